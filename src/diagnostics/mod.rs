@@ -1,0 +1,3 @@
+//! Diagnostics: conservation, error norms and exact reference solutions.
+
+pub mod riemann;

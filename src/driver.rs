@@ -1,0 +1,375 @@
+//! Runs a scene end to end: build, step, write snapshots, history and the run
+//! summary. The CLI is a thin layer over [`run_scene`].
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use nalgebra::SVector;
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::mpm::Particles;
+use crate::output::csv::{write_columns, CsvAppender};
+use crate::output::vtk::{write_vti, write_vtu_points, Field, PvdSeries};
+use crate::output::atomic_write;
+use crate::scene::{build_solid_run, Format, Scene};
+use crate::stepper::{Energies, SolidRun};
+
+/// How to run a scene.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Output folder (created if missing).
+    pub out_dir: PathBuf,
+    /// Worker threads (0: rayon's default, all cores).
+    pub threads: usize,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+/// The end-of-run summary written to `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Integration mode.
+    pub mode: String,
+    /// Shape function.
+    pub shape: String,
+    /// MPM update scheme.
+    pub update: String,
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulation time reached.
+    pub final_time: f64,
+    /// Wall-clock seconds of the time loop (output included).
+    pub wall_s: f64,
+    /// Wall-clock seconds spent writing output.
+    pub output_s: f64,
+    /// Number of particles.
+    pub n_particles: usize,
+    /// Number of grid cells.
+    pub n_cells: usize,
+    /// Particle updates per second of stepping (output excluded).
+    pub particle_steps_per_s: f64,
+    /// Worker threads.
+    pub threads: usize,
+    /// Smallest and largest timestep.
+    pub dt_min: f64,
+    /// Largest timestep.
+    pub dt_max: f64,
+    /// (M_end − M_0)/M_0.
+    pub mass_drift: f64,
+    /// |P_end − P_0| / Σ m|v| at the start (or M·|v|max if that is zero).
+    pub momentum_drift: f64,
+    /// (E_end − E_0)/E_0 of kinetic + strain + body-force potential energy.
+    pub energy_drift: f64,
+    /// Energies at the start.
+    pub initial_energy: Energies,
+    /// Energies at the end.
+    pub final_energy: Energies,
+    /// Error that stopped the run early, if any.
+    pub error: Option<String>,
+}
+
+/// Runs a validated scene with outputs in `opts.out_dir`.
+pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads)
+        .build()
+        .map_err(|e| Error::io(&opts.out_dir, std::io::Error::other(e.to_string())))?;
+    let threads = pool.current_num_threads();
+    pool.install(|| match scene.grid.dim {
+        1 => run_dim::<1>(scene, opts, threads),
+        2 => run_dim::<2>(scene, opts, threads),
+        _ => run_dim::<3>(scene, opts, threads),
+    })
+}
+
+/// Unit of a quantity per unit of the dimensions a run does not resolve
+/// (2D plane strain is per metre of depth, 1D per square metre of section).
+fn per_depth(dim: usize) -> &'static str {
+    match dim {
+        1 => "/m^2",
+        2 => "/m",
+        _ => "",
+    }
+}
+
+struct Writer {
+    dir: PathBuf,
+    formats: Vec<Format>,
+    particles_pvd: PvdSeries,
+    grid_pvd: PvdSeries,
+    history: CsvAppender,
+    snapshots: usize,
+    output_s: f64,
+}
+
+impl Writer {
+    fn new(dir: &Path, formats: &[Format], dim: usize) -> Result<Self> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let u = per_depth(dim);
+        let header = [
+            "time [s]".to_string(),
+            format!("kinetic [J{u}]"),
+            format!("strain [J{u}]"),
+            format!("potential [J{u}]"),
+            format!("total [J{u}]"),
+        ];
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        let hp = dir.join("history.csv");
+        let history = CsvAppender::create(&hp, &header).map_err(|e| Error::io(&hp, e))?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            formats: formats.to_vec(),
+            particles_pvd: PvdSeries::new(dir.join("particles.pvd")),
+            grid_pvd: PvdSeries::new(dir.join("grid.pvd")),
+            history,
+            snapshots: 0,
+            output_s: 0.0,
+        })
+    }
+
+    fn history_row(&mut self, t: f64, e: &Energies) -> Result<()> {
+        let start = Instant::now();
+        self.history
+            .row(&[t, e.kinetic, e.strain, e.potential, e.total()])
+            .map_err(|err| Error::io(self.history.path().to_path_buf(), err))?;
+        self.output_s += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn snapshot<const D: usize>(&mut self, run: &SolidRun<D>) -> Result<()> {
+        let start = Instant::now();
+        let k = self.snapshots;
+        if self.formats.contains(&Format::Vtk) {
+            let name = format!("particles_{k:04}.vtu");
+            let path = self.dir.join(&name);
+            write_particles_vtu(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+            self.particles_pvd
+                .push(run.t, &name)
+                .map_err(|e| Error::io(self.particles_pvd.path().to_path_buf(), e))?;
+            let gname = format!("grid_{k:04}.vti");
+            let gpath = self.dir.join(&gname);
+            write_grid_vti(&gpath, run).map_err(|e| Error::io(&gpath, e))?;
+            self.grid_pvd
+                .push(run.t, &gname)
+                .map_err(|e| Error::io(self.grid_pvd.path().to_path_buf(), e))?;
+        }
+        if self.formats.contains(&Format::Csv) {
+            let path = self.dir.join(format!("particles_{k:04}.csv"));
+            write_particles_csv(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+        }
+        self.snapshots += 1;
+        self.output_s += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
+    std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
+}
+
+fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+    let pts: Vec<[f64; 3]> = p.x.iter().map(pad3).collect();
+    let vel: Vec<[f64; 3]> = p.v.iter().map(pad3).collect();
+    let disp: Vec<[f64; 3]> = p.x.iter().zip(&p.x0).map(|(x, x0)| pad3(&(x - x0))).collect();
+    let stress: Vec<[f64; 9]> = p.stress.iter().map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)])).collect();
+    let f: Vec<[f64; 9]> = p.f.iter().map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)])).collect();
+    let mat: Vec<f64> = p.material.iter().map(|&m| m as f64).collect();
+    let j: Vec<f64> = p.f.iter().map(|f| f.determinant()).collect();
+    write_vtu_points(
+        path,
+        &pts,
+        &[
+            Field::vector("velocity", &vel),
+            Field::vector("displacement", &disp),
+            Field::tensor("stress", &stress),
+            Field::tensor("deformation_gradient", &f),
+            Field::scalar("mass", &p.mass),
+            Field::scalar("volume", &p.vol),
+            Field::scalar("J", &j),
+            Field::scalar("material", &mat),
+        ],
+    )
+}
+
+fn write_particles_csv<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+    let axes = ["x", "y", "z"];
+    let u = per_depth(D);
+    let mut header: Vec<String> = Vec::new();
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    for d in 0..D {
+        header.push(format!("{} [m]", axes[d]));
+        cols.push(p.x.iter().map(|x| x[d]).collect());
+    }
+    for d in 0..D {
+        header.push(format!("v{} [m/s]", axes[d]));
+        cols.push(p.v.iter().map(|v| v[d]).collect());
+    }
+    for d in 0..D {
+        header.push(format!("u{} [m]", axes[d]));
+        cols.push(p.x.iter().zip(&p.x0).map(|(x, x0)| x[d] - x0[d]).collect());
+    }
+    let comps: &[(usize, usize)] = match D {
+        1 => &[(0, 0), (1, 1), (2, 2)],
+        2 => &[(0, 0), (1, 1), (2, 2), (0, 1)],
+        _ => &[(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)],
+    };
+    for &(a, b) in comps {
+        header.push(format!("s{}{} [Pa]", axes[a], axes[b]));
+        cols.push(p.stress.iter().map(|s| s[(a, b)]).collect());
+    }
+    header.push(format!("mass [kg{u}]"));
+    cols.push(p.mass.clone());
+    header.push(format!("volume [m^3{u}]"));
+    cols.push(p.vol.clone());
+    header.push("J [-]".into());
+    cols.push(p.f.iter().map(|f| f.determinant()).collect());
+    header.push("material [-]".into());
+    cols.push(p.material.iter().map(|&m| m as f64).collect());
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    write_columns(path, &h, &c)
+}
+
+fn write_grid_vti<const D: usize>(path: &Path, run: &SolidRun<D>) -> std::io::Result<()> {
+    let g = &run.grid;
+    let gs = run.grid_state();
+    let cells: [usize; 3] = std::array::from_fn(|d| if d < D { g.cells[d] } else { 0 });
+    let n: [usize; 3] = std::array::from_fn(|d| cells[d] + 1);
+    let mut mass = Vec::with_capacity(n[0] * n[1] * n[2]);
+    let mut vel = Vec::with_capacity(mass.capacity());
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let c = [i as isize, j as isize, k as isize];
+                let idx = g.node_index(std::array::from_fn(|d| c[d]));
+                mass.push(gs.mass[idx]);
+                vel.push(pad3(&gs.velocity_new[idx]));
+            }
+        }
+    }
+    let origin = pad3(&g.lower);
+    let spacing: [f64; 3] = std::array::from_fn(|d| if d < D { g.h[d] } else { 1.0 });
+    write_vti(
+        path,
+        origin,
+        spacing,
+        cells,
+        &[Field::scalar("mass", &mass), Field::vector("velocity", &vel)],
+        &[],
+    )
+}
+
+fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> Result<Summary> {
+    let mut run = build_solid_run::<D>(scene)?;
+    let mut writer = Writer::new(&opts.out_dir, &scene.output.formats, D)?;
+    let e0 = run.energies();
+    let m0 = run.particles.total_mass();
+    let p0 = run.particles.momentum();
+    let p_scale = run
+        .particles
+        .mass
+        .iter()
+        .zip(&run.particles.v)
+        .map(|(m, v)| m * v.norm())
+        .sum::<f64>();
+    writer.snapshot(&run)?;
+    writer.history_row(0.0, &e0)?;
+    let interval = scene.output.interval;
+    let hist_iv = scene.output.history_interval.or(interval.map(|i| i / 20.0));
+    let mut next_out = interval.unwrap_or(f64::INFINITY);
+    let mut next_hist = hist_iv.unwrap_or(0.0);
+    let bar = if opts.progress {
+        let b = indicatif::ProgressBar::new(1000);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {percent:>3}% t = {msg} [{elapsed_precise} < {eta_precise}]",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = Instant::now();
+    let mut step_s = 0.0;
+    let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
+    let mut failure = None;
+    while !run.finished() {
+        let s = Instant::now();
+        match run.step() {
+            Ok(dt) => {
+                dt_min = dt_min.min(dt);
+                dt_max = dt_max.max(dt);
+            }
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+        step_s += s.elapsed().as_secs_f64();
+        if run.t >= next_hist * (1.0 - 1e-12) {
+            writer.history_row(run.t, &run.energies())?;
+            next_hist += hist_iv.unwrap_or(0.0);
+        }
+        if run.t >= next_out * (1.0 - 1e-12) && !run.finished() {
+            writer.snapshot(&run)?;
+            next_out += interval.unwrap_or(f64::INFINITY);
+        }
+        if run.steps % 16 == 0 {
+            bar.set_position((1000.0 * run.t / run.time.end) as u64);
+            bar.set_message(format!("{:.4e}", run.t));
+        }
+    }
+    bar.finish_and_clear();
+    // The last state is always written, also after a failure (it shows where
+    // the run broke down).
+    writer.snapshot(&run)?;
+    let e1 = run.energies();
+    writer.history_row(run.t, &e1)?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let e_scale = if e0.total().abs() > 0.0 {
+        e0.total().abs()
+    } else {
+        e1.kinetic.max(e1.strain).max(f64::MIN_POSITIVE)
+    };
+    let dp = (run.particles.momentum() - p0).norm();
+    let summary = Summary {
+        dim: D,
+        mode: scene.time.mode.name().to_string(),
+        shape: format!("{:?}", scene.mpm.shape),
+        update: format!("{:?}", scene.mpm.update),
+        steps: run.steps,
+        final_time: run.t,
+        wall_s,
+        output_s: writer.output_s,
+        n_particles: run.particles.len(),
+        n_cells: run.grid.num_cells(),
+        particle_steps_per_s: if step_s > 0.0 {
+            run.particles.len() as f64 * run.steps as f64 / step_s
+        } else {
+            0.0
+        },
+        threads,
+        dt_min: if run.steps > 0 { dt_min } else { 0.0 },
+        dt_max,
+        mass_drift: (run.particles.total_mass() - m0) / m0,
+        momentum_drift: if p_scale > 0.0 { dp / p_scale } else { dp },
+        energy_drift: (e1.total() - e0.total()) / e_scale,
+        initial_energy: e0,
+        final_energy: e1,
+        error: failure.as_ref().map(|e| e.to_string()),
+    };
+    let path = opts.out_dir.join("summary.json");
+    atomic_write(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
+        std::io::Write::write_all(w, b"\n")
+    })
+    .map_err(|e| Error::io(&path, e))?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}

@@ -1,0 +1,86 @@
+//! Typed errors of the library. The CLI reports them through `anyhow`.
+
+use std::path::PathBuf;
+
+/// A scene file that cannot be used: names the key path and what is allowed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("scene error at `{path}`: {message}")]
+pub struct SceneError {
+    /// Dotted key path, e.g. `materials[0].density`.
+    pub path: String,
+    /// What is wrong and which values are allowed.
+    pub message: String,
+}
+
+impl SceneError {
+    /// Builds an error for `path` with `message`.
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Where in a run a numerical failure happened.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailureSite {
+    /// Step number (0-based count of completed steps when it failed).
+    pub step: u64,
+    /// Simulation time at the start of the failing step.
+    pub time: f64,
+    /// Offending particle, if any.
+    pub particle: Option<usize>,
+    /// Offending grid node or cell (flat index), if any.
+    pub cell: Option<usize>,
+}
+
+impl std::fmt::Display for FailureSite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "step {}, t = {:.6e}", self.step, self.time)?;
+        if let Some(p) = self.particle {
+            write!(f, ", particle {p}")?;
+        }
+        if let Some(c) = self.cell {
+            write!(f, ", cell {c}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Library error.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Invalid scene.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A numerical failure (NaN, inverted particle, particle off the grid, ...).
+    #[error("numerical failure at {site}: {what}")]
+    Numerical {
+        /// Where it happened.
+        site: FailureSite,
+        /// What went wrong.
+        what: String,
+    },
+    /// File output failed.
+    #[error("I/O error on {path}: {source}")]
+    Io {
+        /// The file being written or read.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+/// Library result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

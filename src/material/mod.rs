@@ -1,0 +1,7 @@
+//! Materials: solid constitutive models (`solid`) and fluid equations of state
+//! (`eos`). Imports no physics module.
+
+pub mod eos;
+pub mod solid;
+
+pub use solid::{ElasticConstants, SolidMaterial, SolidModel};

@@ -1,0 +1,532 @@
+//! The explicit MPM step (Guilkey Sec. 3.2, Eqs. 21–27).
+//!
+//! One step is P2G (Eq. 22, internal force Eq. 24), the grid solve
+//! M a = f_ext − f_int (Eq. 21, 25) with boundary conditions, and G2P
+//! (Eqs. 26–27, FLIP velocity update) with the particle velocity gradient
+//! (Eq. 23) driving the constitutive update. The three classic orderings:
+//!
+//! * **USL** (update stress last): stress from the updated grid velocity vᴸ.
+//! * **MUSL** (modified USL): the updated particle momenta are mapped to the
+//!   grid again and the stress uses that velocity.
+//! * **USF** (update stress first): stress from the P2G velocity before the
+//!   force is computed.
+//!
+//! All weights of a step are evaluated at the particle positions at the start
+//! of the step; positions move at the end.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use nalgebra::{Matrix3, SMatrix, SVector};
+use rayon::prelude::*;
+
+use super::particles::Particles;
+use super::scatter::{Bins, SharedMut};
+use crate::error::{Error, FailureSite, Result};
+use crate::grid::Grid;
+use crate::material::SolidMaterial;
+use crate::shape::{
+    CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, ShapeKind, Stencil,
+};
+
+/// Ordering of stress update and momentum update in an explicit step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UpdateScheme {
+    /// Update stress first.
+    Usf,
+    /// Update stress last.
+    Usl,
+    /// Modified update stress last.
+    Musl,
+}
+
+impl UpdateScheme {
+    /// Names accepted in scene files.
+    pub const NAMES: &'static str = "usf, usl, musl";
+}
+
+/// A body force per unit mass, possibly varying in space and time (gravity, or
+/// the body force of a manufactured solution).
+pub trait BodyForce<const D: usize>: Sync {
+    /// Acceleration at reference position `x0`, current position `x`, time `t`.
+    fn accel(&self, x0: &SVector<f64, D>, x: &SVector<f64, D>, t: f64) -> SVector<f64, D>;
+}
+
+/// A uniform body force (gravity).
+#[derive(Debug, Clone, Copy)]
+pub struct Uniform<const D: usize>(pub SVector<f64, D>);
+
+impl<const D: usize> BodyForce<D> for Uniform<D> {
+    fn accel(&self, _: &SVector<f64, D>, _: &SVector<f64, D>, _: f64) -> SVector<f64, D> {
+        self.0
+    }
+}
+
+/// Parameters of the explicit MPM step.
+#[derive(Debug, Clone, Copy)]
+pub struct ExplicitParams {
+    /// Shape function.
+    pub shape: ShapeKind,
+    /// Stress update ordering.
+    pub scheme: UpdateScheme,
+    /// Nodes with less mass than this are treated as empty.
+    pub mass_floor: f64,
+}
+
+/// Node fields of the background grid (ghost nodes included).
+#[derive(Debug, Clone)]
+pub struct GridState<const D: usize> {
+    /// Nodal mass M_i (Eq. 22).
+    pub mass: Vec<f64>,
+    /// Nodal momentum Σ S m v.
+    pub momentum: Vec<SVector<f64, D>>,
+    /// Nodal force f_ext − f_int.
+    pub force: Vec<SVector<f64, D>>,
+    /// Nodal velocity v_i at the start of the step.
+    pub velocity: Vec<SVector<f64, D>>,
+    /// Updated nodal velocity vᴸ (Eq. 25).
+    pub velocity_new: Vec<SVector<f64, D>>,
+    /// Nodal acceleration a_i after boundary conditions.
+    pub accel: Vec<SVector<f64, D>>,
+}
+
+impl<const D: usize> GridState<D> {
+    /// Zeroed fields for `n` nodes.
+    pub fn new(n: usize) -> Self {
+        Self {
+            mass: vec![0.0; n],
+            momentum: vec![SVector::zeros(); n],
+            force: vec![SVector::zeros(); n],
+            velocity: vec![SVector::zeros(); n],
+            velocity_new: vec![SVector::zeros(); n],
+            accel: vec![SVector::zeros(); n],
+        }
+    }
+}
+
+/// Reusable buffers of the step (no allocation inside the time loop).
+#[derive(Debug, Clone, Default)]
+pub struct StepScratch<const D: usize> {
+    bins: Bins,
+    dx: Vec<SVector<f64, D>>,
+}
+
+/// Largest stable explicit timestep times `cfl`: min over particles of
+/// h_min / (c_p + |v_p|), c_p the dilatational wave speed at the particle's
+/// current density.
+pub fn stable_dt<const D: usize>(
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+    particles: &Particles<D>,
+    cfl: f64,
+) -> f64 {
+    let hmin = grid.h.min();
+    let limit = (0..particles.len())
+        .into_par_iter()
+        .map(|p| {
+            let rho = particles.mass[p] / particles.vol[p];
+            let c = materials[particles.material[p] as usize].wave_speed(rho);
+            hmin / (c + particles.v[p].norm())
+        })
+        .reduce(|| f64::INFINITY, f64::min);
+    cfl * limit
+}
+
+/// Advances particles and grid by one explicit step of size `dt` from time `t`.
+///
+/// `step` is only used to name the step in errors.
+#[allow(clippy::too_many_arguments)]
+pub fn explicit_step<const D: usize>(
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+    params: &ExplicitParams,
+    body: Option<&dyn BodyForce<D>>,
+    particles: &mut Particles<D>,
+    gs: &mut GridState<D>,
+    scratch: &mut StepScratch<D>,
+    t: f64,
+    dt: f64,
+    step: u64,
+) -> Result<()> {
+    let ctx = Ctx {
+        grid,
+        materials,
+        params,
+        body,
+        t,
+        dt,
+        step,
+    };
+    match params.shape {
+        ShapeKind::Linear => step_with::<D, 2, _>(&ctx, LinearHat, particles, gs, scratch),
+        ShapeKind::Gimp => step_with::<D, 3, _>(&ctx, Gimp, particles, gs, scratch),
+        ShapeKind::QuadraticBspline => {
+            step_with::<D, 3, _>(&ctx, QuadraticBspline, particles, gs, scratch)
+        }
+        ShapeKind::CubicBspline => step_with::<D, 4, _>(&ctx, CubicBspline, particles, gs, scratch),
+    }
+}
+
+struct Ctx<'a, const D: usize> {
+    grid: &'a Grid<D>,
+    materials: &'a [SolidMaterial],
+    params: &'a ExplicitParams,
+    body: Option<&'a dyn BodyForce<D>>,
+    t: f64,
+    dt: f64,
+    step: u64,
+}
+
+impl<const D: usize> Ctx<'_, D> {
+    fn fail(&self, particle: Option<usize>, cell: Option<usize>, what: &str) -> Error {
+        Error::Numerical {
+            site: FailureSite {
+                step: self.step,
+                time: self.t,
+                particle,
+                cell,
+            },
+            what: what.to_string(),
+        }
+    }
+}
+
+/// What a P2G pass accumulates.
+#[derive(Clone, Copy)]
+struct P2g {
+    /// Mass and momentum (else: momentum only if `momentum_only`).
+    mass: bool,
+    momentum: bool,
+    force: bool,
+}
+
+/// Which nodal velocity a G2P pass differentiates for the stress update.
+#[derive(Clone, Copy, PartialEq)]
+enum Grad {
+    None,
+    /// vᴸ (USL).
+    VelocityNew,
+    /// v from the latest P2G (USF, MUSL).
+    Velocity,
+}
+
+/// What a G2P pass does with the particle position.
+#[derive(Clone, Copy, PartialEq)]
+enum Pos {
+    None,
+    /// x += Δt Σ S vᴸ now.
+    Apply,
+    /// Store Δt Σ S vᴸ for later.
+    Store,
+    /// Apply the stored displacement.
+    ApplyStored,
+}
+
+#[derive(Clone, Copy)]
+struct G2p {
+    flip: bool,
+    position: Pos,
+    grad: Grad,
+}
+
+fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
+    ctx: &Ctx<'_, D>,
+    kernel: K,
+    particles: &mut Particles<D>,
+    gs: &mut GridState<D>,
+    scratch: &mut StepScratch<D>,
+) -> Result<()> {
+    if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
+        return Err(ctx.fail(
+            Some(p),
+            None,
+            "particle position is not finite or has left the grid",
+        ));
+    }
+    let bins = &scratch.bins;
+    let all = P2g {
+        mass: true,
+        momentum: true,
+        force: true,
+    };
+    match ctx.params.scheme {
+        UpdateScheme::Usl => {
+            clear(gs);
+            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, all);
+            grid_solve(ctx, gs);
+            let ops = G2p {
+                flip: true,
+                position: Pos::Apply,
+                grad: Grad::VelocityNew,
+            };
+            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+        }
+        UpdateScheme::Musl => {
+            clear(gs);
+            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, all);
+            grid_solve(ctx, gs);
+            let ops = G2p {
+                flip: true,
+                position: Pos::Store,
+                grad: Grad::None,
+            };
+            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            // Map the updated momenta back (Sulsky's modified USL).
+            gs.momentum.par_iter_mut().for_each(|m| *m = SVector::zeros());
+            let mom = P2g {
+                mass: false,
+                momentum: true,
+                force: false,
+            };
+            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, mom);
+            grid_velocity(ctx, gs);
+            let ops = G2p {
+                flip: false,
+                position: Pos::ApplyStored,
+                grad: Grad::Velocity,
+            };
+            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+        }
+        UpdateScheme::Usf => {
+            clear(gs);
+            let mm = P2g {
+                mass: true,
+                momentum: true,
+                force: false,
+            };
+            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, mm);
+            grid_velocity(ctx, gs);
+            let ops = G2p {
+                flip: false,
+                position: Pos::None,
+                grad: Grad::Velocity,
+            };
+            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            let force = P2g {
+                mass: false,
+                momentum: false,
+                force: true,
+            };
+            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, force);
+            grid_solve(ctx, gs);
+            let ops = G2p {
+                flip: true,
+                position: Pos::Apply,
+                grad: Grad::None,
+            };
+            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+        }
+    }
+    Ok(())
+}
+
+fn clear<const D: usize>(gs: &mut GridState<D>) {
+    gs.mass.par_iter_mut().for_each(|m| *m = 0.0);
+    gs.momentum
+        .par_iter_mut()
+        .zip(gs.force.par_iter_mut())
+        .for_each(|(m, f)| {
+            *m = SVector::zeros();
+            *f = SVector::zeros();
+        });
+}
+
+/// Flat node offsets of a stencil multi-index.
+#[inline(always)]
+fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
+    let mut o = 0;
+    for d in 0..D {
+        o += m[d] * strides[d];
+    }
+    o
+}
+
+/// The D×D block of a 3×3 tensor.
+#[inline(always)]
+fn block<const D: usize>(s: &Matrix3<f64>) -> SMatrix<f64, D, D> {
+    SMatrix::<f64, D, D>::from_fn(|i, j| s[(i, j)])
+}
+
+/// Particle to grid (Guilkey Eq. 22 and Eq. 24, f = f_ext − f_int).
+fn p2g<const D: usize, const S: usize, K: Stencil<S>>(
+    ctx: &Ctx<'_, D>,
+    kernel: K,
+    bins: &Bins,
+    particles: &Particles<D>,
+    gs: &mut GridState<D>,
+    what: P2g,
+) {
+    let grid = ctx.grid;
+    let strides = grid.strides();
+    let h = grid.h;
+    let mass = SharedMut::new(&mut gs.mass);
+    let momentum = SharedMut::new(&mut gs.momentum);
+    let force = SharedMut::new(&mut gs.force);
+    let (t, body) = (ctx.t, ctx.body);
+    bins.for_each_colored(|p| {
+        let xi = grid.to_grid_units(&particles.x[p]);
+        let lp = particles.half_size[p].component_div(&h);
+        let pw = ParticleWeights::<D, S>::new(kernel, &xi, &lp);
+        let base = grid.node_index(pw.base());
+        let mp = particles.mass[p];
+        let mv = particles.v[p] * mp;
+        let mut fb = SVector::<f64, D>::zeros();
+        let mut vs = SMatrix::<f64, D, D>::zeros();
+        if what.force {
+            if let Some(b) = body {
+                fb = b.accel(&particles.x0[p], &particles.x[p], t) * mp;
+            }
+            vs = block::<D>(&particles.stress[p]) * particles.vol[p];
+        }
+        pw.for_each(|m, w, g| {
+            let idx = base + offset(m, &strides);
+            // SAFETY: slab colouring gives concurrent tasks disjoint nodes.
+            unsafe {
+                if what.mass {
+                    *mass.get(idx) += w * mp;
+                }
+                if what.momentum {
+                    *momentum.get(idx) += mv * w;
+                }
+                if what.force {
+                    let grad = g.component_div(&h);
+                    *force.get(idx) += fb * w - vs * grad;
+                }
+            }
+        });
+    });
+}
+
+/// v = p/m on nodes with mass, zero elsewhere, then boundary conditions.
+fn grid_velocity<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
+    let floor = ctx.params.mass_floor;
+    gs.velocity
+        .par_iter_mut()
+        .zip(gs.mass.par_iter().zip(gs.momentum.par_iter()))
+        .for_each(|(v, (&m, p))| *v = if m > floor { p / m } else { SVector::zeros() });
+    ctx.grid.apply_velocity_bc(&mut gs.velocity);
+}
+
+/// Grid momentum equation: v = p/m, vᴸ = v + Δt f/m (Guilkey Eqs. 21, 25), then
+/// boundary conditions on both and a = (vᴸ − v)/Δt.
+fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
+    let floor = ctx.params.mass_floor;
+    let dt = ctx.dt;
+    gs.velocity
+        .par_iter_mut()
+        .zip(gs.velocity_new.par_iter_mut())
+        .zip(gs.mass.par_iter())
+        .zip(gs.momentum.par_iter().zip(gs.force.par_iter()))
+        .for_each(|(((v, vl), &m), (p, f))| {
+            if m > floor {
+                *v = p / m;
+                *vl = *v + f * (dt / m);
+            } else {
+                *v = SVector::zeros();
+                *vl = SVector::zeros();
+            }
+        });
+    ctx.grid.apply_velocity_bc(&mut gs.velocity);
+    ctx.grid.apply_velocity_bc(&mut gs.velocity_new);
+    let inv_dt = 1.0 / dt;
+    gs.accel
+        .par_iter_mut()
+        .zip(gs.velocity.par_iter().zip(gs.velocity_new.par_iter()))
+        .for_each(|(a, (v, vl))| *a = (vl - v) * inv_dt);
+}
+
+/// Grid to particle (Guilkey Eqs. 23, 26, 27) and the constitutive update.
+fn g2p<const D: usize, const S: usize, K: Stencil<S>>(
+    ctx: &Ctx<'_, D>,
+    kernel: K,
+    particles: &mut Particles<D>,
+    gs: &GridState<D>,
+    dx_store: &mut Vec<SVector<f64, D>>,
+    ops: G2p,
+) -> Result<()> {
+    let grid = ctx.grid;
+    let strides = grid.strides();
+    let h = grid.h;
+    let dt = ctx.dt;
+    let np = particles.len();
+    if ops.position == Pos::Store {
+        dx_store.resize(np, SVector::zeros());
+    }
+    let grad_field: &[SVector<f64, D>] = match ops.grad {
+        Grad::VelocityNew => &gs.velocity_new,
+        _ => &gs.velocity,
+    };
+    let failed = AtomicUsize::new(usize::MAX);
+    {
+        let x = SharedMut::new(&mut particles.x);
+        let v = SharedMut::new(&mut particles.v);
+        let fgrad = SharedMut::new(&mut particles.f);
+        let stress = SharedMut::new(&mut particles.stress);
+        let work = SharedMut::new(&mut particles.work);
+        let vol = SharedMut::new(&mut particles.vol);
+        let dxs = SharedMut::new(dx_store);
+        let (half, vol0, mat) = (&particles.half_size, &particles.vol0, &particles.material);
+        (0..np).into_par_iter().with_min_len(512).for_each(|p| {
+            // SAFETY: each task touches only particle p's entries.
+            let (xp, vp) = unsafe { (x.get(p), v.get(p)) };
+            let xi = grid.to_grid_units(xp);
+            let lp = half[p].component_div(&h);
+            let pw = ParticleWeights::<D, S>::new(kernel, &xi, &lp);
+            let base = grid.node_index(pw.base());
+            let mut acc = SVector::<f64, D>::zeros();
+            let mut vel = SVector::<f64, D>::zeros();
+            let mut l = SMatrix::<f64, D, D>::zeros();
+            pw.for_each(|m, w, g| {
+                let idx = base + offset(m, &strides);
+                if ops.flip {
+                    acc += gs.accel[idx] * w;
+                }
+                if ops.position == Pos::Apply || ops.position == Pos::Store {
+                    vel += gs.velocity_new[idx] * w;
+                }
+                if ops.grad != Grad::None {
+                    l += grad_field[idx] * g.component_div(&h).transpose();
+                }
+            });
+            if ops.flip {
+                *vp += acc * dt; // Eq. 26
+            }
+            match ops.position {
+                Pos::Apply => *xp += vel * dt, // Eq. 27
+                // SAFETY: as above.
+                Pos::Store => unsafe { *dxs.get(p) = vel * dt },
+                Pos::ApplyStored => unsafe { *xp += *dxs.get(p) },
+                Pos::None => {}
+            }
+            if ops.grad != Grad::None {
+                let mut l3 = Matrix3::<f64>::zeros();
+                for i in 0..D {
+                    for j in 0..D {
+                        l3[(i, j)] = l[(i, j)];
+                    }
+                }
+                // SAFETY: as above.
+                let (fp, sp, wp, vp_vol) =
+                    unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
+                let f_new = (Matrix3::identity() + l3 * dt) * *fp;
+                let j = f_new.determinant();
+                if !(j > 0.0) || !j.is_finite() {
+                    failed.fetch_min(p, Ordering::Relaxed);
+                    return;
+                }
+                *fp = f_new;
+                *vp_vol = j * vol0[p];
+                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, dt, sp, wp);
+            }
+        });
+    }
+    let p = failed.load(Ordering::Relaxed);
+    if p != usize::MAX {
+        return Err(ctx.fail(
+            Some(p),
+            None,
+            "deformation gradient inverted or not finite (J ≤ 0); try a smaller CFL",
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,11 @@
+//! Material point method: particles (struct of arrays) and the explicit step
+//! (Guilkey Sec. 3.2, Eqs. 21–27) with USF, USL and MUSL orderings.
+
+pub mod explicit;
+pub mod particles;
+mod scatter;
+
+pub use explicit::{
+    explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, StepScratch, UpdateScheme,
+};
+pub use particles::Particles;

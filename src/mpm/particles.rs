@@ -1,0 +1,111 @@
+//! Particle state as a struct of arrays.
+
+use nalgebra::{Matrix3, SVector};
+
+use crate::material::SolidMaterial;
+
+/// Material points of every solid material in a scene.
+#[derive(Debug, Clone, Default)]
+pub struct Particles<const D: usize> {
+    /// Current position x_p.
+    pub x: Vec<SVector<f64, D>>,
+    /// Reference (initial) position X_p.
+    pub x0: Vec<SVector<f64, D>>,
+    /// Velocity v_p.
+    pub v: Vec<SVector<f64, D>>,
+    /// Mass m_p.
+    pub mass: Vec<f64>,
+    /// Reference volume V_p⁰.
+    pub vol0: Vec<f64>,
+    /// Current volume V_p = J V_p⁰.
+    pub vol: Vec<f64>,
+    /// Initial half-size per direction (physical units), for GIMP.
+    pub half_size: Vec<SVector<f64, D>>,
+    /// Deformation gradient F (3×3; plane strain / uniaxial strain in 2D/1D).
+    pub f: Vec<Matrix3<f64>>,
+    /// Cauchy stress σ (3×3).
+    pub stress: Vec<Matrix3<f64>>,
+    /// Accumulated stress work per unit reference volume (rate models).
+    pub work: Vec<f64>,
+    /// Index into the scene's solid materials.
+    pub material: Vec<u16>,
+}
+
+impl<const D: usize> Particles<D> {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Appends one particle at rest in its reference configuration.
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(
+        &mut self,
+        x: SVector<f64, D>,
+        v: SVector<f64, D>,
+        mass: f64,
+        vol: f64,
+        half_size: SVector<f64, D>,
+        material: u16,
+    ) {
+        self.x.push(x);
+        self.x0.push(x);
+        self.v.push(v);
+        self.mass.push(mass);
+        self.vol0.push(vol);
+        self.vol.push(vol);
+        self.half_size.push(half_size);
+        self.f.push(Matrix3::identity());
+        self.stress.push(Matrix3::zeros());
+        self.work.push(0.0);
+        self.material.push(material);
+    }
+
+    /// Total mass.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+
+    /// Total linear momentum Σ m_p v_p.
+    pub fn momentum(&self) -> SVector<f64, D> {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .fold(SVector::zeros(), |acc, (m, v)| acc + *m * v)
+    }
+
+    /// Kinetic energy Σ ½ m_p |v_p|².
+    pub fn kinetic_energy(&self) -> f64 {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .map(|(m, v)| 0.5 * m * v.norm_squared())
+            .sum()
+    }
+
+    /// Strain energy Σ V_p⁰ W(F_p).
+    pub fn strain_energy(&self, materials: &[SolidMaterial]) -> f64 {
+        (0..self.len())
+            .map(|p| {
+                self.vol0[p]
+                    * materials[self.material[p] as usize]
+                        .strain_energy_density(&self.f[p], self.work[p])
+            })
+            .sum()
+    }
+
+    /// Potential energy of a uniform body force g: −Σ m_p g·x_p.
+    pub fn potential_energy(&self, g: &SVector<f64, D>) -> f64 {
+        -self
+            .mass
+            .iter()
+            .zip(&self.x)
+            .map(|(m, x)| m * g.dot(x))
+            .sum::<f64>()
+    }
+}

@@ -1,0 +1,843 @@
+//! ParaView VTK XML writers (no external crates).
+//!
+//! * [`write_vtu_points`]: particles as an `UnstructuredGrid` of `VTK_VERTEX`
+//!   cells (one per point), so ParaView shows them without a glyph filter.
+//! * [`write_vti`]: a uniform grid as `ImageData` with point and cell data.
+//! * [`PvdSeries`]: a `.pvd` collection listing the files of a time series.
+//!
+//! Data arrays are stored as `format="appended"` with `encoding="raw"`,
+//! `header_type="UInt64"` and `byte_order="LittleEndian"`: after the XML
+//! header comes `<AppendedData encoding="raw">`, an underscore, then for
+//! each array a little-endian `u64` byte count followed by the raw
+//! little-endian values. Each `DataArray`'s `offset` attribute is the byte
+//! position of its count, measured from just after the underscore. All
+//! floating-point data is `Float64`.
+//!
+//! All files are written with [`atomic_write`], so a reader never sees a
+//! half-written file.
+
+use std::collections::HashSet;
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use super::{atomic_write, fmt_f64};
+
+/// VTK cell type id of a single-point cell.
+const VTK_VERTEX: u8 = 1;
+
+/// The values of one named field, one tuple per point or per cell.
+#[derive(Clone, Copy, Debug)]
+pub enum FieldData<'a> {
+    /// One `f64` per entity (`NumberOfComponents="1"`).
+    Scalar(&'a [f64]),
+    /// Three components per entity (`NumberOfComponents="3"`).
+    Vector(&'a [[f64; 3]]),
+    /// Nine components per entity, row-major
+    /// (`[xx, xy, xz, yx, yy, yz, zx, zy, zz]`, `NumberOfComponents="9"`).
+    Tensor(&'a [[f64; 9]]),
+}
+
+impl FieldData<'_> {
+    /// Number of tuples (entities), not of scalar values.
+    pub fn len(&self) -> usize {
+        match self {
+            FieldData::Scalar(d) => d.len(),
+            FieldData::Vector(d) => d.len(),
+            FieldData::Tensor(d) => d.len(),
+        }
+    }
+
+    /// `true` when there are no tuples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Number of components per tuple (1, 3 or 9).
+    pub fn components(&self) -> usize {
+        match self {
+            FieldData::Scalar(_) => 1,
+            FieldData::Vector(_) => 3,
+            FieldData::Tensor(_) => 9,
+        }
+    }
+}
+
+/// A named field to write as a VTK `DataArray`.
+#[derive(Clone, Copy, Debug)]
+pub struct Field<'a> {
+    /// Array name shown in ParaView (must be non-empty, without control
+    /// characters, and unique within its point-data or cell-data list).
+    pub name: &'a str,
+    /// The values.
+    pub data: FieldData<'a>,
+}
+
+impl<'a> Field<'a> {
+    /// A scalar field.
+    pub fn scalar(name: &'a str, data: &'a [f64]) -> Self {
+        Field {
+            name,
+            data: FieldData::Scalar(data),
+        }
+    }
+
+    /// A 3-component vector field.
+    pub fn vector(name: &'a str, data: &'a [[f64; 3]]) -> Self {
+        Field {
+            name,
+            data: FieldData::Vector(data),
+        }
+    }
+
+    /// A 9-component (row-major 3×3) tensor field.
+    pub fn tensor(name: &'a str, data: &'a [[f64; 9]]) -> Self {
+        Field {
+            name,
+            data: FieldData::Tensor(data),
+        }
+    }
+}
+
+fn invalid(msg: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg)
+}
+
+/// Checks names and lengths of a field list (`what` is "point" or "cell").
+fn check_fields(what: &str, fields: &[Field], expected: usize) -> io::Result<()> {
+    let mut seen = HashSet::new();
+    for f in fields {
+        if f.name.is_empty() {
+            return Err(invalid(format!("{what} field with an empty name")));
+        }
+        if f.name.chars().any(char::is_control) {
+            return Err(invalid(format!(
+                "{what} field name {:?} contains control characters",
+                f.name
+            )));
+        }
+        if !seen.insert(f.name) {
+            return Err(invalid(format!(
+                "duplicate {what} field name \"{}\"",
+                f.name
+            )));
+        }
+        if f.data.len() != expected {
+            return Err(invalid(format!(
+                "{what} field \"{}\" has {} tuples, expected {expected}",
+                f.name,
+                f.data.len()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Escapes a string for use inside a double-quoted XML attribute.
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// One array of the appended-data section.
+enum Block<'a> {
+    Field(FieldData<'a>),
+    Points(&'a [[f64; 3]]),
+    /// `Int64` values `start, start + 1, …` (`n` of them).
+    Iota {
+        n: usize,
+        start: i64,
+    },
+    /// `n` copies of one `UInt8`.
+    ConstU8 {
+        n: usize,
+        value: u8,
+    },
+}
+
+impl Block<'_> {
+    fn byte_len(&self) -> io::Result<u64> {
+        let (n, size) = match self {
+            Block::Field(d) => (d.len(), 8 * d.components()),
+            Block::Points(p) => (p.len(), 24),
+            Block::Iota { n, .. } => (*n, 8),
+            Block::ConstU8 { n, .. } => (*n, 1),
+        };
+        (n as u64)
+            .checked_mul(size as u64)
+            .ok_or_else(|| invalid("data array too large".to_string()))
+    }
+
+    fn write(&self, w: &mut impl Write) -> io::Result<()> {
+        w.write_all(&self.byte_len()?.to_le_bytes())?;
+        match self {
+            Block::Field(FieldData::Scalar(d)) => write_f64s(w, d.iter().copied()),
+            Block::Field(FieldData::Vector(d)) => write_f64s(w, d.iter().flatten().copied()),
+            Block::Field(FieldData::Tensor(d)) => write_f64s(w, d.iter().flatten().copied()),
+            Block::Points(p) => write_f64s(w, p.iter().flatten().copied()),
+            Block::Iota { n, start } => {
+                for i in 0..*n {
+                    // Indices fit in i64 for any slice that fits in memory.
+                    w.write_all(&(start + i as i64).to_le_bytes())?;
+                }
+                Ok(())
+            }
+            Block::ConstU8 { n, value } => {
+                let chunk = [*value; 4096];
+                let mut left = *n;
+                while left > 0 {
+                    let k = left.min(chunk.len());
+                    w.write_all(&chunk[..k])?;
+                    left -= k;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+fn write_f64s(w: &mut impl Write, values: impl Iterator<Item = f64>) -> io::Result<()> {
+    for v in values {
+        w.write_all(&v.to_le_bytes())?;
+    }
+    Ok(())
+}
+
+/// Builder for the XML header and the list of appended arrays.
+struct Doc<'a> {
+    xml: String,
+    blocks: Vec<Block<'a>>,
+    offset: u64,
+}
+
+impl<'a> Doc<'a> {
+    fn new(kind: &str) -> Self {
+        let mut xml = String::new();
+        xml.push_str("<?xml version=\"1.0\"?>\n");
+        let _ = writeln!(
+            xml,
+            "<VTKFile type=\"{kind}\" version=\"1.0\" byte_order=\"LittleEndian\" \
+             header_type=\"UInt64\">"
+        );
+        Doc {
+            xml,
+            blocks: Vec::new(),
+            offset: 0,
+        }
+    }
+
+    fn line(&mut self, indent: usize, text: &str) {
+        for _ in 0..indent {
+            self.xml.push_str("  ");
+        }
+        self.xml.push_str(text);
+        self.xml.push('\n');
+    }
+
+    /// Adds a `<DataArray .../>` element referring to a new appended block.
+    fn array(
+        &mut self,
+        indent: usize,
+        vtk_type: &str,
+        name: &str,
+        components: usize,
+        block: Block<'a>,
+    ) -> io::Result<()> {
+        let len = block.byte_len()?;
+        let tag = format!(
+            "<DataArray type=\"{vtk_type}\" Name=\"{}\" NumberOfComponents=\"{components}\" \
+             format=\"appended\" offset=\"{}\"/>",
+            xml_escape(name),
+            self.offset
+        );
+        self.line(indent, &tag);
+        self.offset = self
+            .offset
+            .checked_add(8 + len)
+            .ok_or_else(|| invalid("appended data too large".to_string()))?;
+        self.blocks.push(block);
+        Ok(())
+    }
+
+    /// Adds a `<PointData>`/`<CellData>` section with the given fields.
+    fn fields(&mut self, indent: usize, section: &str, fields: &[Field<'a>]) -> io::Result<()> {
+        if fields.is_empty() {
+            self.line(indent, &format!("<{section}/>"));
+            return Ok(());
+        }
+        self.line(indent, &format!("<{section}>"));
+        for f in fields {
+            self.array(
+                indent + 1,
+                "Float64",
+                f.name,
+                f.data.components(),
+                Block::Field(f.data),
+            )?;
+        }
+        self.line(indent, &format!("</{section}>"));
+        Ok(())
+    }
+
+    /// Writes the document atomically: XML header, appended data, footer.
+    fn write(self, path: &Path) -> io::Result<()> {
+        atomic_write(path, |w: &mut BufWriter<File>| {
+            w.write_all(self.xml.as_bytes())?;
+            w.write_all(b"  <AppendedData encoding=\"raw\">\n   _")?;
+            for b in &self.blocks {
+                b.write(w)?;
+            }
+            w.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
+        })
+    }
+}
+
+/// Writes particles as a VTK XML `UnstructuredGrid` (`.vtu`) made of one
+/// `VTK_VERTEX` cell per point, with the given point data.
+///
+/// Zero points is allowed and gives a valid, empty file. Connectivity and
+/// offsets are `Int64`, cell types `UInt8`.
+///
+/// # Errors
+/// [`io::ErrorKind::InvalidInput`] (naming the field) when a field's length
+/// differs from `points.len()`, a name is empty, duplicated or contains
+/// control characters; otherwise any I/O error of the write.
+pub fn write_vtu_points(path: &Path, points: &[[f64; 3]], point_data: &[Field]) -> io::Result<()> {
+    let n = points.len();
+    check_fields("point", point_data, n)?;
+    let mut doc = Doc::new("UnstructuredGrid");
+    doc.line(1, "<UnstructuredGrid>");
+    doc.line(
+        2,
+        &format!("<Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">"),
+    );
+    doc.fields(3, "PointData", point_data)?;
+    doc.line(3, "<CellData/>");
+    doc.line(3, "<Points>");
+    doc.array(4, "Float64", "Points", 3, Block::Points(points))?;
+    doc.line(3, "</Points>");
+    doc.line(3, "<Cells>");
+    doc.array(4, "Int64", "connectivity", 1, Block::Iota { n, start: 0 })?;
+    doc.array(4, "Int64", "offsets", 1, Block::Iota { n, start: 1 })?;
+    doc.array(
+        4,
+        "UInt8",
+        "types",
+        1,
+        Block::ConstU8 {
+            n,
+            value: VTK_VERTEX,
+        },
+    )?;
+    doc.line(3, "</Cells>");
+    doc.line(2, "</Piece>");
+    doc.line(1, "</UnstructuredGrid>");
+    doc.write(path)
+}
+
+/// Writes a uniform grid as a VTK XML `ImageData` (`.vti`).
+///
+/// The whole extent is `0 cells[0] 0 cells[1] 0 cells[2]`; use 0 for unused
+/// dimensions (a 2D grid of `nx × ny` cells gives `"0 nx 0 ny 0 0"`).
+/// `point_data` fields hold `(nx+1)(ny+1)(nz+1)` tuples and `cell_data`
+/// fields `max(nx,1)·max(ny,1)·max(nz,1)` tuples, both ordered with x
+/// fastest, then y, then z.
+///
+/// # Errors
+/// [`io::ErrorKind::InvalidInput`] (naming the field) when a field has the
+/// wrong length or an invalid/duplicate name, when `origin` or `spacing` is
+/// not finite, or when the sizes overflow; otherwise any I/O error.
+pub fn write_vti(
+    path: &Path,
+    origin: [f64; 3],
+    spacing: [f64; 3],
+    cells: [usize; 3],
+    point_data: &[Field],
+    cell_data: &[Field],
+) -> io::Result<()> {
+    if origin.iter().chain(spacing.iter()).any(|v| !v.is_finite()) {
+        return Err(invalid(format!(
+            "non-finite origin {origin:?} or spacing {spacing:?}"
+        )));
+    }
+    let overflow = || invalid(format!("grid of {cells:?} cells is too large"));
+    let n_points = cells.iter().try_fold(1usize, |acc, &c| {
+        c.checked_add(1)
+            .and_then(|c1| acc.checked_mul(c1))
+            .ok_or_else(overflow)
+    })?;
+    let n_cells = cells.iter().try_fold(1usize, |acc, &c| {
+        acc.checked_mul(c.max(1)).ok_or_else(overflow)
+    })?;
+    check_fields("point", point_data, n_points)?;
+    check_fields("cell", cell_data, n_cells)?;
+
+    let extent = format!("0 {} 0 {} 0 {}", cells[0], cells[1], cells[2]);
+    let triple = |v: [f64; 3]| format!("{} {} {}", fmt_f64(v[0]), fmt_f64(v[1]), fmt_f64(v[2]));
+    let mut doc = Doc::new("ImageData");
+    doc.line(
+        1,
+        &format!(
+            "<ImageData WholeExtent=\"{extent}\" Origin=\"{}\" Spacing=\"{}\">",
+            triple(origin),
+            triple(spacing)
+        ),
+    );
+    doc.line(2, &format!("<Piece Extent=\"{extent}\">"));
+    doc.fields(3, "PointData", point_data)?;
+    doc.fields(3, "CellData", cell_data)?;
+    doc.line(2, "</Piece>");
+    doc.line(1, "</ImageData>");
+    doc.write(path)
+}
+
+/// One entry of a [`PvdSeries`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PvdEntry {
+    /// Simulation time of the data set.
+    pub time: f64,
+    /// File name of the data set, relative to the `.pvd` file's directory.
+    pub file: String,
+}
+
+/// A ParaView collection file (`.pvd`) listing a time series of data sets.
+///
+/// Every [`push`](Self::push) rewrites the whole file atomically, so an
+/// interrupted run still leaves a valid series of the steps written so far.
+/// A run with several series (e.g. particles and grid) uses one
+/// `PvdSeries` per series. The file is first created by the first `push`
+/// (or an explicit [`write`](Self::write)).
+#[derive(Clone, Debug)]
+pub struct PvdSeries {
+    path: PathBuf,
+    entries: Vec<PvdEntry>,
+}
+
+impl PvdSeries {
+    /// A new, empty series to be written at `path` (nothing is written yet).
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        PvdSeries {
+            path: path.into(),
+            entries: Vec::new(),
+        }
+    }
+
+    /// The `.pvd` file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The entries pushed so far, in push order.
+    pub fn entries(&self) -> &[PvdEntry] {
+        &self.entries
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// `true` when no entry has been pushed.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Appends a data set at `time` (file name relative to the `.pvd`'s
+    /// directory) and rewrites the `.pvd` atomically.
+    ///
+    /// # Errors
+    /// [`io::ErrorKind::InvalidInput`] for a non-finite time or an empty file
+    /// name or one with control characters; any I/O error of the rewrite. On
+    /// error the entry is not kept.
+    pub fn push(&mut self, time: f64, relative_file_name: &str) -> io::Result<()> {
+        if !time.is_finite() {
+            return Err(invalid(format!("non-finite PVD time step {time}")));
+        }
+        if relative_file_name.is_empty() || relative_file_name.chars().any(char::is_control) {
+            return Err(invalid(format!(
+                "invalid PVD file name {relative_file_name:?}"
+            )));
+        }
+        self.entries.push(PvdEntry {
+            time,
+            file: relative_file_name.to_string(),
+        });
+        let result = self.write();
+        if result.is_err() {
+            self.entries.pop();
+        }
+        result
+    }
+
+    /// Writes the `.pvd` file atomically with the current entries.
+    ///
+    /// # Errors
+    /// Any I/O error of the write.
+    pub fn write(&self) -> io::Result<()> {
+        let mut xml = String::new();
+        xml.push_str("<?xml version=\"1.0\"?>\n");
+        xml.push_str("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n");
+        xml.push_str("  <Collection>\n");
+        for e in &self.entries {
+            let _ = writeln!(
+                xml,
+                "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",
+                fmt_f64(e.time),
+                xml_escape(&e.file)
+            );
+        }
+        xml.push_str("  </Collection>\n");
+        xml.push_str("</VTKFile>\n");
+        atomic_write(&self.path, |w| w.write_all(xml.as_bytes()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_dir;
+    use super::*;
+    use std::fs;
+
+    /// Value of attribute `key` in the tag text `tag` (still XML-escaped).
+    fn attr<'t>(tag: &'t str, key: &str) -> Option<&'t str> {
+        let pat = format!(" {key}=\"");
+        let start = tag.find(&pat)? + pat.len();
+        let end = start + tag[start..].find('"')?;
+        Some(&tag[start..end])
+    }
+
+    /// Tiny well-formedness check: every tag is closed by `>`, quotes are
+    /// balanced inside tags, and open/close tags nest properly.
+    fn assert_balanced(xml: &str) {
+        let mut stack: Vec<String> = Vec::new();
+        let mut rest = xml;
+        while let Some(i) = rest.find('<') {
+            let j = rest[i..].find('>').expect("unterminated tag") + i;
+            let tag = &rest[i + 1..j];
+            assert_eq!(tag.matches('"').count() % 2, 0, "unbalanced quotes: {tag}");
+            if tag.starts_with('?') {
+                // processing instruction
+            } else if let Some(name) = tag.strip_prefix('/') {
+                let open = stack.pop().expect("close without open");
+                assert_eq!(open, name.trim(), "mismatched close tag");
+            } else if !tag.ends_with('/') {
+                let name = tag.split_whitespace().next().expect("tag name");
+                stack.push(name.to_string());
+            }
+            rest = &rest[j + 1..];
+        }
+        assert!(stack.is_empty(), "unclosed tags: {stack:?}");
+    }
+
+    /// A parsed appended-raw VTK file.
+    struct Vtk {
+        /// XML header + footer (without the binary section).
+        xml: String,
+        /// DataArray tags, in order.
+        arrays: Vec<String>,
+        /// Bytes after the `_` marker.
+        raw: Vec<u8>,
+    }
+
+    impl Vtk {
+        fn read(path: &Path) -> Vtk {
+            let bytes = fs::read(path).expect("read vtk");
+            let marker = b"<AppendedData encoding=\"raw\">";
+            let m = bytes
+                .windows(marker.len())
+                .position(|w| w == marker)
+                .expect("AppendedData");
+            let us = m + bytes[m..].iter().position(|&b| b == b'_').expect("_");
+            let header = String::from_utf8(bytes[..us].to_vec()).expect("utf8 header");
+            assert!(header.contains("header_type=\"UInt64\""));
+            assert!(header.contains("byte_order=\"LittleEndian\""));
+            let raw = bytes[us + 1..].to_vec();
+            let arrays: Vec<String> = header
+                .match_indices("<DataArray")
+                .map(|(i, _)| {
+                    let j = header[i..].find('>').expect(">") + i;
+                    header[i..=j].to_string()
+                })
+                .collect();
+            // Walk the blocks to find the end of the binary section.
+            let mut end = 0usize;
+            for a in &arrays {
+                assert_eq!(attr(a, "format"), Some("appended"));
+                let off: usize = attr(a, "offset").expect("offset").parse().expect("int");
+                let len = u64::from_le_bytes(raw[off..off + 8].try_into().expect("8"));
+                end = end.max(off + 8 + len as usize);
+            }
+            let tail = String::from_utf8(raw[end..].to_vec()).expect("utf8 tail");
+            assert_eq!(tail.trim(), "</AppendedData>\n</VTKFile>");
+            let xml = format!("{header}{tail}");
+            Vtk {
+                xml,
+                arrays,
+                raw: raw[..end].to_vec(),
+            }
+        }
+
+        fn tag(&self, name: &str) -> &str {
+            self.arrays
+                .iter()
+                .find(|a| attr(a, "Name") == Some(name))
+                .unwrap_or_else(|| panic!("no array {name}"))
+        }
+
+        /// Payload bytes of the named array, checked against its header.
+        fn payload(&self, name: &str) -> &[u8] {
+            let off: usize = attr(self.tag(name), "offset")
+                .expect("offset")
+                .parse()
+                .expect("int");
+            let len = u64::from_le_bytes(self.raw[off..off + 8].try_into().expect("8")) as usize;
+            &self.raw[off + 8..off + 8 + len]
+        }
+
+        fn f64s(&self, name: &str) -> Vec<f64> {
+            assert_eq!(attr(self.tag(name), "type"), Some("Float64"));
+            self.payload(name)
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().expect("8")))
+                .collect()
+        }
+
+        fn i64s(&self, name: &str) -> Vec<i64> {
+            assert_eq!(attr(self.tag(name), "type"), Some("Int64"));
+            self.payload(name)
+                .chunks_exact(8)
+                .map(|c| i64::from_le_bytes(c.try_into().expect("8")))
+                .collect()
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    #[test]
+    fn vtu_round_trips_exactly() {
+        let dir = test_dir("vtu");
+        let path = dir.join("p.vtu");
+        let points = [[0.0, 1.5, -2.0], [1e-300, f64::MAX, -0.0], [0.1, 0.2, 0.3]];
+        let mass = [1.0, 2.0 / 3.0, f64::NAN];
+        let vel = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [-7.0, 8.5, 1e10]];
+        let stress: Vec<[f64; 9]> = (0..3)
+            .map(|p| std::array::from_fn(|k| (p * 9 + k) as f64 * 0.37 - 1.0))
+            .collect();
+        write_vtu_points(
+            &path,
+            &points,
+            &[
+                Field::scalar("mass", &mass),
+                Field::vector("velocity", &vel),
+                Field::tensor("stress & <strain>", &stress),
+            ],
+        )
+        .expect("write vtu");
+
+        let v = Vtk::read(&path);
+        assert_balanced(&v.xml);
+        assert!(v.xml.contains("type=\"UnstructuredGrid\""));
+        assert!(v.xml.contains("NumberOfPoints=\"3\" NumberOfCells=\"3\""));
+        assert_eq!(bits(&v.f64s("mass")), bits(&mass));
+        assert_eq!(attr(v.tag("velocity"), "NumberOfComponents"), Some("3"));
+        let flat_vel: Vec<f64> = vel.iter().flatten().copied().collect();
+        assert_eq!(bits(&v.f64s("velocity")), bits(&flat_vel));
+        let tname = "stress &amp; &lt;strain&gt;";
+        assert_eq!(attr(v.tag(tname), "NumberOfComponents"), Some("9"));
+        let flat_s: Vec<f64> = stress.iter().flatten().copied().collect();
+        assert_eq!(bits(&v.f64s(tname)), bits(&flat_s));
+        let flat_p: Vec<f64> = points.iter().flatten().copied().collect();
+        assert_eq!(bits(&v.f64s("Points")), bits(&flat_p));
+        assert_eq!(v.i64s("connectivity"), vec![0, 1, 2]);
+        assert_eq!(v.i64s("offsets"), vec![1, 2, 3]);
+        assert_eq!(attr(v.tag("types"), "type"), Some("UInt8"));
+        assert_eq!(v.payload("types"), &[VTK_VERTEX; 3]);
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn vtu_zero_points_is_valid() {
+        let dir = test_dir("vtu0");
+        let path = dir.join("empty.vtu");
+        write_vtu_points(&path, &[], &[Field::scalar("mass", &[])]).expect("write");
+        let v = Vtk::read(&path);
+        assert_balanced(&v.xml);
+        assert!(v.xml.contains("NumberOfPoints=\"0\" NumberOfCells=\"0\""));
+        for name in ["mass", "Points", "connectivity", "offsets", "types"] {
+            assert!(v.payload(name).is_empty(), "{name}");
+        }
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn vti_round_trips_exactly_3d_and_2d() {
+        let dir = test_dir("vti");
+        // 3D: 2 x 3 x 1 cells -> 3*4*2 = 24 points, 6 cells.
+        let path = dir.join("g3.vti");
+        let pressure: Vec<f64> = (0..24).map(|i| (i as f64).sqrt() - 2.0).collect();
+        let vel: Vec<[f64; 3]> = (0..24).map(|i| [i as f64, -(i as f64), 0.5]).collect();
+        let vol_frac: Vec<f64> = (0..6).map(|i| i as f64 / 7.0).collect();
+        let stress: Vec<[f64; 9]> = (0..6).map(|i| [i as f64 * 1e-7; 9]).collect();
+        write_vti(
+            &path,
+            [0.0, -1.0, 2.5e-8],
+            [0.1, 0.2, 1e20],
+            [2, 3, 1],
+            &[
+                Field::scalar("pressure", &pressure),
+                Field::vector("velocity", &vel),
+            ],
+            &[
+                Field::scalar("vol_frac", &vol_frac),
+                Field::tensor("stress", &stress),
+            ],
+        )
+        .expect("write vti");
+        let v = Vtk::read(&path);
+        assert_balanced(&v.xml);
+        assert!(v.xml.contains("WholeExtent=\"0 2 0 3 0 1\""));
+        assert!(v.xml.contains("Piece Extent=\"0 2 0 3 0 1\""));
+        assert!(v.xml.contains("Origin=\"0 -1 2.5e-8\""));
+        assert!(v.xml.contains("Spacing=\"0.1 0.2 1e20\""));
+        assert_eq!(bits(&v.f64s("pressure")), bits(&pressure));
+        let flat: Vec<f64> = vel.iter().flatten().copied().collect();
+        assert_eq!(bits(&v.f64s("velocity")), bits(&flat));
+        assert_eq!(bits(&v.f64s("vol_frac")), bits(&vol_frac));
+        let flat: Vec<f64> = stress.iter().flatten().copied().collect();
+        assert_eq!(bits(&v.f64s("stress")), bits(&flat));
+
+        // 2D: 4 x 2 cells -> 5*3 = 15 points, 8 cells; no cell data.
+        let path = dir.join("g2.vti");
+        let phi: Vec<f64> = (0..15).map(|i| i as f64 * 0.25).collect();
+        write_vti(
+            &path,
+            [0.0; 3],
+            [1.0; 3],
+            [4, 2, 0],
+            &[Field::scalar("phi", &phi)],
+            &[],
+        )
+        .expect("write 2d");
+        let v = Vtk::read(&path);
+        assert_balanced(&v.xml);
+        assert!(v.xml.contains("WholeExtent=\"0 4 0 2 0 0\""));
+        assert!(v.xml.contains("<CellData/>"));
+        assert_eq!(bits(&v.f64s("phi")), bits(&phi));
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn wrong_lengths_are_invalid_input_naming_the_field() {
+        let dir = test_dir("vtk-bad");
+        let path = dir.join("bad.vti");
+        let p = vec![0.0; 15];
+        let c_bad = vec![0.0; 7];
+        let err = write_vti(
+            &path,
+            [0.0; 3],
+            [1.0; 3],
+            [4, 2, 0],
+            &[Field::scalar("phi", &p)],
+            &[Field::scalar("rho", &c_bad)],
+        )
+        .expect_err("bad cell length");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("\"rho\""), "{err}");
+
+        let err = write_vti(
+            &path,
+            [0.0; 3],
+            [1.0; 3],
+            [4, 2, 0],
+            &[Field::scalar("phi", &p[..14])],
+            &[],
+        )
+        .expect_err("bad point length");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("\"phi\""), "{err}");
+
+        let err = write_vti(&path, [f64::NAN, 0.0, 0.0], [1.0; 3], [1, 1, 1], &[], &[])
+            .expect_err("nan origin");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+
+        let err = write_vti(&path, [0.0; 3], [1.0; 3], [usize::MAX, 2, 2], &[], &[])
+            .expect_err("overflow");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+
+        let vpath = dir.join("bad.vtu");
+        let vel = [[0.0; 3]; 2];
+        let err = write_vtu_points(&vpath, &[[0.0; 3]; 3], &[Field::vector("vel", &vel)])
+            .expect_err("bad vtu length");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("\"vel\""), "{err}");
+
+        let m = [1.0; 3];
+        let err = write_vtu_points(
+            &vpath,
+            &[[0.0; 3]; 3],
+            &[Field::scalar("m", &m), Field::scalar("m", &m)],
+        )
+        .expect_err("duplicate");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+
+        // Nothing was written, not even temporaries.
+        assert_eq!(fs::read_dir(&dir).expect("dir").count(), 0);
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn pvd_lists_entries_and_is_rewritten() {
+        let dir = test_dir("pvd");
+        let path = dir.join("particles.pvd");
+        let mut s = PvdSeries::new(&path);
+        assert!(s.is_empty());
+        s.push(0.0, "particles_0000.vtu").expect("push 0");
+        let first = fs::read_to_string(&path).expect("read");
+        assert_balanced(&first);
+        assert_eq!(first.matches("<DataSet").count(), 1);
+        s.push(2.5e-3, "particles_0001.vtu").expect("push 1");
+        s.push(1e-9, "a&b.vtu").expect("push 2");
+        assert_eq!(s.len(), 3);
+
+        let text = fs::read_to_string(&path).expect("read");
+        assert_balanced(&text);
+        assert!(text.contains("type=\"Collection\""));
+        let sets: Vec<(String, String)> = text
+            .lines()
+            .filter(|l| l.contains("<DataSet"))
+            .map(|l| {
+                (
+                    attr(l, "timestep").expect("timestep").to_string(),
+                    attr(l, "file").expect("file").to_string(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            sets,
+            vec![
+                ("0".to_string(), "particles_0000.vtu".to_string()),
+                ("0.0025".to_string(), "particles_0001.vtu".to_string()),
+                ("1e-9".to_string(), "a&amp;b.vtu".to_string()),
+            ]
+        );
+        let err = s.push(f64::NAN, "x.vtu").expect_err("nan time");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert_eq!(s.len(), 3);
+        // Only the .pvd itself: no temporary files left behind.
+        assert_eq!(fs::read_dir(&dir).expect("dir").count(), 1);
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+}

@@ -1,0 +1,576 @@
+//! The scene schema. Every table rejects unknown keys.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SceneError;
+use crate::grid::Boundary;
+use crate::material::SolidModel;
+use crate::mpm::UpdateScheme;
+use crate::shape::ShapeKind;
+
+/// A whole scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Free-text description.
+    #[serde(default)]
+    pub description: String,
+    /// The background grid.
+    pub grid: GridSpec,
+    /// Time integration.
+    pub time: TimeSpec,
+    /// MPM discretisation choices.
+    #[serde(default)]
+    pub mpm: MpmSpec,
+    /// Materials, referred to by name.
+    pub materials: Vec<MaterialSpec>,
+    /// Bodies filled with particles.
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+    /// Uniform body force per unit mass (length `dim`), e.g. `[0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<Vec<f64>>,
+    /// What to write.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// The background grid.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Spatial dimension: 1, 2 (plane strain) or 3.
+    pub dim: usize,
+    /// Lower corner (length `dim`).
+    pub lower: Vec<f64>,
+    /// Upper corner (length `dim`).
+    pub upper: Vec<f64>,
+    /// Cells per direction (length `dim`).
+    pub cells: Vec<usize>,
+    /// Boundary condition per face.
+    #[serde(default)]
+    pub boundary: BoundarySpec,
+}
+
+/// Boundary condition per face; faces not given are `free`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// Face x = lower.
+    pub x_lower: Option<Boundary>,
+    /// Face x = upper.
+    pub x_upper: Option<Boundary>,
+    /// Face y = lower.
+    pub y_lower: Option<Boundary>,
+    /// Face y = upper.
+    pub y_upper: Option<Boundary>,
+    /// Face z = lower.
+    pub z_lower: Option<Boundary>,
+    /// Face z = upper.
+    pub z_upper: Option<Boundary>,
+}
+
+impl BoundarySpec {
+    /// The faces as `[[lower, upper]; 3]` with their key names.
+    pub fn faces(&self) -> [[(Option<Boundary>, &'static str); 2]; 3] {
+        [
+            [(self.x_lower, "x_lower"), (self.x_upper, "x_upper")],
+            [(self.y_lower, "y_lower"), (self.y_upper, "y_upper")],
+            [(self.z_lower, "z_lower"), (self.z_upper, "z_upper")],
+        ]
+    }
+}
+
+/// Time-integration mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// Explicit in every material.
+    #[default]
+    Explicit,
+    /// Implicit pressure, explicit MPM.
+    SemiImplicit,
+    /// Implicit pressure and implicit MPM.
+    Implicit,
+}
+
+impl Mode {
+    /// Scene-file name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Explicit => "explicit",
+            Mode::SemiImplicit => "semi_implicit",
+            Mode::Implicit => "implicit",
+        }
+    }
+}
+
+/// Time integration.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// End time (> 0).
+    pub end: f64,
+    /// Courant number, 0 < cfl ≤ 1.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// Fixed timestep; when absent the CFL condition sets it every step.
+    pub dt: Option<f64>,
+    /// Integration mode.
+    #[serde(default)]
+    pub mode: Mode,
+    /// Stop after this many steps even before `end`.
+    pub max_steps: Option<u64>,
+}
+
+fn default_cfl() -> f64 {
+    0.4
+}
+
+/// MPM discretisation choices.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MpmSpec {
+    /// Shape function.
+    #[serde(default = "default_shape")]
+    pub shape: ShapeKind,
+    /// Stress update ordering.
+    #[serde(default = "default_update")]
+    pub update: UpdateScheme,
+    /// Default particles per cell per direction.
+    #[serde(default = "default_ppc")]
+    pub particles_per_cell: usize,
+}
+
+fn default_shape() -> ShapeKind {
+    ShapeKind::QuadraticBspline
+}
+fn default_update() -> UpdateScheme {
+    UpdateScheme::Usl
+}
+fn default_ppc() -> usize {
+    2
+}
+
+impl Default for MpmSpec {
+    fn default() -> Self {
+        Self {
+            shape: default_shape(),
+            update: default_update(),
+            particles_per_cell: default_ppc(),
+        }
+    }
+}
+
+/// Kind of material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialKind {
+    /// A solid on material points.
+    Solid,
+}
+
+/// A material. Elastic constants are given either as `youngs_modulus` and
+/// `poisson_ratio` or as `bulk_modulus` and `shear_modulus`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Unique name.
+    pub name: String,
+    /// Material kind.
+    #[serde(rename = "type")]
+    pub kind: MaterialKind,
+    /// Constitutive model (solids).
+    pub model: Option<SolidModel>,
+    /// Reference density (> 0).
+    pub density: f64,
+    /// Young's modulus E (> 0).
+    pub youngs_modulus: Option<f64>,
+    /// Poisson's ratio, −1 < ν < 0.5.
+    pub poisson_ratio: Option<f64>,
+    /// Bulk modulus K (> 0).
+    pub bulk_modulus: Option<f64>,
+    /// Shear modulus G (> 0).
+    pub shear_modulus: Option<f64>,
+}
+
+/// Region filled by an object.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Geometry {
+    /// Axis-aligned box.
+    Box {
+        /// Lower corner.
+        lower: Vec<f64>,
+        /// Upper corner.
+        upper: Vec<f64>,
+    },
+    /// Disk (2D) or ball in any dimension.
+    Disk {
+        /// Centre.
+        center: Vec<f64>,
+        /// Radius.
+        radius: f64,
+    },
+    /// Ball (3D) or disk in any dimension.
+    Sphere {
+        /// Centre.
+        center: Vec<f64>,
+        /// Radius.
+        radius: f64,
+    },
+    /// Annulus (2D) or cylindrical shell along z (3D): distance from the
+    /// centre (in the x–y plane) between the radii.
+    Annulus {
+        /// Centre (length `dim`; z ignored).
+        center: Vec<f64>,
+        /// Inner radius.
+        inner_radius: f64,
+        /// Outer radius.
+        outer_radius: f64,
+    },
+}
+
+impl Geometry {
+    /// Whether point `x` lies inside the region.
+    pub fn contains(&self, x: &[f64]) -> bool {
+        match self {
+            Geometry::Box { lower, upper } => {
+                (0..x.len()).all(|d| x[d] >= lower[d] && x[d] <= upper[d])
+            }
+            Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
+                dist2(x, center, x.len()) <= radius * radius
+            }
+            Geometry::Annulus {
+                center,
+                inner_radius,
+                outer_radius,
+            } => {
+                let r2 = dist2(x, center, x.len().min(2));
+                r2 >= inner_radius * inner_radius && r2 <= outer_radius * outer_radius
+            }
+        }
+    }
+
+    /// Axis-aligned bounding box.
+    pub fn bounds(&self, dim: usize) -> (Vec<f64>, Vec<f64>) {
+        match self {
+            Geometry::Box { lower, upper } => (lower.clone(), upper.clone()),
+            Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => (
+                center.iter().map(|c| c - radius).collect(),
+                center.iter().map(|c| c + radius).collect(),
+            ),
+            Geometry::Annulus {
+                center,
+                outer_radius,
+                ..
+            } => (
+                (0..dim)
+                    .map(|d| {
+                        if d < 2 {
+                            center[d] - outer_radius
+                        } else {
+                            f64::NEG_INFINITY
+                        }
+                    })
+                    .collect(),
+                (0..dim)
+                    .map(|d| {
+                        if d < 2 {
+                            center[d] + outer_radius
+                        } else {
+                            f64::INFINITY
+                        }
+                    })
+                    .collect(),
+            ),
+        }
+    }
+}
+
+fn dist2(a: &[f64], b: &[f64], n: usize) -> f64 {
+    (0..n).map(|d| (a[d] - b[d]) * (a[d] - b[d])).sum()
+}
+
+/// A body of one material filled with particles.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Name of a solid material.
+    pub material: String,
+    /// Region to fill.
+    pub geometry: Geometry,
+    /// Particles per cell per direction (default: `mpm.particles_per_cell`).
+    pub particles_per_cell: Option<usize>,
+    /// Initial velocity (length `dim`; default zero).
+    pub velocity: Option<Vec<f64>>,
+    /// Keep only the part inside the grid instead of rejecting a region that
+    /// extends beyond it (e.g. a quarter of an annulus on symmetry planes).
+    #[serde(default)]
+    pub clip: bool,
+}
+
+/// Output file formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Format {
+    /// ParaView VTK XML (`.vtu` particles, `.vti` grid, `.pvd` series).
+    Vtk,
+    /// CSV snapshots of particle fields.
+    Csv,
+}
+
+/// What to write.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Simulation time between snapshots (> 0); absent: first and last only.
+    pub interval: Option<f64>,
+    /// Snapshot formats.
+    #[serde(default = "default_formats")]
+    pub formats: Vec<Format>,
+    /// Simulation time between rows of `history.csv` (default: interval / 20,
+    /// or every step when there is no interval).
+    pub history_interval: Option<f64>,
+}
+
+fn default_formats() -> Vec<Format> {
+    vec![Format::Vtk, Format::Csv]
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            interval: None,
+            formats: default_formats(),
+            history_interval: None,
+        }
+    }
+}
+
+fn err(path: impl Into<String>, msg: impl Into<String>) -> SceneError {
+    SceneError::new(path, msg)
+}
+
+fn positive(path: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(err(path, format!("must be a finite number > 0 (got {v})")))
+    }
+}
+
+fn vec_len(path: &str, v: &[f64], dim: usize) -> Result<(), SceneError> {
+    if v.len() != dim {
+        return Err(err(
+            path,
+            format!("must have {dim} components (grid.dim), got {}", v.len()),
+        ));
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(err(format!("{path}[{i}]"), "must be finite"));
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Checks ranges and cross-references; the error names the key path and
+    /// the allowed values.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let g = &self.grid;
+        let dim = g.dim;
+        if !(1..=3).contains(&dim) {
+            return Err(err("grid.dim", format!("must be 1, 2 or 3 (got {dim})")));
+        }
+        vec_len("grid.lower", &g.lower, dim)?;
+        vec_len("grid.upper", &g.upper, dim)?;
+        if g.cells.len() != dim {
+            return Err(err(
+                "grid.cells",
+                format!("must have {dim} components (grid.dim), got {}", g.cells.len()),
+            ));
+        }
+        for d in 0..dim {
+            if g.cells[d] == 0 {
+                return Err(err(format!("grid.cells[{d}]"), "must be ≥ 1 (got 0)"));
+            }
+            if g.cells[d] > 1 << 20 {
+                return Err(err(format!("grid.cells[{d}]"), "must be ≤ 1048576"));
+            }
+            if g.upper[d] <= g.lower[d] {
+                return Err(err(
+                    format!("grid.upper[{d}]"),
+                    format!("must be > grid.lower[{d}] = {}", g.lower[d]),
+                ));
+            }
+        }
+        for (axis, faces) in g.boundary.faces().iter().enumerate() {
+            for (bc, name) in faces {
+                if axis >= dim && bc.is_some() {
+                    return Err(err(
+                        format!("grid.boundary.{name}"),
+                        format!("not allowed in {dim}D (only faces of the first {dim} axes)"),
+                    ));
+                }
+            }
+        }
+        let t = &self.time;
+        positive("time.end", t.end)?;
+        if !(t.cfl.is_finite() && t.cfl > 0.0 && t.cfl <= 1.0) {
+            return Err(err("time.cfl", format!("must satisfy 0 < cfl ≤ 1 (got {})", t.cfl)));
+        }
+        if let Some(dt) = t.dt {
+            positive("time.dt", dt)?;
+        }
+        if t.max_steps == Some(0) {
+            return Err(err("time.max_steps", "must be ≥ 1 (got 0)"));
+        }
+        if t.mode != Mode::Explicit {
+            return Err(err(
+                "time.mode",
+                format!(
+                    "`{}` is not available yet in this build; allowed: explicit",
+                    t.mode.name()
+                ),
+            ));
+        }
+        if !(1..=16).contains(&self.mpm.particles_per_cell) {
+            return Err(err(
+                "mpm.particles_per_cell",
+                format!("must be 1 … 16 (got {})", self.mpm.particles_per_cell),
+            ));
+        }
+        if self.materials.is_empty() {
+            return Err(err("materials", "at least one material is required"));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let p = |k: &str| format!("materials[{i}].{k}");
+            if m.name.trim().is_empty() {
+                return Err(err(p("name"), "must not be empty"));
+            }
+            if self.materials[..i].iter().any(|o| o.name == m.name) {
+                return Err(err(p("name"), format!("`{}` is used twice", m.name)));
+            }
+            positive(&p("density"), m.density)?;
+            if m.model.is_none() {
+                return Err(err(
+                    p("model"),
+                    format!("missing; solids need one of: {}", SolidModel::NAMES),
+                ));
+            }
+            match (
+                m.youngs_modulus,
+                m.poisson_ratio,
+                m.bulk_modulus,
+                m.shear_modulus,
+            ) {
+                (Some(e), Some(nu), None, None) => {
+                    positive(&p("youngs_modulus"), e)?;
+                    if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+                        return Err(err(
+                            p("poisson_ratio"),
+                            format!("must satisfy -1 < ν < 0.5 (got {nu})"),
+                        ));
+                    }
+                }
+                (None, None, Some(k), Some(g)) => {
+                    positive(&p("bulk_modulus"), k)?;
+                    positive(&p("shear_modulus"), g)?;
+                }
+                _ => {
+                    return Err(err(
+                        p("youngs_modulus"),
+                        "give exactly one pair: youngs_modulus + poisson_ratio, or \
+                         bulk_modulus + shear_modulus",
+                    ))
+                }
+            }
+        }
+        if let Some(gv) = &self.gravity {
+            vec_len("gravity", gv, dim)?;
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            let p = |k: &str| format!("objects[{i}].{k}");
+            if !self.materials.iter().any(|m| m.name == o.material) {
+                let names: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
+                return Err(err(
+                    p("material"),
+                    format!("unknown material `{}`; defined: {}", o.material, names.join(", ")),
+                ));
+            }
+            if let Some(ppc) = o.particles_per_cell {
+                if !(1..=16).contains(&ppc) {
+                    return Err(err(p("particles_per_cell"), format!("must be 1 … 16 (got {ppc})")));
+                }
+            }
+            if let Some(v) = &o.velocity {
+                vec_len(&p("velocity"), v, dim)?;
+            }
+            match &o.geometry {
+                Geometry::Box { lower, upper } => {
+                    vec_len(&p("geometry.lower"), lower, dim)?;
+                    vec_len(&p("geometry.upper"), upper, dim)?;
+                    for d in 0..dim {
+                        if upper[d] <= lower[d] {
+                            return Err(err(
+                                format!("objects[{i}].geometry.upper[{d}]"),
+                                format!("must be > geometry.lower[{d}] = {}", lower[d]),
+                            ));
+                        }
+                    }
+                }
+                Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
+                    vec_len(&p("geometry.center"), center, dim)?;
+                    positive(&p("geometry.radius"), *radius)?;
+                }
+                Geometry::Annulus {
+                    center,
+                    inner_radius,
+                    outer_radius,
+                } => {
+                    if dim < 2 {
+                        return Err(err(p("geometry.type"), "annulus needs dim 2 or 3"));
+                    }
+                    vec_len(&p("geometry.center"), center, dim)?;
+                    if !(inner_radius.is_finite() && *inner_radius >= 0.0) {
+                        return Err(err(p("geometry.inner_radius"), "must be ≥ 0"));
+                    }
+                    if !(outer_radius.is_finite() && outer_radius > inner_radius) {
+                        return Err(err(
+                            p("geometry.outer_radius"),
+                            format!("must be > inner_radius = {inner_radius}"),
+                        ));
+                    }
+                }
+            }
+            if !o.clip {
+                let (lo, hi) = o.geometry.bounds(dim);
+                for d in 0..dim {
+                    let tol = 1e-12 * (g.upper[d] - g.lower[d]);
+                    if lo[d] < g.lower[d] - tol || hi[d] > g.upper[d] + tol {
+                        return Err(err(
+                            p("geometry"),
+                            format!(
+                                "particles would lie outside the grid along axis {d}: region \
+                                 [{}, {}] vs grid [{}, {}] (set clip = true to keep only the \
+                                 part inside)",
+                                lo[d], hi[d], g.lower[d], g.upper[d]
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        if self.objects.is_empty() {
+            return Err(err("objects", "at least one object is required"));
+        }
+        let out = &self.output;
+        if let Some(iv) = out.interval {
+            positive("output.interval", iv)?;
+        }
+        if let Some(iv) = out.history_interval {
+            positive("output.history_interval", iv)?;
+        }
+        Ok(())
+    }
+}
