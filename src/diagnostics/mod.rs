@@ -1,3 +1,4 @@
 //! Diagnostics: conservation, error norms and exact reference solutions.
 
+pub mod mms;
 pub mod riemann;

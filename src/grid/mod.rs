@@ -25,6 +25,52 @@ pub enum Boundary {
 /// of a particle within one cell of the domain.
 pub const GHOST: usize = 2;
 
+/// A nodal quantity that can be mirrored across a boundary face.
+pub trait Reflect<const D: usize>: Copy {
+    /// The value of the mirror image across a face normal to `axis`.
+    fn reflect(&self, axis: usize, bc: Boundary) -> Self;
+    /// Sum.
+    fn add(&self, other: &Self) -> Self;
+    /// Zero.
+    fn zero() -> Self;
+}
+
+impl<const D: usize> Reflect<D> for f64 {
+    #[inline]
+    fn reflect(&self, _: usize, _: Boundary) -> Self {
+        *self
+    }
+    #[inline]
+    fn add(&self, o: &Self) -> Self {
+        self + o
+    }
+    fn zero() -> Self {
+        0.0
+    }
+}
+
+impl<const D: usize> Reflect<D> for SVector<f64, D> {
+    #[inline]
+    fn reflect(&self, axis: usize, bc: Boundary) -> Self {
+        match bc {
+            Boundary::Fixed => -self,
+            Boundary::Symmetry => {
+                let mut r = *self;
+                r[axis] = -r[axis];
+                r
+            }
+            Boundary::Free => *self,
+        }
+    }
+    #[inline]
+    fn add(&self, o: &Self) -> Self {
+        self + o
+    }
+    fn zero() -> Self {
+        SVector::zeros()
+    }
+}
+
 /// The background grid.
 #[derive(Debug, Clone)]
 pub struct Grid<const D: usize> {
@@ -135,28 +181,60 @@ impl<const D: usize> Grid<D> {
         (0..D).all(|d| xi[d] >= -1.0 && xi[d] < self.cells[d] as f64 + 1.0)
     }
 
-    /// Applies the boundary conditions to a node velocity (or acceleration)
-    /// field: on a `Fixed` face every component vanishes at the boundary node
-    /// and the ghosts beyond it; on a `Symmetry` face the normal component does.
-    pub fn apply_velocity_bc(&self, v: &mut [SVector<f64, D>]) {
+    /// Folds what P2G put on ghost nodes back onto the domain, as if mirror
+    /// images of the particles stood beyond every `Fixed` or `Symmetry` face:
+    /// node `k` inside gains the reflected value of ghost node `−k`, and the
+    /// boundary node gains its own reflection (mass doubles; odd components
+    /// cancel). Odd components are all of them on a `Fixed` face (no-slip) and
+    /// the normal one on a `Symmetry` face. Applied to nodal mass, momentum and
+    /// force, this gives every shape function, however wide, the consistent
+    /// boundary treatment; ghosts are cleared afterwards.
+    pub fn fold_ghosts<T: Reflect<D>>(&self, q: &mut [T]) {
+        self.for_each_mirror_pair(|ghost, mirror, axis, bc| {
+            if ghost == mirror {
+                let r = q[ghost].reflect(axis, bc);
+                q[ghost] = q[ghost].add(&r);
+            } else {
+                let r = q[ghost].reflect(axis, bc);
+                q[mirror] = q[mirror].add(&r);
+                q[ghost] = T::zero();
+            }
+        });
+    }
+
+    /// Sets every ghost node beyond a `Fixed` or `Symmetry` face to the
+    /// reflection of its mirror node inside (the counterpart of
+    /// [`Self::fold_ghosts`] for grid velocities and accelerations).
+    pub fn mirror_ghosts<T: Reflect<D>>(&self, q: &mut [T]) {
+        self.for_each_mirror_pair(|ghost, mirror, axis, bc| {
+            if ghost != mirror {
+                q[ghost] = q[mirror].reflect(axis, bc);
+            }
+        });
+    }
+
+    /// Calls `f(ghost, mirror, axis, bc)` for every node of the boundary layer
+    /// (with `ghost == mirror`) and every ghost layer of each non-free face,
+    /// axis by axis so that corners fold twice.
+    fn for_each_mirror_pair(&self, mut f: impl FnMut(usize, usize, usize, Boundary)) {
+        let strides = self.strides();
         for axis in 0..D {
+            let n = self.cells[axis] as isize;
             for side in 0..2 {
                 let bc = self.bc[axis][side];
                 if bc == Boundary::Free {
                     continue;
                 }
-                // Node layers on this face: the boundary node and the ghosts beyond.
-                let (first, last) = if side == 0 {
-                    (-(GHOST as isize), 0)
-                } else {
-                    let n = self.cells[axis] as isize;
-                    (n, n + GHOST as isize)
-                };
-                for layer in first..=last {
-                    self.for_each_node_in_layer(axis, layer, |idx| match bc {
-                        Boundary::Fixed => v[idx] = SVector::zeros(),
-                        Boundary::Symmetry => v[idx][axis] = 0.0,
-                        Boundary::Free => {}
+                // Boundary layer first, then ghosts from the outermost in:
+                // the boundary layer must see only its own contributions.
+                for k in 0..=GHOST as isize {
+                    if k > n {
+                        break;
+                    }
+                    let (ghost, mirror) = if side == 0 { (-k, k) } else { (n + k, n - k) };
+                    let shift = (mirror - ghost) * strides[axis] as isize;
+                    self.for_each_node_in_layer(axis, ghost, |g| {
+                        f(g, (g as isize + shift) as usize, axis, bc)
                     });
                 }
             }
@@ -206,7 +284,7 @@ mod tests {
     }
 
     #[test]
-    fn symmetry_zeroes_normal_component_only() {
+    fn folding_mirrors_momentum_and_doubles_boundary_mass() {
         let g = Grid::<2>::new(
             SVector::from([0.0, 0.0]),
             SVector::from([1.0, 1.0]),
@@ -216,12 +294,25 @@ mod tests {
                 [Boundary::Fixed, Boundary::Free],
             ],
         );
-        let mut v = vec![SVector::from([1.0, 1.0]); g.num_nodes()];
-        g.apply_velocity_bc(&mut v);
-        assert_eq!(v[g.node_index([0, 2])], SVector::from([0.0, 1.0]));
-        assert_eq!(v[g.node_index([-2, 2])], SVector::from([0.0, 1.0]));
-        assert_eq!(v[g.node_index([2, 0])], SVector::from([0.0, 0.0]));
-        assert_eq!(v[g.node_index([2, 1])], SVector::from([1.0, 1.0]));
-        assert_eq!(v[g.node_index([4, 4])], SVector::from([1.0, 1.0]));
+        let mut m = vec![1.0; g.num_nodes()];
+        let mut v = vec![SVector::from([1.0, 2.0]); g.num_nodes()];
+        g.fold_ghosts(&mut m);
+        g.fold_ghosts(&mut v);
+        // x = 0 symmetry: boundary node doubles mass, normal momentum cancels.
+        // (Row y = 3 is untouched by the y = 0 face, whose ghosts fold onto y = 1, 2.)
+        assert_eq!(m[g.node_index([0, 3])], 2.0);
+        assert_eq!(v[g.node_index([0, 3])], SVector::from([0.0, 4.0]));
+        // Interior node x = 1 gains ghost x = -1 reflected: (1,2) + (-1,2).
+        assert_eq!(v[g.node_index([1, 3])], SVector::from([0.0, 4.0]));
+        assert_eq!(m[g.node_index([1, 3])], 2.0);
+        assert_eq!(v[g.node_index([-1, 3])], SVector::<f64, 2>::zeros());
+        // Row y = 2 gains the y = -2 ghost row as well: mass 1 + 1 (x) then + 2 (y).
+        assert_eq!(m[g.node_index([1, 2])], 4.0);
+        // y = 0 fixed: everything odd, boundary node momentum vanishes.
+        assert_eq!(v[g.node_index([3, 0])], SVector::<f64, 2>::zeros());
+        let mut w = vec![SVector::from([1.0, 2.0]); g.num_nodes()];
+        g.mirror_ghosts(&mut w);
+        assert_eq!(w[g.node_index([-2, 3])], SVector::from([-1.0, 2.0]));
+        assert_eq!(w[g.node_index([3, -1])], SVector::from([-1.0, -2.0]));
     }
 }

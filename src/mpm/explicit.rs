@@ -395,20 +395,31 @@ fn p2g<const D: usize, const S: usize, K: Stencil<S>>(
             }
         });
     });
+    // Mirror-particle boundary treatment (see `Grid::fold_ghosts`).
+    if what.mass {
+        grid.fold_ghosts(&mut gs.mass);
+    }
+    if what.momentum {
+        grid.fold_ghosts(&mut gs.momentum);
+    }
+    if what.force {
+        grid.fold_ghosts(&mut gs.force);
+    }
 }
 
-/// v = p/m on nodes with mass, zero elsewhere, then boundary conditions.
+/// v = p/m on nodes with mass, zero elsewhere; ghosts mirrored (the boundary
+/// conditions were imposed by folding in P2G).
 fn grid_velocity<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
     let floor = ctx.params.mass_floor;
     gs.velocity
         .par_iter_mut()
         .zip(gs.mass.par_iter().zip(gs.momentum.par_iter()))
         .for_each(|(v, (&m, p))| *v = if m > floor { p / m } else { SVector::zeros() });
-    ctx.grid.apply_velocity_bc(&mut gs.velocity);
+    ctx.grid.mirror_ghosts(&mut gs.velocity);
 }
 
-/// Grid momentum equation: v = p/m, vᴸ = v + Δt f/m (Guilkey Eqs. 21, 25), then
-/// boundary conditions on both and a = (vᴸ − v)/Δt.
+/// Grid momentum equation: v = p/m, vᴸ = v + Δt f/m (Guilkey Eqs. 21, 25) on
+/// the folded fields, ghosts mirrored, and a = (vᴸ − v)/Δt.
 fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
     let floor = ctx.params.mass_floor;
     let dt = ctx.dt;
@@ -426,8 +437,8 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
                 *vl = SVector::zeros();
             }
         });
-    ctx.grid.apply_velocity_bc(&mut gs.velocity);
-    ctx.grid.apply_velocity_bc(&mut gs.velocity_new);
+    ctx.grid.mirror_ghosts(&mut gs.velocity);
+    ctx.grid.mirror_ghosts(&mut gs.velocity_new);
     let inv_dt = 1.0 / dt;
     gs.accel
         .par_iter_mut()

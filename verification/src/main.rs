@@ -1,1 +1,66 @@
-fn main() {}
+//! `verification`: runs convergence and work-precision studies and writes
+//! `results/STUDY.{json,csv,png}` (full runs also refresh `RESULTS.md`).
+
+use std::path::PathBuf;
+
+use anyhow::bail;
+use clap::Parser;
+use verification::harness::{write_results_md, write_study, StudyResult};
+use verification::STUDIES;
+
+#[derive(Parser)]
+#[command(about = "mpmice convergence and work-precision studies")]
+struct Args {
+    /// Study name, `list`, or `all`.
+    study: String,
+    /// Coarse resolutions only (what the test suite runs).
+    #[arg(long)]
+    quick: bool,
+    /// Output folder (default: verification/results, or verification/results/quick).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    if args.study == "list" {
+        for (name, about, _) in STUDIES {
+            println!("{name:28} {about}");
+        }
+        return Ok(());
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = args.out.clone().unwrap_or_else(|| {
+        if args.quick {
+            root.join("results/quick")
+        } else {
+            root.join("results")
+        }
+    });
+    let chosen: Vec<_> = STUDIES
+        .iter()
+        .filter(|(n, _, _)| args.study == "all" || *n == args.study)
+        .collect();
+    if chosen.is_empty() {
+        let names: Vec<&str> = STUDIES.iter().map(|s| s.0).collect();
+        bail!("unknown study `{}`; available: {}, all, list", args.study, names.join(", "));
+    }
+    for (name, _, f) in chosen {
+        eprintln!("running {name}{}", if args.quick { " (quick)" } else { "" });
+        let result: StudyResult = f(args.quick)?;
+        for s in &result.series {
+            println!("{name:24} {:32} order {:6.3}", s.label, s.observed_order);
+            for p in &s.points {
+                println!(
+                    "    h = {:9.3e}  error = {:10.4e}  wall = {:8.3} s  {:9.3e} updates/s",
+                    p.h, p.error, p.wall_s, p.updates_per_s
+                );
+            }
+        }
+        write_study(&out, &result)?;
+    }
+    if !args.quick && args.out.is_none() {
+        write_results_md(&out, &root.join("RESULTS.md"))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,1 @@
+//! ICE verification studies (placeholder while building).
