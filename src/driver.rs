@@ -9,9 +9,9 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::mpm::Particles;
+use crate::output::atomic_write;
 use crate::output::csv::{write_columns, CsvAppender};
 use crate::output::vtk::{write_vti, write_vtu_points, Field, PvdSeries};
-use crate::output::atomic_write;
 use crate::scene::{build_solid_run, Format, Scene};
 use crate::stepper::{Energies, SolidRun};
 
@@ -173,9 +173,20 @@ fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
 fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
     let pts: Vec<[f64; 3]> = p.x.iter().map(pad3).collect();
     let vel: Vec<[f64; 3]> = p.v.iter().map(pad3).collect();
-    let disp: Vec<[f64; 3]> = p.x.iter().zip(&p.x0).map(|(x, x0)| pad3(&(x - x0))).collect();
-    let stress: Vec<[f64; 9]> = p.stress.iter().map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)])).collect();
-    let f: Vec<[f64; 9]> = p.f.iter().map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)])).collect();
+    let disp: Vec<[f64; 3]> =
+        p.x.iter()
+            .zip(&p.x0)
+            .map(|(x, x0)| pad3(&(x - x0)))
+            .collect();
+    let stress: Vec<[f64; 9]> = p
+        .stress
+        .iter()
+        .map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)]))
+        .collect();
+    let f: Vec<[f64; 9]> =
+        p.f.iter()
+            .map(|s| std::array::from_fn(|k| s[(k / 3, k % 3)]))
+            .collect();
     let mat: Vec<f64> = p.material.iter().map(|&m| m as f64).collect();
     let j: Vec<f64> = p.f.iter().map(|f| f.determinant()).collect();
     write_vtu_points(
@@ -257,7 +268,10 @@ fn write_grid_vti<const D: usize>(path: &Path, run: &SolidRun<D>) -> std::io::Re
         origin,
         spacing,
         cells,
-        &[Field::scalar("mass", &mass), Field::vector("velocity", &vel)],
+        &[
+            Field::scalar("mass", &mass),
+            Field::vector("velocity", &vel),
+        ],
         &[],
     )
 }

@@ -6,7 +6,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "mpmice", version, about = "MPM-ICE fluid-structure interaction solver")]
+#[command(
+    name = "mpmice",
+    version,
+    about = "MPM-ICE fluid-structure interaction solver"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

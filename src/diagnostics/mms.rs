@@ -328,8 +328,9 @@ pub fn run_bar(
     while !run.finished() {
         run.step()?;
         let t = run.t;
-        let (e, m) =
-            displacement_error(&run.particles, |x0| SVector::from([bar.displacement(x0[0], t)]));
+        let (e, m) = displacement_error(&run.particles, |x0| {
+            SVector::from([bar.displacement(x0[0], t)])
+        });
         err = err.max(e);
         max_err = max_err.max(m);
     }

@@ -173,7 +173,8 @@ mod tests {
         };
         let f = Matrix3::new(1.1, 0.05, 0.0, -0.02, 0.93, 0.03, 0.01, 0.0, 1.04);
         let j = f.determinant();
-        let p = j * neo_hookean_stress(m.elastic.lambda, m.elastic.mu, &f)
+        let p = j
+            * neo_hookean_stress(m.elastic.lambda, m.elastic.mu, &f)
             * f.try_inverse().unwrap().transpose();
         let h = 1e-6;
         for a in 0..3 {
@@ -184,7 +185,11 @@ mod tests {
                 fm[(a, b)] -= h;
                 let d = (m.strain_energy_density(&fp, 0.0) - m.strain_energy_density(&fm, 0.0))
                     / (2.0 * h);
-                assert!((d - p[(a, b)]).abs() < 1e-4, "P[{a}{b}]: {d} vs {}", p[(a, b)]);
+                assert!(
+                    (d - p[(a, b)]).abs() < 1e-4,
+                    "P[{a}{b}]: {d} vs {}",
+                    p[(a, b)]
+                );
             }
         }
     }

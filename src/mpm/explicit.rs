@@ -191,43 +191,22 @@ impl<const D: usize> Ctx<'_, D> {
     }
 }
 
-/// What a P2G pass accumulates.
-#[derive(Clone, Copy)]
-struct P2g {
-    /// Mass and momentum (else: momentum only if `momentum_only`).
-    mass: bool,
-    momentum: bool,
-    force: bool,
-}
-
-/// Which nodal velocity a G2P pass differentiates for the stress update.
-#[derive(Clone, Copy, PartialEq)]
-enum Grad {
-    None,
-    /// vᴸ (USL).
-    VelocityNew,
-    /// v from the latest P2G (USF, MUSL).
-    Velocity,
-}
-
-/// What a G2P pass does with the particle position.
-#[derive(Clone, Copy, PartialEq)]
-enum Pos {
-    None,
-    /// x += Δt Σ S vᴸ now.
-    Apply,
-    /// Store Δt Σ S vᴸ for later.
-    Store,
-    /// Apply the stored displacement.
-    ApplyStored,
-}
-
-#[derive(Clone, Copy)]
-struct G2p {
-    flip: bool,
-    position: Pos,
-    grad: Grad,
-}
+// G2P variants, as const-generic parameters so that each pass compiles to
+// its own loop without per-node branches.
+/// Position update: none.
+const POS_NONE: u8 = 0;
+/// x += Δt Σ S vᴸ now (Eq. 27).
+const POS_APPLY: u8 = 1;
+/// Store Δt Σ S vᴸ for later (MUSL).
+const POS_STORE: u8 = 2;
+/// Apply the stored displacement (MUSL).
+const POS_APPLY_STORED: u8 = 3;
+/// No velocity gradient / stress update.
+const GRAD_NONE: u8 = 0;
+/// Stress from the gradient of vᴸ (USL).
+const GRAD_VEL_NEW: u8 = 1;
+/// Stress from the gradient of the latest P2G velocity (USF, MUSL).
+const GRAD_VEL: u8 = 2;
 
 fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
     ctx: &Ctx<'_, D>,
@@ -244,77 +223,35 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
         ));
     }
     let bins = &scratch.bins;
-    let all = P2g {
-        mass: true,
-        momentum: true,
-        force: true,
-    };
+    let dx = &mut scratch.dx;
     match ctx.params.scheme {
         UpdateScheme::Usl => {
             clear(gs);
-            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, all);
+            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
             grid_solve(ctx, gs);
-            let ops = G2p {
-                flip: true,
-                position: Pos::Apply,
-                grad: Grad::VelocityNew,
-            };
-            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, particles, gs, dx)?;
         }
         UpdateScheme::Musl => {
             clear(gs);
-            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, all);
+            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
             grid_solve(ctx, gs);
-            let ops = G2p {
-                flip: true,
-                position: Pos::Store,
-                grad: Grad::None,
-            };
-            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
             // Map the updated momenta back (Sulsky's modified USL).
-            gs.momentum.par_iter_mut().for_each(|m| *m = SVector::zeros());
-            let mom = P2g {
-                mass: false,
-                momentum: true,
-                force: false,
-            };
-            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, mom);
+            gs.momentum
+                .par_iter_mut()
+                .for_each(|m| *m = SVector::zeros());
+            p2g::<D, S, K, false, true, false>(ctx, kernel, bins, particles, gs);
             grid_velocity(ctx, gs);
-            let ops = G2p {
-                flip: false,
-                position: Pos::ApplyStored,
-                grad: Grad::Velocity,
-            };
-            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
         }
         UpdateScheme::Usf => {
             clear(gs);
-            let mm = P2g {
-                mass: true,
-                momentum: true,
-                force: false,
-            };
-            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, mm);
+            p2g::<D, S, K, true, true, false>(ctx, kernel, bins, particles, gs);
             grid_velocity(ctx, gs);
-            let ops = G2p {
-                flip: false,
-                position: Pos::None,
-                grad: Grad::Velocity,
-            };
-            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
-            let force = P2g {
-                mass: false,
-                momentum: false,
-                force: true,
-            };
-            p2g::<D, S, K>(ctx, kernel, bins, particles, gs, force);
+            g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
+            p2g::<D, S, K, false, false, true>(ctx, kernel, bins, particles, gs);
             grid_solve(ctx, gs);
-            let ops = G2p {
-                flip: true,
-                position: Pos::Apply,
-                grad: Grad::None,
-            };
-            g2p::<D, S, K>(ctx, kernel, particles, gs, &mut scratch.dx, ops)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
         }
     }
     Ok(())
@@ -348,31 +285,37 @@ fn block<const D: usize>(s: &Matrix3<f64>) -> SMatrix<f64, D, D> {
 }
 
 /// Particle to grid (Guilkey Eq. 22 and Eq. 24, f = f_ext − f_int).
-fn p2g<const D: usize, const S: usize, K: Stencil<S>>(
+fn p2g<
+    const D: usize,
+    const S: usize,
+    K: Stencil<S>,
+    const MASS: bool,
+    const MOMENTUM: bool,
+    const FORCE: bool,
+>(
     ctx: &Ctx<'_, D>,
     kernel: K,
     bins: &Bins,
     particles: &Particles<D>,
     gs: &mut GridState<D>,
-    what: P2g,
 ) {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let h = grid.h;
+    let inv_h = grid.h.map(|v| 1.0 / v);
     let mass = SharedMut::new(&mut gs.mass);
     let momentum = SharedMut::new(&mut gs.momentum);
     let force = SharedMut::new(&mut gs.force);
     let (t, body) = (ctx.t, ctx.body);
     bins.for_each_colored(|p| {
         let xi = grid.to_grid_units(&particles.x[p]);
-        let lp = particles.half_size[p].component_div(&h);
-        let pw = ParticleWeights::<D, S>::new(kernel, &xi, &lp);
+        let lp = particles.half_size[p].component_mul(&inv_h);
+        let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &lp, &inv_h);
         let base = grid.node_index(pw.base());
         let mp = particles.mass[p];
         let mv = particles.v[p] * mp;
         let mut fb = SVector::<f64, D>::zeros();
         let mut vs = SMatrix::<f64, D, D>::zeros();
-        if what.force {
+        if FORCE {
             if let Some(b) = body {
                 fb = b.accel(&particles.x0[p], &particles.x[p], t) * mp;
             }
@@ -382,27 +325,26 @@ fn p2g<const D: usize, const S: usize, K: Stencil<S>>(
             let idx = base + offset(m, &strides);
             // SAFETY: slab colouring gives concurrent tasks disjoint nodes.
             unsafe {
-                if what.mass {
+                if MASS {
                     *mass.get(idx) += w * mp;
                 }
-                if what.momentum {
+                if MOMENTUM {
                     *momentum.get(idx) += mv * w;
                 }
-                if what.force {
-                    let grad = g.component_div(&h);
-                    *force.get(idx) += fb * w - vs * grad;
+                if FORCE {
+                    *force.get(idx) += fb * w - vs * g;
                 }
             }
         });
     });
     // Mirror-particle boundary treatment (see `Grid::fold_ghosts`).
-    if what.mass {
+    if MASS {
         grid.fold_ghosts(&mut gs.mass);
     }
-    if what.momentum {
+    if MOMENTUM {
         grid.fold_ghosts(&mut gs.momentum);
     }
-    if what.force {
+    if FORCE {
         grid.fold_ghosts(&mut gs.force);
     }
 }
@@ -447,25 +389,32 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
 }
 
 /// Grid to particle (Guilkey Eqs. 23, 26, 27) and the constitutive update.
-fn g2p<const D: usize, const S: usize, K: Stencil<S>>(
+fn g2p<
+    const D: usize,
+    const S: usize,
+    K: Stencil<S>,
+    const FLIP: bool,
+    const POS: u8,
+    const GRAD: u8,
+>(
     ctx: &Ctx<'_, D>,
     kernel: K,
     particles: &mut Particles<D>,
     gs: &GridState<D>,
     dx_store: &mut Vec<SVector<f64, D>>,
-    ops: G2p,
 ) -> Result<()> {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let h = grid.h;
+    let inv_h = grid.h.map(|v| 1.0 / v);
     let dt = ctx.dt;
     let np = particles.len();
-    if ops.position == Pos::Store {
+    if POS == POS_STORE {
         dx_store.resize(np, SVector::zeros());
     }
-    let grad_field: &[SVector<f64, D>] = match ops.grad {
-        Grad::VelocityNew => &gs.velocity_new,
-        _ => &gs.velocity,
+    let grad_field: &[SVector<f64, D>] = if GRAD == GRAD_VEL_NEW {
+        &gs.velocity_new
+    } else {
+        &gs.velocity
     };
     let failed = AtomicUsize::new(usize::MAX);
     {
@@ -481,35 +430,35 @@ fn g2p<const D: usize, const S: usize, K: Stencil<S>>(
             // SAFETY: each task touches only particle p's entries.
             let (xp, vp) = unsafe { (x.get(p), v.get(p)) };
             let xi = grid.to_grid_units(xp);
-            let lp = half[p].component_div(&h);
-            let pw = ParticleWeights::<D, S>::new(kernel, &xi, &lp);
+            let lp = half[p].component_mul(&inv_h);
+            let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &lp, &inv_h);
             let base = grid.node_index(pw.base());
             let mut acc = SVector::<f64, D>::zeros();
             let mut vel = SVector::<f64, D>::zeros();
             let mut l = SMatrix::<f64, D, D>::zeros();
             pw.for_each(|m, w, g| {
                 let idx = base + offset(m, &strides);
-                if ops.flip {
+                if FLIP {
                     acc += gs.accel[idx] * w;
                 }
-                if ops.position == Pos::Apply || ops.position == Pos::Store {
+                if POS == POS_APPLY || POS == POS_STORE {
                     vel += gs.velocity_new[idx] * w;
                 }
-                if ops.grad != Grad::None {
-                    l += grad_field[idx] * g.component_div(&h).transpose();
+                if GRAD != GRAD_NONE {
+                    l += grad_field[idx] * g.transpose();
                 }
             });
-            if ops.flip {
+            if FLIP {
                 *vp += acc * dt; // Eq. 26
             }
-            match ops.position {
-                Pos::Apply => *xp += vel * dt, // Eq. 27
+            match POS {
+                POS_APPLY => *xp += vel * dt, // Eq. 27
                 // SAFETY: as above.
-                Pos::Store => unsafe { *dxs.get(p) = vel * dt },
-                Pos::ApplyStored => unsafe { *xp += *dxs.get(p) },
-                Pos::None => {}
+                POS_STORE => unsafe { *dxs.get(p) = vel * dt },
+                POS_APPLY_STORED => unsafe { *xp += *dxs.get(p) },
+                _ => {}
             }
-            if ops.grad != Grad::None {
+            if GRAD != GRAD_NONE {
                 let mut l3 = Matrix3::<f64>::zeros();
                 for i in 0..D {
                     for j in 0..D {
@@ -521,7 +470,7 @@ fn g2p<const D: usize, const S: usize, K: Stencil<S>>(
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
                 let f_new = (Matrix3::identity() + l3 * dt) * *fp;
                 let j = f_new.determinant();
-                if !(j > 0.0) || !j.is_finite() {
+                if !j.is_finite() || j <= 0.0 {
                     failed.fetch_min(p, Ordering::Relaxed);
                     return;
                 }

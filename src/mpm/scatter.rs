@@ -41,14 +41,26 @@ impl Bins {
         self.start.clear();
         self.start.resize(n_slabs + 1, 0);
         self.slab.resize(x.len(), 0);
-        for (p, xp) in x.iter().enumerate() {
-            let xi = grid.to_grid_units(xp);
-            if !xi.iter().all(|v| v.is_finite()) || !grid.holds(&xi) {
+        // Classify in parallel (u32::MAX marks a particle off the grid), then
+        // count and fill serially in index order.
+        self.slab
+            .par_iter_mut()
+            .zip(x.par_iter())
+            .with_min_len(4096)
+            .for_each(|(s, xp)| {
+                let xi = grid.to_grid_units(xp);
+                *s = if xi.iter().all(|v| v.is_finite()) && grid.holds(&xi) {
+                    // xi ≥ −1 on the grid, so the cast truncates like floor.
+                    (((xi[axis] + 1.0) as usize / SLAB_WIDTH).min(n_slabs - 1)) as u32
+                } else {
+                    u32::MAX
+                };
+            });
+        for (p, &s) in self.slab.iter().enumerate() {
+            if s == u32::MAX {
                 return Err(p);
             }
-            let s = ((xi[axis] + 1.0).floor() as usize / SLAB_WIDTH).min(n_slabs - 1);
-            self.slab[p] = s as u32;
-            self.start[s + 1] += 1;
+            self.start[s as usize + 1] += 1;
         }
         for s in 0..n_slabs {
             self.start[s + 1] += self.start[s];

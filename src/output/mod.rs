@@ -74,7 +74,6 @@ where
     Ok(())
 }
 
-
 /// Formats an `f64` so that parsing the text gives back exactly the same
 /// bits (Rust's shortest round-trip representation).
 ///

@@ -61,9 +61,13 @@ pub fn fill_particles<const D: usize>(
         let mat_index = materials
             .iter()
             .position(|m| m.name == obj.material)
-            .ok_or_else(|| SceneError::new(format!("objects[{oi}].material"), "unknown material"))?;
+            .ok_or_else(|| {
+                SceneError::new(format!("objects[{oi}].material"), "unknown material")
+            })?;
         let rho = materials[mat_index].density;
-        let ppc = obj.particles_per_cell.unwrap_or(scene.mpm.particles_per_cell);
+        let ppc = obj
+            .particles_per_cell
+            .unwrap_or(scene.mpm.particles_per_cell);
         let vel = obj
             .velocity
             .as_deref()
@@ -86,10 +90,18 @@ pub fn fill_particles<const D: usize>(
                 for d in 0..D {
                     let s = r % ppc;
                     r /= ppc;
-                    x[d] = grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
+                    x[d] =
+                        grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
                 }
                 if obj.geometry.contains(&x) {
-                    particles.push(SVector::from(x), vel, rho * vol, vol, half, mat_index as u16);
+                    particles.push(
+                        SVector::from(x),
+                        vel,
+                        rho * vol,
+                        vol,
+                        half,
+                        mat_index as u16,
+                    );
                 }
             }
         }

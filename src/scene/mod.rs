@@ -21,7 +21,11 @@ pub fn parse(text: &str) -> Result<Scene, SceneError> {
         let path = e.path().to_string();
         let inner = e.into_inner();
         SceneError::new(
-            if path == "." { "<root>".to_string() } else { path },
+            if path == "." {
+                "<root>".to_string()
+            } else {
+                path
+            },
             inner.message().to_string(),
         )
     })?;

@@ -387,7 +387,10 @@ impl Scene {
         if g.cells.len() != dim {
             return Err(err(
                 "grid.cells",
-                format!("must have {dim} components (grid.dim), got {}", g.cells.len()),
+                format!(
+                    "must have {dim} components (grid.dim), got {}",
+                    g.cells.len()
+                ),
             ));
         }
         for d in 0..dim {
@@ -417,7 +420,10 @@ impl Scene {
         let t = &self.time;
         positive("time.end", t.end)?;
         if !(t.cfl.is_finite() && t.cfl > 0.0 && t.cfl <= 1.0) {
-            return Err(err("time.cfl", format!("must satisfy 0 < cfl ≤ 1 (got {})", t.cfl)));
+            return Err(err(
+                "time.cfl",
+                format!("must satisfy 0 < cfl ≤ 1 (got {})", t.cfl),
+            ));
         }
         if let Some(dt) = t.dt {
             positive("time.dt", dt)?;
@@ -495,12 +501,19 @@ impl Scene {
                 let names: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
                 return Err(err(
                     p("material"),
-                    format!("unknown material `{}`; defined: {}", o.material, names.join(", ")),
+                    format!(
+                        "unknown material `{}`; defined: {}",
+                        o.material,
+                        names.join(", ")
+                    ),
                 ));
             }
             if let Some(ppc) = o.particles_per_cell {
                 if !(1..=16).contains(&ppc) {
-                    return Err(err(p("particles_per_cell"), format!("must be 1 … 16 (got {ppc})")));
+                    return Err(err(
+                        p("particles_per_cell"),
+                        format!("must be 1 … 16 (got {ppc})"),
+                    ));
                 }
             }
             if let Some(v) = &o.velocity {

@@ -48,10 +48,18 @@ pub struct Weights1<const S: usize> {
     pub dw: [f64; S],
 }
 
+/// ⌊x⌋ for x > −16 by a truncating cast (a single instruction; `f64::floor`
+/// is a libm call on baseline x86-64). Particles on the grid always satisfy
+/// the bound (they stay within one cell of the domain, see `Grid::holds`).
+#[inline(always)]
+fn floor_on_grid(x: f64) -> f64 {
+    ((x + 16.0) as i64 - 16) as f64
+}
+
 /// Linear hat on 2 nodes.
 #[inline(always)]
 pub fn linear(xi: f64) -> Weights1<2> {
-    let base = xi.floor();
+    let base = floor_on_grid(xi);
     let f = xi - base;
     Weights1 {
         base: base as isize,
@@ -66,7 +74,7 @@ pub fn linear(xi: f64) -> Weights1<2> {
 /// (1 + lp − |r|)²/(4 lp) for 1 − lp ≤ |r| < 1 + lp; 0 beyond.
 #[inline(always)]
 pub fn gimp(xi: f64, lp: f64) -> Weights1<3> {
-    let base = (xi - lp).floor();
+    let base = floor_on_grid(xi - lp);
     let mut w = [0.0; 3];
     let mut dw = [0.0; 3];
     for k in 0..3 {
@@ -96,7 +104,7 @@ pub fn gimp(xi: f64, lp: f64) -> Weights1<3> {
 /// 1/2 ≤ |r| < 3/2.
 #[inline(always)]
 pub fn quadratic_bspline(xi: f64) -> Weights1<3> {
-    let base = (xi - 0.5).floor();
+    let base = floor_on_grid(xi - 0.5);
     // Distances to the three nodes: r0 ∈ [0.5, 1.5), r1 ∈ [-0.5, 0.5), r2 ∈ [-1.5, -0.5).
     let f = xi - base; // ∈ [0.5, 1.5)
     let a = 1.5 - f;
@@ -113,7 +121,7 @@ pub fn quadratic_bspline(xi: f64) -> Weights1<3> {
 /// 1 ≤ |r| < 2.
 #[inline(always)]
 pub fn cubic_bspline(xi: f64) -> Weights1<4> {
-    let base = xi.floor() - 1.0;
+    let base = floor_on_grid(xi) - 1.0;
     let f = xi - base; // ∈ [1, 2): distances f, f-1, f-2, f-3
     let mut w = [0.0; 4];
     let mut dw = [0.0; 4];
@@ -189,7 +197,8 @@ pub struct ParticleWeights<const D: usize, const S: usize> {
 }
 
 impl<const D: usize, const S: usize> ParticleWeights<D, S> {
-    /// Evaluates `kernel` at position `xi` (cell units) with half-widths `lp`.
+    /// Evaluates `kernel` at position `xi` (cell units) with half-widths `lp`;
+    /// gradients in cell units.
     #[inline(always)]
     pub fn new<K: Stencil<S>>(kernel: K, xi: &SVector<f64, D>, lp: &SVector<f64, D>) -> Self {
         Self {
@@ -197,7 +206,25 @@ impl<const D: usize, const S: usize> ParticleWeights<D, S> {
         }
     }
 
-    /// Calls `f(node_offset_multi_index, weight, gradient_in_cell_units)` for
+    /// Evaluates `kernel` and scales the derivatives by `inv_h` (1/h per
+    /// direction), so [`Self::for_each`] yields physical gradients.
+    #[inline(always)]
+    pub fn new_physical<K: Stencil<S>>(
+        kernel: K,
+        xi: &SVector<f64, D>,
+        lp: &SVector<f64, D>,
+        inv_h: &SVector<f64, D>,
+    ) -> Self {
+        let mut pw = Self::new(kernel, xi, lp);
+        for d in 0..D {
+            for k in 0..S {
+                pw.dirs[d].dw[k] *= inv_h[d];
+            }
+        }
+        pw
+    }
+
+    /// Calls `f(node_offset_multi_index, weight, gradient)` for
     /// every node of the tensor-product stencil (x fastest).
     #[inline(always)]
     pub fn for_each(&self, mut f: impl FnMut([usize; D], f64, SVector<f64, D>)) {
@@ -242,12 +269,13 @@ mod tests {
             let sum: f64 = a.w.iter().sum();
             assert!((sum - 1.0).abs() < 1e-13, "{name}: Σw = {sum} at {xi}");
             let first: f64 = (0..S).map(|i| a.w[i] * (a.base + i as isize) as f64).sum();
-            assert!((first - xi).abs() < 1e-12, "{name}: Σ w x_i = {first} ≠ {xi}");
+            assert!(
+                (first - xi).abs() < 1e-12,
+                "{name}: Σ w x_i = {first} ≠ {xi}"
+            );
             let dsum: f64 = a.dw.iter().sum();
             assert!(dsum.abs() < 1e-12, "{name}: Σ dw = {dsum}");
-            let dfirst: f64 = (0..S)
-                .map(|i| a.dw[i] * (a.base + i as isize) as f64)
-                .sum();
+            let dfirst: f64 = (0..S).map(|i| a.dw[i] * (a.base + i as isize) as f64).sum();
             assert!((dfirst - 1.0).abs() < 1e-12, "{name}: Σ dw x_i = {dfirst}");
             let eps = 1e-6;
             let (p, m) = (f(xi + eps), f(xi - eps));

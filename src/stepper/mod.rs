@@ -9,7 +9,9 @@ use nalgebra::SVector;
 use crate::error::Result;
 use crate::grid::Grid;
 use crate::material::SolidMaterial;
-use crate::mpm::{explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, Particles, StepScratch};
+use crate::mpm::{
+    explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, Particles, StepScratch,
+};
 
 /// Timestep control.
 #[derive(Debug, Clone, Copy)]

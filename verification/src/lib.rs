@@ -2,6 +2,7 @@
 //! plots) and the studies themselves.
 
 pub mod harness;
+pub mod ice_studies;
 pub mod mpm_studies;
 
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
@@ -22,5 +23,20 @@ pub const STUDIES: &[Study] = &[
         "mpm_mms_axis_aligned",
         "Wallstedt-Guilkey axis-aligned MMS, 1D/2D, all shape functions, A = 1e-4 and 0.05",
         mpm_studies::mpm_mms_axis_aligned,
+    ),
+    (
+        "ice_sod",
+        "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
+        ice_studies::ice_sod,
+    ),
+    (
+        "ice_entropy_wave",
+        "advected smooth density wave (exact translation), periodic",
+        ice_studies::ice_entropy_wave,
+    ),
+    (
+        "ice_acoustic",
+        "small-amplitude acoustic wave vs linear acoustics",
+        ice_studies::ice_acoustic,
     ),
 ];

@@ -43,7 +43,11 @@ fn main() -> anyhow::Result<()> {
         .collect();
     if chosen.is_empty() {
         let names: Vec<&str> = STUDIES.iter().map(|s| s.0).collect();
-        bail!("unknown study `{}`; available: {}, all, list", args.study, names.join(", "));
+        bail!(
+            "unknown study `{}`; available: {}, all, list",
+            args.study,
+            names.join(", ")
+        );
     }
     for (name, _, f) in chosen {
         eprintln!("running {name}{}", if args.quick { " (quick)" } else { "" });

@@ -33,7 +33,11 @@ pub fn mpm_bar_1d(quick: bool) -> anyhow::Result<StudyResult> {
         rho: 1.0,
         v0: 1e-3,
     };
-    let ns: &[usize] = if quick { &[8, 16, 32] } else { &[8, 16, 32, 64, 128, 256] };
+    let ns: &[usize] = if quick {
+        &[8, 16, 32]
+    } else {
+        &[8, 16, 32, 64, 128, 256]
+    };
     let mut series = Vec::new();
     for (shape, label) in SHAPES {
         let mut points = Vec::new();
@@ -54,7 +58,8 @@ pub fn mpm_bar_1d(quick: bool) -> anyhow::Result<StudyResult> {
             "Bar L = 1, E = 100, rho = 1, nu = 0 (c = 10), v0 = 1e-3 in mode 1, fixed at x = 0, \
              free at x = L; 2 particles per cell; USL, FLIP, CFL 0.2; one period 4L/c."
                 .into(),
-            "extra.energy_drift: relative change of kinetic + strain energy over the period.".into(),
+            "extra.energy_drift: relative change of kinetic + strain energy over the period."
+                .into(),
         ],
     })
 }
@@ -63,8 +68,16 @@ pub fn mpm_bar_1d(quick: bool) -> anyhow::Result<StudyResult> {
 /// 2D, every shape function, A = 1e-4 (no cell crossing) and A = 0.05.
 pub fn mpm_mms_axis_aligned(quick: bool) -> anyhow::Result<StudyResult> {
     let mut series = Vec::new();
-    let n1: &[usize] = if quick { &[8, 16, 32] } else { &[8, 16, 32, 64, 128, 256] };
-    let n2: &[usize] = if quick { &[8, 16] } else { &[8, 16, 32, 64, 128] };
+    let n1: &[usize] = if quick {
+        &[8, 16, 32]
+    } else {
+        &[8, 16, 32, 64, 128, 256]
+    };
+    let n2: &[usize] = if quick {
+        &[8, 16]
+    } else {
+        &[8, 16, 32, 64, 128]
+    };
     for amplitude in [1e-4, 0.05] {
         let mms = AxisAlignedMms::standard(amplitude);
         for (shape, label) in SHAPES {

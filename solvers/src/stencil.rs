@@ -1,0 +1,623 @@
+//! Cell-centred structured-grid operators with variable face coefficients.
+//!
+//! A [`CellStencil`] represents, on an `nx × ny (× nz)` grid of cells,
+//!
+//! ```text
+//! (A u)_i = diag_extra_i u_i + Σ_{faces f of i} c_f (u_i − u_j(f))
+//! ```
+//!
+//! where `j(f)` is the neighbour across face `f`. On a domain-boundary face
+//! of kind [`BoundaryKind::Neumann`] nothing is added; on a
+//! [`BoundaryKind::Dirichlet`] face the coefficient is added to the diagonal
+//! (ghost value 0). The matrix is symmetric, and positive definite when every
+//! connected component (through faces with `c > 0`) touches a Dirichlet face
+//! with `c > 0` or contains a cell with `diag_extra > 0`.
+//!
+//! Indexing: cells are numbered `i + nx (j + ny k)`. Face coefficients are
+//! stored per axis, including both boundary layers: along axis `a` with
+//! `n_a` cells there are `n_a + 1` face positions, position `m` being the
+//! face between cells `m − 1` and `m` (positions `0` and `n_a` are boundary
+//! faces). See [`CellStencil::face_index`]. A grid with `nz == 1` is 2D and
+//! has no axis-2 faces.
+
+use faer::sparse::SparseColMat;
+
+use crate::assembly::SparsityPattern;
+use crate::error::{check_len, Result, SolverError};
+use crate::operator::LinearOperator;
+
+/// Kind of a domain-boundary face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BoundaryKind {
+    /// Zero flux: the face contributes nothing.
+    #[default]
+    Neumann,
+    /// Homogeneous Dirichlet (ghost value 0): the face coefficient is added
+    /// to the diagonal.
+    Dirichlet,
+}
+
+/// Variable-coefficient cell-centred operator on a 2D or 3D structured grid
+/// (see the module documentation for the definition and indexing).
+#[derive(Debug, Clone)]
+pub struct CellStencil {
+    dims: [usize; 3],
+    ndim: usize,
+    face: [Vec<f64>; 3],
+    /// `bc[axis][side][t]`, `t` = transverse index (see `boundary_slot`).
+    bc: [[Vec<BoundaryKind>; 2]; 3],
+    diag_extra: Vec<f64>,
+}
+
+impl CellStencil {
+    /// A grid of `dims = [nx, ny, nz]` cells (`nz = 1` for 2D) with all
+    /// coefficients zero and all boundaries Neumann.
+    pub fn new(dims: [usize; 3]) -> Result<Self> {
+        if dims.iter().any(|&d| d == 0) {
+            return Err(SolverError::invalid(format!("grid dims {dims:?} must be >= 1")));
+        }
+        let ndim = if dims[2] > 1 { 3 } else { 2 };
+        let n = dims[0] * dims[1] * dims[2];
+        let mut face: [Vec<f64>; 3] = Default::default();
+        let mut bc: [[Vec<BoundaryKind>; 2]; 3] = Default::default();
+        for (a, (f, b)) in face.iter_mut().zip(bc.iter_mut()).enumerate().take(ndim) {
+            *f = vec![0.0; n / dims[a] * (dims[a] + 1)];
+            let nt = n / dims[a];
+            b[0] = vec![BoundaryKind::Neumann; nt];
+            b[1] = vec![BoundaryKind::Neumann; nt];
+        }
+        Ok(Self {
+            dims,
+            ndim,
+            face,
+            bc,
+            diag_extra: vec![0.0; n],
+        })
+    }
+
+    /// Constant face coefficient `coeff`, constant `diag_extra` and the same
+    /// boundary kind on every boundary face.
+    pub fn uniform(
+        dims: [usize; 3],
+        coeff: f64,
+        diag_extra: f64,
+        boundary: BoundaryKind,
+    ) -> Result<Self> {
+        let mut s = Self::new(dims)?;
+        for a in 0..s.ndim {
+            s.face[a].fill(coeff);
+            s.set_boundary_side(a, 0, boundary)?;
+            s.set_boundary_side(a, 1, boundary)?;
+        }
+        s.diag_extra.fill(diag_extra);
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Face coefficients from a cell field `k` (length = number of cells):
+    /// interior face `c = scale · 2 k_a k_b / (k_a + k_b)` (harmonic mean, 0 if
+    /// both vanish), boundary face `c = scale · k_cell` (ghost cell with the
+    /// same value), `diag_extra` zero, all boundaries set to `boundary`.
+    pub fn from_cell_field(
+        dims: [usize; 3],
+        k: &[f64],
+        scale: f64,
+        boundary: BoundaryKind,
+    ) -> Result<Self> {
+        let mut s = Self::new(dims)?;
+        check_len(s.num_cells(), k.len())?;
+        let [nx, ny, nz] = dims;
+        let harm = |a: f64, b: f64| if a + b > 0.0 { 2.0 * a * b / (a + b) } else { 0.0 };
+        for a in 0..s.ndim {
+            let na = dims[a];
+            for kk in 0..nz + usize::from(a == 2) {
+                for j in 0..ny + usize::from(a == 1) {
+                    for i in 0..nx + usize::from(a == 0) {
+                        let f = [i, j, kk];
+                        let m = f[a];
+                        let mut lo = f;
+                        let hi = f;
+                        let c = if m == 0 {
+                            k[s.cell_index(hi)]
+                        } else if m == na {
+                            lo[a] -= 1;
+                            k[s.cell_index(lo)]
+                        } else {
+                            lo[a] -= 1;
+                            harm(k[s.cell_index(lo)], k[s.cell_index(hi)])
+                        };
+                        let idx = s.face_index(a, f);
+                        s.face[a][idx] = scale * c;
+                    }
+                }
+            }
+            s.set_boundary_side(a, 0, boundary)?;
+            s.set_boundary_side(a, 1, boundary)?;
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Grid dimensions `[nx, ny, nz]`.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// 2 or 3.
+    pub fn ndim(&self) -> usize {
+        self.ndim
+    }
+
+    /// Number of cells (unknowns).
+    pub fn num_cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Linear index of cell `[i, j, k]`.
+    #[inline]
+    pub fn cell_index(&self, c: [usize; 3]) -> usize {
+        c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2])
+    }
+
+    /// Linear index into [`CellStencil::face_coeffs`]`(axis)` of the face at
+    /// position `f[axis]` (0..=n_axis) and transverse cell indices given by
+    /// the other components of `f`.
+    #[inline]
+    pub fn face_index(&self, axis: usize, f: [usize; 3]) -> usize {
+        let mut d = self.dims;
+        d[axis] += 1;
+        f[0] + d[0] * (f[1] + d[1] * f[2])
+    }
+
+    /// Face coefficients of `axis` (length `(n_axis + 1) · Π other dims`).
+    /// Boundary positions are used only on Dirichlet faces.
+    pub fn face_coeffs(&self, axis: usize) -> &[f64] {
+        &self.face[axis]
+    }
+
+    /// Mutable face coefficients of `axis` (call [`CellStencil::validate`]
+    /// after editing if the values are untrusted).
+    pub fn face_coeffs_mut(&mut self, axis: usize) -> &mut [f64] {
+        &mut self.face[axis]
+    }
+
+    /// Sets one face coefficient (see [`CellStencil::face_index`]).
+    pub fn set_face(&mut self, axis: usize, f: [usize; 3], c: f64) -> Result<()> {
+        self.check_axis(axis)?;
+        for a in 0..3 {
+            let lim = self.dims[a] + usize::from(a == axis);
+            if f[a] >= lim {
+                return Err(SolverError::invalid(format!("face {f:?} of axis {axis} out of range")));
+            }
+        }
+        if !(c >= 0.0 && c.is_finite()) {
+            return Err(SolverError::invalid(format!("face coefficient {c} must be finite and >= 0")));
+        }
+        let idx = self.face_index(axis, f);
+        self.face[axis][idx] = c;
+        Ok(())
+    }
+
+    /// Per-cell extra diagonal term (length = number of cells).
+    pub fn diag_extra(&self) -> &[f64] {
+        &self.diag_extra
+    }
+
+    /// Mutable per-cell extra diagonal term.
+    pub fn diag_extra_mut(&mut self) -> &mut [f64] {
+        &mut self.diag_extra
+    }
+
+    fn check_axis(&self, axis: usize) -> Result<()> {
+        if axis >= self.ndim {
+            return Err(SolverError::invalid(format!(
+                "axis {axis} does not exist in a {}D grid",
+                self.ndim
+            )));
+        }
+        Ok(())
+    }
+
+    /// Transverse slot of the boundary face of `cell` on `axis`.
+    #[inline]
+    fn boundary_slot(&self, axis: usize, c: [usize; 3]) -> usize {
+        match axis {
+            0 => c[1] + self.dims[1] * c[2],
+            1 => c[0] + self.dims[0] * c[2],
+            _ => c[0] + self.dims[0] * c[1],
+        }
+    }
+
+    /// Sets the kind of every face on one domain side (`side` 0 = low,
+    /// 1 = high end of `axis`).
+    pub fn set_boundary_side(&mut self, axis: usize, side: usize, kind: BoundaryKind) -> Result<()> {
+        self.check_axis(axis)?;
+        if side > 1 {
+            return Err(SolverError::invalid("side must be 0 or 1"));
+        }
+        self.bc[axis][side].fill(kind);
+        Ok(())
+    }
+
+    /// Sets the kind of the single boundary face of `cell` on the given
+    /// side of `axis` (the cell must touch that side).
+    pub fn set_boundary_face(
+        &mut self,
+        axis: usize,
+        side: usize,
+        cell: [usize; 3],
+        kind: BoundaryKind,
+    ) -> Result<()> {
+        self.check_axis(axis)?;
+        let want = if side == 0 { 0 } else { self.dims[axis] - 1 };
+        if side > 1 || cell[axis] != want || (0..3).any(|a| cell[a] >= self.dims[a]) {
+            return Err(SolverError::invalid(format!(
+                "cell {cell:?} is not on side {side} of axis {axis}"
+            )));
+        }
+        let t = self.boundary_slot(axis, cell);
+        self.bc[axis][side][t] = kind;
+        Ok(())
+    }
+
+    /// Kind of the boundary face of `cell` on `side` of `axis` (the cell is
+    /// assumed to touch that side).
+    pub fn boundary_kind(&self, axis: usize, side: usize, cell: [usize; 3]) -> BoundaryKind {
+        self.bc[axis][side][self.boundary_slot(axis, cell)]
+    }
+
+    /// True if every face on that side is Dirichlet.
+    pub fn side_all_dirichlet(&self, axis: usize, side: usize) -> bool {
+        self.bc[axis][side].iter().all(|&k| k == BoundaryKind::Dirichlet)
+    }
+
+    /// Effective coefficient of a boundary face (0 for Neumann).
+    #[inline]
+    pub(crate) fn boundary_coeff(&self, axis: usize, side: usize, cell: [usize; 3]) -> f64 {
+        if self.boundary_kind(axis, side, cell) == BoundaryKind::Dirichlet {
+            let mut f = cell;
+            f[axis] = if side == 0 { 0 } else { self.dims[axis] };
+            self.face[axis][self.face_index(axis, f)]
+        } else {
+            0.0
+        }
+    }
+
+    /// Checks array lengths and that all coefficients are finite and `>= 0`.
+    pub fn validate(&self) -> Result<()> {
+        fn first_bad(x: &[f64]) -> Option<(usize, f64)> {
+            // Branch-free scan first (vectorisable), then locate.
+            let bad = x
+                .iter()
+                .fold(false, |acc, &c| acc | !(c >= 0.0 && c <= f64::MAX));
+            if bad {
+                x.iter()
+                    .copied()
+                    .enumerate()
+                    .find(|&(_, c)| !(c >= 0.0 && c <= f64::MAX))
+            } else {
+                None
+            }
+        }
+        let n = self.num_cells();
+        check_len(n, self.diag_extra.len())?;
+        for a in 0..self.ndim {
+            check_len(n / self.dims[a] * (self.dims[a] + 1), self.face[a].len())?;
+            if let Some((i, c)) = first_bad(&self.face[a]) {
+                return Err(SolverError::invalid(format!(
+                    "face coefficient {i} of axis {a} is {c} (must be finite and >= 0)"
+                )));
+            }
+        }
+        if let Some((i, c)) = first_bad(&self.diag_extra) {
+            return Err(SolverError::invalid(format!(
+                "diag_extra[{i}] = {c} (must be finite and >= 0)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Returns [`SolverError::Singular`] if some connected component of the
+    /// grid graph (cells linked by faces with `c > 0`) has neither a cell
+    /// with `diag_extra > 0` nor a Dirichlet face with `c > 0`: its constant
+    /// mode is then in the null space. Also validates the data.
+    pub fn check_nonsingular(&self) -> Result<()> {
+        self.validate()?;
+        let n = self.num_cells();
+        let [nx, ny, nz] = self.dims;
+        // Anchored cells: diag_extra > 0 or a Dirichlet face with c > 0.
+        let mut anchored: Vec<bool> = self.diag_extra.iter().map(|&d| d > 0.0).collect();
+        for a in 0..self.ndim {
+            let na = self.dims[a];
+            for k in 0..nz {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        let c = [i, j, k];
+                        if c[a] != 0 && c[a] + 1 != na {
+                            continue;
+                        }
+                        for side in 0..2 {
+                            let on = if side == 0 { c[a] == 0 } else { c[a] + 1 == na };
+                            if on && self.boundary_coeff(a, side, c) > 0.0 {
+                                anchored[self.cell_index(c)] = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Fast path: every interior face has c > 0, so the grid is connected.
+        let all_connected = (0..self.ndim).all(|a| {
+            let na = self.dims[a];
+            self.interior_faces(a).all(|(f, _, _)| self.face[a][f] > 0.0) || na == 1
+        });
+        if all_connected {
+            if anchored.iter().any(|&x| x) {
+                return Ok(());
+            }
+            return Err(SolverError::Singular {
+                detail: format!(
+                    "the {nx}x{ny}x{nz} grid has no Dirichlet face with c > 0 and no diag_extra > 0 (constant mode in the null space)"
+                ),
+            });
+        }
+        // General case: union-find over faces with c > 0.
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        for a in 0..self.ndim {
+            for (f, lo, hi) in self.interior_faces(a) {
+                if self.face[a][f] > 0.0 {
+                    let (ra, rb) = (find(&mut parent, lo), find(&mut parent, hi));
+                    if ra != rb {
+                        let (small, big) = if ra < rb { (ra, rb) } else { (rb, ra) };
+                        parent[big] = small;
+                    }
+                }
+            }
+        }
+        let mut root_ok = vec![false; n];
+        for p in 0..n {
+            if anchored[p] {
+                let r = find(&mut parent, p);
+                root_ok[r] = true;
+            }
+        }
+        for p in 0..n {
+            let r = find(&mut parent, p);
+            if !root_ok[r] {
+                let size = (0..n).filter(|&q| find(&mut parent, q) == r).count();
+                let c = [p % nx, (p / nx) % ny, p / (nx * ny)];
+                return Err(SolverError::Singular {
+                    detail: format!(
+                        "connected component of {size} cells containing cell {c:?} has no Dirichlet face and no diag_extra > 0 (constant mode in the null space; grid {nx}x{ny}x{nz})"
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Iterator over the interior faces of `axis`: (face index, low cell,
+    /// high cell).
+    fn interior_faces(&self, axis: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        let [nx, ny, nz] = self.dims;
+        let step = [1, nx, nx * ny][axis];
+        let na = self.dims[axis];
+        (0..nz).flat_map(move |k| {
+            (0..ny).flat_map(move |j| {
+                (0..nx).filter_map(move |i| {
+                    let c = [i, j, k];
+                    if c[axis] == 0 {
+                        return None;
+                    }
+                    let _ = na;
+                    let hi = i + nx * (j + ny * k);
+                    Some((self.face_index(axis, c), hi - step, hi))
+                })
+            })
+        })
+    }
+
+    /// Number of triplets produced by [`CellStencil::triplet_pattern`].
+    pub fn num_triplets(&self) -> usize {
+        let n = self.num_cells();
+        let mut t = n;
+        for a in 0..self.ndim {
+            t += 2 * (n / self.dims[a]) * (self.dims[a] - 1);
+        }
+        t
+    }
+
+    /// Row and column indices of the matrix triplets, in the fixed order
+    /// used by [`CellStencil::triplet_values`]: for each cell, its diagonal,
+    /// then its interior neighbours in the order −z, −y, −x, +x, +y, +z.
+    /// The pattern depends only on the grid dimensions (zero coefficients
+    /// are kept), so the values can be refreshed in place.
+    pub fn triplet_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        let nt = self.num_triplets();
+        let mut rows = Vec::with_capacity(nt);
+        let mut cols = Vec::with_capacity(nt);
+        self.for_each_entry(|r, c, _| {
+            rows.push(r);
+            cols.push(c);
+        });
+        (rows, cols)
+    }
+
+    /// Triplet values matching [`CellStencil::triplet_pattern`].
+    pub fn triplet_values(&self, out: &mut [f64]) -> Result<()> {
+        check_len(self.num_triplets(), out.len())?;
+        let mut k = 0;
+        self.for_each_entry(|_, _, v| {
+            out[k] = v;
+            k += 1;
+        });
+        Ok(())
+    }
+
+    /// `(rows, cols, values)` of the symmetric matrix (both triangles).
+    pub fn to_triplets(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let (r, c) = self.triplet_pattern();
+        let mut v = vec![0.0; r.len()];
+        // Lengths match by construction.
+        let _ = self.triplet_values(&mut v);
+        (r, c, v)
+    }
+
+    /// The matrix as a faer CSC matrix (both triangles stored).
+    pub fn to_matrix(&self) -> Result<SparseColMat<usize, f64>> {
+        self.validate()?;
+        let (r, c, v) = self.to_triplets();
+        let n = self.num_cells();
+        SparsityPattern::new(n, n, &r, &c)?.build(&v)
+    }
+
+    fn for_each_entry(&self, mut emit: impl FnMut(usize, usize, f64)) {
+        let [nx, ny, nz] = self.dims;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let c = [i, j, k];
+                    let p = self.cell_index(c);
+                    let mut off = [(usize::MAX, 0.0f64); 6];
+                    let mut diag = self.diag_extra[p];
+                    for a in 0..self.ndim {
+                        let lo_f = self.face_index(a, c);
+                        let mut hc = c;
+                        hc[a] += 1;
+                        let hi_f = self.face_index(a, hc);
+                        let (clo, chi) = (self.face[a][lo_f], self.face[a][hi_f]);
+                        if c[a] == 0 {
+                            diag += self.boundary_coeff(a, 0, c);
+                        } else {
+                            let mut nb = c;
+                            nb[a] -= 1;
+                            diag += clo;
+                            off[2 - a] = (self.cell_index(nb), -clo);
+                        }
+                        if c[a] + 1 == self.dims[a] {
+                            diag += self.boundary_coeff(a, 1, c);
+                        } else {
+                            diag += chi;
+                            off[3 + a] = (self.cell_index(hc), -chi);
+                        }
+                    }
+                    emit(p, p, diag);
+                    for &(q, v) in &off {
+                        if q != usize::MAX {
+                            emit(p, q, v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Diagonal of the operator.
+    pub fn diagonal(&self) -> Vec<f64> {
+        let mut d = vec![0.0; self.num_cells()];
+        self.for_each_entry(|r, c, v| {
+            if r == c {
+                d[r] = v;
+            }
+        });
+        d
+    }
+
+    /// `y = A x` (matrix-free), with dimension checks.
+    pub fn apply_checked(&self, x: &[f64], y: &mut [f64]) -> Result<()> {
+        check_len(self.num_cells(), x.len())?;
+        check_len(self.num_cells(), y.len())?;
+        self.apply_impl(x, y);
+        Ok(())
+    }
+
+    fn apply_impl(&self, x: &[f64], y: &mut [f64]) {
+        let [nx, ny, nz] = self.dims;
+        for ((yi, xi), d) in y.iter_mut().zip(x).zip(&self.diag_extra) {
+            *yi = d * xi;
+        }
+        // Axis 0: faces inside each x-row, plus boundary faces.
+        let fx = &self.face[0];
+        for k in 0..nz {
+            for j in 0..ny {
+                let b = nx * (j + ny * k);
+                let fb = (nx + 1) * (j + ny * k);
+                let xr = &x[b..b + nx];
+                let yr = &mut y[b..b + nx];
+                let cr = &fx[fb..fb + nx + 1];
+                for i in 1..nx {
+                    let flux = cr[i] * (xr[i - 1] - xr[i]);
+                    yr[i - 1] += flux;
+                    yr[i] -= flux;
+                }
+                let c = [0, j, k];
+                yr[0] += self.boundary_coeff(0, 0, c) * xr[0];
+                let c = [nx - 1, j, k];
+                yr[nx - 1] += self.boundary_coeff(0, 1, c) * xr[nx - 1];
+            }
+        }
+        // Axis 1.
+        let fy = &self.face[1];
+        for k in 0..nz {
+            let plane = nx * ny * k;
+            let fplane = nx * (ny + 1) * k;
+            for j in 1..ny {
+                let lo = plane + nx * (j - 1);
+                let hi = plane + nx * j;
+                let cr = &fy[fplane + nx * j..fplane + nx * j + nx];
+                let (ylo, yhi) = y[lo..hi + nx].split_at_mut(nx);
+                let (xlo, xhi) = (&x[lo..lo + nx], &x[hi..hi + nx]);
+                for i in 0..nx {
+                    let flux = cr[i] * (xlo[i] - xhi[i]);
+                    ylo[i] += flux;
+                    yhi[i] -= flux;
+                }
+            }
+            for i in 0..nx {
+                let p0 = plane + i;
+                y[p0] += self.boundary_coeff(1, 0, [i, 0, k]) * x[p0];
+                let p1 = plane + nx * (ny - 1) + i;
+                y[p1] += self.boundary_coeff(1, 1, [i, ny - 1, k]) * x[p1];
+            }
+        }
+        // Axis 2.
+        if self.ndim == 3 {
+            let fz = &self.face[2];
+            let pl = nx * ny;
+            for k in 1..nz {
+                let lo = pl * (k - 1);
+                let hi = pl * k;
+                let cr = &fz[pl * k..pl * k + pl];
+                let (ylo, yhi) = y[lo..hi + pl].split_at_mut(pl);
+                let (xlo, xhi) = (&x[lo..lo + pl], &x[hi..hi + pl]);
+                for t in 0..pl {
+                    let flux = cr[t] * (xlo[t] - xhi[t]);
+                    ylo[t] += flux;
+                    yhi[t] -= flux;
+                }
+            }
+            for t in 0..pl {
+                let (i, j) = (t % nx, t / nx);
+                y[t] += self.boundary_coeff(2, 0, [i, j, 0]) * x[t];
+                let p1 = pl * (nz - 1) + t;
+                y[p1] += self.boundary_coeff(2, 1, [i, j, nz - 1]) * x[p1];
+            }
+        }
+    }
+}
+
+impl LinearOperator for CellStencil {
+    fn dim(&self) -> usize {
+        self.num_cells()
+    }
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.apply_impl(x, y)
+    }
+}

@@ -1,0 +1,176 @@
+//! Bad scene input is rejected with the key path and the allowed values,
+//! never a panic — through the library and through the `mpmice` binary.
+
+use std::process::Command;
+
+const GOOD: &str = r#"
+[grid]
+dim = 2
+lower = [0.0, 0.0]
+upper = [1.0, 1.0]
+cells = [10, 10]
+boundary = { x_lower = "fixed", y_lower = "symmetry" }
+
+[time]
+end = 0.1
+cfl = 0.5
+
+[[materials]]
+name = "steel"
+type = "solid"
+model = "linear_elastic"
+density = 7800.0
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+
+[[objects]]
+material = "steel"
+geometry = { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] }
+velocity = [1.0, 0.0]
+"#;
+
+/// The good scene with `from` replaced by `to` (which must occur once).
+fn edit(from: &str, to: &str) -> String {
+    assert_eq!(GOOD.matches(from).count(), 1, "edit anchor `{from}`");
+    GOOD.replacen(from, to, 1)
+}
+
+fn error_of(text: &str) -> mpmice::error::SceneError {
+    mpmice::scene::parse(text).expect_err("must be rejected")
+}
+
+#[test]
+fn the_good_scene_is_accepted() {
+    let s = mpmice::scene::parse(GOOD).expect("valid");
+    assert_eq!(s.grid.dim, 2);
+}
+
+#[test]
+fn each_bad_input_names_its_key_and_the_allowed_values() {
+    // (edit, expected key path, a word of the message)
+    let cases: &[(String, &str, &str)] = &[
+        (
+            edit("cfl = 0.5", "cfl = 0.5\nstep_size = 2"),
+            "time.step_size",
+            "unknown field `step_size`",
+        ),
+        (
+            edit("density = 7800.0", "densty = 7800.0"),
+            "materials[0].densty",
+            "expected one of",
+        ),
+        (edit("end = 0.1\n", ""), "time", "missing field `end`"),
+        (
+            edit("end = 0.1", "end = \"soon\""),
+            "time.end",
+            "invalid type",
+        ),
+        (
+            edit("density = 7800.0", "density = -1.0"),
+            "materials[0].density",
+            "> 0",
+        ),
+        (
+            edit("youngs_modulus = 200e9", "youngs_modulus = 0.0"),
+            "materials[0].youngs_modulus",
+            "> 0",
+        ),
+        (
+            edit("poisson_ratio = 0.3", "poisson_ratio = 0.5"),
+            "materials[0].poisson_ratio",
+            "0.5",
+        ),
+        (
+            edit("upper = [0.8, 0.8]", "upper = [1.2, 0.8]"),
+            "objects[0].geometry",
+            "outside the grid",
+        ),
+        (edit("cfl = 0.5", "cfl = 0.0"), "time.cfl", "0 < cfl ≤ 1"),
+        (edit("cfl = 0.5", "cfl = 1.5"), "time.cfl", "0 < cfl ≤ 1"),
+        (
+            edit("cells = [10, 10]", "cells = [10, 0]"),
+            "grid.cells[1]",
+            "≥ 1",
+        ),
+        (edit("dim = 2", "dim = 4"), "grid.dim", "1, 2 or 3"),
+        (
+            edit("cells = [10, 10]", "cells = [10]"),
+            "grid.cells",
+            "2 components",
+        ),
+        (
+            edit("model = \"linear_elastic\"", "model = \"rubbery\""),
+            "materials[0].model",
+            "neo_hookean",
+        ),
+        (
+            edit("x_lower = \"fixed\"", "x_lower = \"sticky\""),
+            "grid.boundary.x_lower",
+            "symmetry",
+        ),
+        (
+            edit("material = \"steel\"", "material = \"wood\""),
+            "objects[0].material",
+            "unknown material",
+        ),
+        (
+            edit("cfl = 0.5", "cfl = 0.5\nmode = \"implicit\""),
+            "time.mode",
+            "explicit",
+        ),
+        (
+            edit("type = \"box\"", "type = \"cone\""),
+            "objects[0].geometry.type",
+            "box",
+        ),
+        (edit("end = 0.1", "end = 0.1\ndt = -1.0"), "time.dt", "> 0"),
+        ("this is = not toml [".to_string(), "<toml>", "TOML"),
+    ];
+    let mut wrong = Vec::new();
+    for (text, path, word) in cases {
+        let e = error_of(text);
+        if e.path != *path || !e.to_string().contains(word) {
+            wrong.push(format!("expected `{path}` with `{word}`, got: {e}"));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[test]
+fn the_cli_rejects_bad_scenes_without_panicking() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, edit("poisson_ratio = 0.3", "poisson_ratio = 0.7")).expect("write");
+    for sub in ["check", "run"] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_mpmice"));
+        cmd.arg(sub).arg(&bad);
+        if sub == "run" {
+            cmd.arg("--out").arg(dir.path().join("out")).arg("--quiet");
+        }
+        let out = cmd.output().expect("spawn");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{sub}: must fail");
+        assert!(err.contains("materials[0].poisson_ratio"), "{sub}: {err}");
+        assert!(!err.contains("panicked"), "{sub}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_mpmice"))
+        .args(["check", "/no/such/scene.toml"])
+        .output()
+        .expect("spawn");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+}
+
+#[test]
+fn the_cli_checks_and_runs_the_default_scene() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/two_disks.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_mpmice"))
+        .args(["check", scene])
+        .output()
+        .expect("spawn");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
