@@ -67,6 +67,8 @@ pub struct Summary {
     pub initial_energy: Energies,
     /// Energies at the end.
     pub final_energy: Energies,
+    /// Wall time per phase of the step (binning, P2G, grid, G2P + stress).
+    pub phase_times: crate::mpm::PhaseTimes,
     /// Error that stopped the run early, if any.
     pub error: Option<String>,
 }
@@ -374,6 +376,7 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         energy_drift: (e1.total() - e0.total()) / e_scale,
         initial_energy: e0,
         final_energy: e1,
+        phase_times: run.phase_times(),
         error: failure.as_ref().map(|e| e.to_string()),
     };
     let path = opts.out_dir.join("summary.json");

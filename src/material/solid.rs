@@ -82,14 +82,17 @@ impl SolidMaterial {
     /// Advances the particle stress over one step.
     ///
     /// `l` is the velocity gradient ∇v (Guilkey Eq. 23) over the step, `f_new`
-    /// the updated deformation gradient, `stress` the Cauchy stress (updated in
-    /// place) and `work` the accumulated stress work per unit reference volume
-    /// (updated for rate models, whose strain energy is that work).
+    /// the updated deformation gradient and `j` its determinant, `stress` the
+    /// Cauchy stress (updated in place) and `work` the accumulated stress work
+    /// per unit reference volume (updated for rate models, whose strain energy
+    /// is that work).
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     pub fn update_stress(
         &self,
         l: &Matrix3<f64>,
         f_new: &Matrix3<f64>,
+        j: f64,
         dt: f64,
         stress: &mut Matrix3<f64>,
         work: &mut f64,
@@ -106,11 +109,10 @@ impl SolidMaterial {
                     + dt * (lambda * d.trace() * Matrix3::identity() + 2.0 * mu * d);
                 // Stress power per unit current volume, midpoint in time,
                 // converted to per unit reference volume with J.
-                let j = f_new.determinant();
                 *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
             }
             SolidModel::NeoHookean => {
-                *stress = neo_hookean_stress(lambda, mu, f_new);
+                *stress = neo_hookean_stress_j(lambda, mu, f_new, j);
             }
         }
     }
@@ -133,9 +135,32 @@ impl SolidMaterial {
 /// Compressible neo-Hookean Cauchy stress σ = (λ ln J/J) I + (μ/J)(F Fᵀ − I).
 #[inline]
 pub fn neo_hookean_stress(lambda: f64, mu: f64, f: &Matrix3<f64>) -> Matrix3<f64> {
-    let j = f.determinant();
-    let b = f * f.transpose();
-    (lambda * j.ln() / j) * Matrix3::identity() + (mu / j) * (b - Matrix3::identity())
+    neo_hookean_stress_j(lambda, mu, f, f.determinant())
+}
+
+/// [`neo_hookean_stress`] with J = det F given; forms only the six
+/// independent entries of B = F Fᵀ.
+#[inline]
+pub fn neo_hookean_stress_j(lambda: f64, mu: f64, f: &Matrix3<f64>, j: f64) -> Matrix3<f64> {
+    let inv_j = 1.0 / j;
+    let iso = (lambda * j.ln() - mu) * inv_j;
+    let m = mu * inv_j;
+    let r0 = f.row(0);
+    let r1 = f.row(1);
+    let r2 = f.row(2);
+    let (b00, b11, b22) = (r0.dot(&r0), r1.dot(&r1), r2.dot(&r2));
+    let (b01, b02, b12) = (r0.dot(&r1), r0.dot(&r2), r1.dot(&r2));
+    Matrix3::new(
+        m * b00 + iso,
+        m * b01,
+        m * b02,
+        m * b01,
+        m * b11 + iso,
+        m * b12,
+        m * b02,
+        m * b12,
+        m * b22 + iso,
+    )
 }
 
 #[cfg(test)]
@@ -211,7 +236,7 @@ mod tests {
         let dt = 1.0 / steps as f64;
         let mut work = 0.0;
         for _ in 0..steps {
-            m.update_stress(&l, &Matrix3::identity(), dt, &mut s, &mut work);
+            m.update_stress(&l, &Matrix3::identity(), 1.0, dt, &mut s, &mut work);
         }
         assert!((s.trace() - tr0).abs() < 1e-12);
         assert!((s.norm() - n0).abs() < 5e-3 * n0);

@@ -15,6 +15,7 @@
 //! of the step; positions move at the end.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
@@ -104,11 +105,26 @@ impl<const D: usize> GridState<D> {
     }
 }
 
+/// Wall time spent in each phase of the explicit step, accumulated over steps.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct PhaseTimes {
+    /// Binning particles into slabs.
+    pub bin_s: f64,
+    /// Particle-to-grid transfers (all P2G passes of a step).
+    pub p2g_s: f64,
+    /// Grid clearing, boundary folding and the nodal momentum equation.
+    pub grid_s: f64,
+    /// Grid-to-particle transfers and the constitutive update.
+    pub g2p_s: f64,
+}
+
 /// Reusable buffers of the step (no allocation inside the time loop).
 #[derive(Debug, Clone, Default)]
 pub struct StepScratch<const D: usize> {
     bins: Bins,
     dx: Vec<SVector<f64, D>>,
+    /// Accumulated phase timings.
+    pub times: PhaseTimes,
 }
 
 /// Largest stable explicit timestep times `cfl`: min over particles of
@@ -215,6 +231,13 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
     gs: &mut GridState<D>,
     scratch: &mut StepScratch<D>,
 ) -> Result<()> {
+    let mut clock = Instant::now();
+    let mut lap = |slot: &mut f64| {
+        let now = Instant::now();
+        *slot += (now - clock).as_secs_f64();
+        clock = now;
+    };
+    let mut t = scratch.times;
     if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
         return Err(ctx.fail(
             Some(p),
@@ -222,38 +245,59 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
             "particle position is not finite or has left the grid",
         ));
     }
+    lap(&mut t.bin_s);
     let bins = &scratch.bins;
     let dx = &mut scratch.dx;
     match ctx.params.scheme {
         UpdateScheme::Usl => {
             clear(gs);
+            lap(&mut t.grid_s);
             p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
+            lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
+            lap(&mut t.grid_s);
             g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, particles, gs, dx)?;
+            lap(&mut t.g2p_s);
         }
         UpdateScheme::Musl => {
             clear(gs);
+            lap(&mut t.grid_s);
             p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
+            lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
+            lap(&mut t.grid_s);
             g2p::<D, S, K, true, POS_STORE, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
+            lap(&mut t.g2p_s);
             // Map the updated momenta back (Sulsky's modified USL).
             gs.momentum
                 .par_iter_mut()
                 .for_each(|m| *m = SVector::zeros());
+            lap(&mut t.grid_s);
             p2g::<D, S, K, false, true, false>(ctx, kernel, bins, particles, gs);
+            lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
+            lap(&mut t.grid_s);
             g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
+            lap(&mut t.g2p_s);
         }
         UpdateScheme::Usf => {
             clear(gs);
+            lap(&mut t.grid_s);
             p2g::<D, S, K, true, true, false>(ctx, kernel, bins, particles, gs);
+            lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
+            lap(&mut t.grid_s);
             g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
+            lap(&mut t.g2p_s);
             p2g::<D, S, K, false, false, true>(ctx, kernel, bins, particles, gs);
+            lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
+            lap(&mut t.grid_s);
             g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
+            lap(&mut t.g2p_s);
         }
     }
+    scratch.times = t;
     Ok(())
 }
 
@@ -476,7 +520,7 @@ fn g2p<
                 }
                 *fp = f_new;
                 *vp_vol = j * vol0[p];
-                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, dt, sp, wp);
+                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, j, dt, sp, wp);
             }
         });
     }

@@ -6,6 +6,7 @@ pub mod particles;
 mod scatter;
 
 pub use explicit::{
-    explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, StepScratch, UpdateScheme,
+    explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, PhaseTimes, StepScratch,
+    UpdateScheme,
 };
 pub use particles::Particles;

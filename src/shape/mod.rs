@@ -297,25 +297,51 @@ mod tests {
         check_1d(cubic_bspline, "cubic");
     }
 
+    /// Partition of unity (Σ w = 1), linear reproduction (Σ w x_i = x) and
+    /// gradient consistency (Σ ∇w = 0, Σ x_i ⊗ ∇w = I) of the tensor product,
+    /// in physical units with anisotropic cells.
+    fn check_tensor<const D: usize, const S: usize, K: Stencil<S>>(kernel: K, name: &str) {
+        let h = SVector::<f64, D>::from_fn(|d, _| 0.1 + 0.05 * d as f64);
+        let inv_h = h.map(|v| 1.0 / v);
+        let lp = SVector::<f64, D>::repeat(0.25);
+        for k in 0..200 {
+            let xi = SVector::<f64, D>::from_fn(|d, _| {
+                3.0 + ((k * (7 + 3 * d)) % 200) as f64 * 0.00497 + 0.1 * d as f64
+            });
+            let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &lp, &inv_h);
+            let base = pw.base();
+            let mut sum = 0.0;
+            let mut first = SVector::<f64, D>::zeros();
+            let mut gsum = SVector::<f64, D>::zeros();
+            let mut gx = nalgebra::SMatrix::<f64, D, D>::zeros();
+            pw.for_each(|m, w, g| {
+                let xn = SVector::<f64, D>::from_fn(|d, _| (base[d] + m[d] as isize) as f64 * h[d]);
+                sum += w;
+                first += xn * w;
+                gsum += g;
+                gx += xn * g.transpose();
+            });
+            let x = xi.component_mul(&h);
+            assert!((sum - 1.0).abs() < 1e-13, "{name} {D}D: Σw = {sum}");
+            assert!((first - x).norm() < 1e-13, "{name} {D}D: Σ w x_i ≠ x");
+            assert!(gsum.norm() < 1e-11, "{name} {D}D: Σ∇w = {gsum}");
+            let err = (gx - nalgebra::SMatrix::<f64, D, D>::identity()).norm();
+            assert!(err < 1e-12, "{name} {D}D: Σ x_i ⊗ ∇w ≠ I ({err})");
+        }
+    }
+
     #[test]
-    fn tensor_product_partition_and_gradient() {
-        let xi = SVector::from([2.3, 5.71, 0.4]);
-        let lp = SVector::from([0.25, 0.25, 0.25]);
-        let pw = ParticleWeights::<3, 3>::new(Gimp, &xi, &lp);
-        let base = pw.base();
-        let mut sum = 0.0;
-        let mut gsum = SVector::<f64, 3>::zeros();
-        let mut grad_x = nalgebra::Matrix3::<f64>::zeros();
-        pw.for_each(|m, w, g| {
-            sum += w;
-            gsum += g;
-            let xn = SVector::from(std::array::from_fn::<f64, 3, _>(|d| {
-                (base[d] + m[d] as isize) as f64
-            }));
-            grad_x += xn * g.transpose();
-        });
-        assert!((sum - 1.0).abs() < 1e-13);
-        assert!(gsum.norm() < 1e-12);
-        assert!((grad_x - nalgebra::Matrix3::identity()).norm() < 1e-12);
+    fn tensor_products_are_consistent_in_every_dimension() {
+        macro_rules! all_dims {
+            ($k:expr, $s:literal, $n:literal) => {
+                check_tensor::<1, $s, _>($k, $n);
+                check_tensor::<2, $s, _>($k, $n);
+                check_tensor::<3, $s, _>($k, $n);
+            };
+        }
+        all_dims!(LinearHat, 2, "linear");
+        all_dims!(Gimp, 3, "gimp");
+        all_dims!(QuadraticBspline, 3, "quadratic");
+        all_dims!(CubicBspline, 4, "cubic");
     }
 }

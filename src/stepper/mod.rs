@@ -136,6 +136,11 @@ impl<const D: usize> SolidRun<D> {
         }
     }
 
+    /// Wall time per phase of the explicit step, accumulated over the run.
+    pub fn phase_times(&self) -> crate::mpm::PhaseTimes {
+        self.scratch.times
+    }
+
     /// The grid node fields of the last step.
     pub fn grid_state(&self) -> &GridState<D> {
         &self.grid_state
