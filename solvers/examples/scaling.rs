@@ -5,9 +5,15 @@
 //! pseudo-random right-hand side), solved to relative residual 1e-10 on one
 //! thread.
 //!
+//! Every run that takes less than 3 s is repeated (3 times by default,
+//! `--repeat N`) and the fastest run (by setup + solve) is reported, to
+//! reduce the noise of a shared machine.
+//!
 //! Usage: `cargo run --release -p solvers --example scaling [-- --quick]`
-//! Options: `--quick` (small sizes only), `--max-chol-cells N` (default
-//! 300000), `--max-jacobi-cells N` (default 1100000), `--only 2d|3d`,
+//! Options: `--quick` (small sizes only), `--max-chol-cells-2d N` (default
+//! 1100000), `--max-chol-cells-3d N` (default 300000: Cholesky takes ~30 s at
+//! 64³ and would take minutes at 96³), `--max-jacobi-cells N` (default
+//! 1000000: PCG-Jacobi at 1024² needs ~6500 iterations, > 60 s), `--only 2d|3d`,
 //! `--mg-smooth N` (pre = post smoothing sweeps), `--omega W`, `--w-cycle`.
 
 #[path = "../tests/common/mod.rs"]
@@ -29,7 +35,9 @@ struct Row {
 
 fn arg_value(name: &str) -> Option<String> {
     let args: Vec<String> = std::env::args().collect();
-    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1).cloned())
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
 }
 
 fn problem(dims: [usize; 3]) -> (CellStencil, Vec<f64>) {
@@ -121,7 +129,9 @@ fn run_mg_standalone(st: &CellStencil, b: &[f64], o: &MgOptions) -> Result<Row> 
 /// Least-squares slope of log(t) against log(n).
 fn slope(pts: &[(f64, f64)]) -> f64 {
     let m = pts.len() as f64;
-    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0.ln(), a.1 + p.1.ln()));
+    let (sx, sy) = pts
+        .iter()
+        .fold((0.0, 0.0), |a, p| (a.0 + p.0.ln(), a.1 + p.1.ln()));
     let (mx, my) = (sx / m, sy / m);
     let num: f64 = pts.iter().map(|p| (p.0.ln() - mx) * (p.1.ln() - my)).sum();
     let den: f64 = pts.iter().map(|p| (p.0.ln() - mx).powi(2)).sum();
@@ -130,21 +140,31 @@ fn slope(pts: &[(f64, f64)]) -> f64 {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
-    let max_chol: usize = arg_value("--max-chol-cells")
+    let max_chol_2d: usize = arg_value("--max-chol-cells-2d")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_100_000);
+    let max_chol_3d: usize = arg_value("--max-chol-cells-3d")
         .and_then(|v| v.parse().ok())
         .unwrap_or(300_000);
     let max_jac: usize = arg_value("--max-jacobi-cells")
         .and_then(|v| v.parse().ok())
-        .unwrap_or(1_100_000);
+        .unwrap_or(1_000_000);
     let only = arg_value("--only").unwrap_or_default();
+    let repeat: usize = arg_value("--repeat")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3);
     let mut sizes: Vec<[usize; 3]> = if quick {
         vec![[128, 128, 1], [256, 256, 1], [32, 32, 32]]
     } else {
         vec![
+            [32, 32, 1],
+            [64, 64, 1],
             [128, 128, 1],
             [256, 256, 1],
             [512, 512, 1],
             [1024, 1024, 1],
+            [16, 16, 16],
+            [24, 24, 24],
             [32, 32, 32],
             [64, 64, 64],
             [96, 96, 96],
@@ -183,19 +203,38 @@ fn main() {
         } else {
             format!("{}^2", dims[0])
         };
+        let best = |f: &dyn Fn() -> Result<Row>| -> Result<Row> {
+            let mut r = f()?;
+            let mut k = 1;
+            while k < repeat && r.setup + r.solve < 3.0 {
+                let r2 = f()?;
+                if r2.setup + r2.solve < r.setup + r.solve {
+                    r = r2;
+                }
+                k += 1;
+            }
+            Ok(r)
+        };
         let mut rows: Vec<std::result::Result<Row, String>> = Vec::new();
+        let max_chol = if dims[2] > 1 {
+            max_chol_3d
+        } else {
+            max_chol_2d
+        };
         if n <= max_chol {
-            rows.push(run_cholesky(&st, &b).map_err(|e| format!("Cholesky: {e}")));
+            rows.push(best(&|| run_cholesky(&st, &b)).map_err(|e| format!("Cholesky: {e}")));
         } else {
             rows.push(Err(format!("Cholesky: skipped (> {max_chol} cells)")));
         }
         if n <= max_jac {
-            rows.push(run_jacobi(&st, &b).map_err(|e| format!("PCG-Jacobi: {e}")));
+            rows.push(best(&|| run_jacobi(&st, &b)).map_err(|e| format!("PCG-Jacobi: {e}")));
         } else {
             rows.push(Err(format!("PCG-Jacobi: skipped (> {max_jac} cells)")));
         }
-        rows.push(run_mg(&st, &b, &mg_opts, "PCG-MG").map_err(|e| format!("PCG-MG: {e}")));
-        rows.push(run_mg_standalone(&st, &b, &mg_opts).map_err(|e| format!("MG: {e}")));
+        rows.push(
+            best(&|| run_mg(&st, &b, &mg_opts, "PCG-MG")).map_err(|e| format!("PCG-MG: {e}")),
+        );
+        rows.push(best(&|| run_mg_standalone(&st, &b, &mg_opts)).map_err(|e| format!("MG: {e}")));
         for r in rows {
             match r {
                 Ok(r) => {
@@ -221,19 +260,32 @@ fn main() {
         for method in ["Cholesky", "PCG-Jacobi", "PCG-MG", "MG-standalone"] {
             let pts: Vec<(f64, f64)> = results
                 .iter()
-                .filter(|(d, r)| (d[2] > 1) == is3d && r.method == method)
+                .filter(|(d, r)| {
+                    (d[2] > 1) == is3d && r.method == method && d[0] >= if is3d { 32 } else { 128 }
+                })
                 .map(|(d, r)| ((d[0] * d[1] * d[2]) as f64, r.setup + r.solve))
                 .collect();
+            if pts.len() >= 3 {
+                let last = &pts[pts.len() - 2..];
+                println!(
+                    "{label} {method:>14}: slope between the two largest sizes = {:.2}",
+                    slope(last)
+                );
+            }
             if pts.len() >= 2 {
                 println!(
-                    "{label} {method:>14}: log-log slope of total time vs N = {:.2} ({} sizes)",
+                    "{label} {method:>14}: log-log slope of total time vs N = {:.2} ({} sizes from {})",
                     slope(&pts),
-                    pts.len()
+                    pts.len(),
+                    if is3d { "32^3" } else { "128^2" }
                 );
             }
         }
         let mut crossover = None;
-        for (d, r) in results.iter().filter(|(d, r)| (d[2] > 1) == is3d && r.method == "PCG-MG") {
+        for (d, r) in results
+            .iter()
+            .filter(|(d, r)| (d[2] > 1) == is3d && r.method == "PCG-MG")
+        {
             if let Some((_, c)) = results
                 .iter()
                 .find(|(dd, rr)| dd == d && rr.method == "Cholesky")

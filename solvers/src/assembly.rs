@@ -45,8 +45,7 @@ impl SparsityPattern {
         }
         let mut order = vec![0usize; nt];
         let mut next = count.clone();
-        for k in 0..nt {
-            let c = cols[k];
+        for (k, &c) in cols.iter().enumerate() {
             order[next[c]] = k;
             next[c] += 1;
         }

@@ -92,8 +92,7 @@ impl CscCopy {
     /// `y = A x` using all stored entries.
     fn mul_full(&self, x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
-        for j in 0..self.n {
-            let xj = x[j];
+        for (j, &xj) in x.iter().enumerate().take(self.n) {
             for k in self.col_ptr[j]..self.col_ptr[j + 1] {
                 y[self.row_idx[k]] += self.vals[k] * xj;
             }
@@ -250,7 +249,7 @@ impl Cholesky {
             });
         }
         let (ratio, idx) = self.min_pivot_ratio();
-        if !(ratio >= self.pivot_tol) {
+        if ratio.is_nan() || ratio < self.pivot_tol {
             return Err(SolverError::Singular {
                 detail: format!(
                     "Cholesky: relative pivot {ratio:e} at elimination step {idx} below tolerance {:e} (numerically singular)",
@@ -269,16 +268,20 @@ impl Cholesky {
         let mut best = (f64::INFINITY, 0usize);
         let mut consider = |j: usize, l: f64| {
             let a = self.a_diag[orig(j)];
-            let r = if a > 0.0 { l * l / a } else { f64::NEG_INFINITY };
-            if !(r >= best.0) {
+            let r = if a > 0.0 {
+                l * l / a
+            } else {
+                f64::NEG_INFINITY
+            };
+            if r.is_nan() || r < best.0 {
                 best = (r, j);
             }
         };
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let cp = s.col_ptr();
-                for j in 0..n {
-                    consider(j, self.l_values[cp[j]]);
+                for (j, &c) in cp.iter().enumerate().take(n) {
+                    consider(j, self.l_values[c]);
                 }
             }
             SymbolicCholeskyRaw::Supernodal(s) => {

@@ -63,6 +63,13 @@ impl SolverError {
     }
 }
 
+/// `x > 0` and not NaN (NaN-aware positivity test used for pivots and
+/// Krylov denominators).
+#[inline]
+pub(crate) fn is_pos(x: f64) -> bool {
+    x > 0.0
+}
+
 /// Returns `Err(Dimension)` unless `got == expected`.
 pub(crate) fn check_len(expected: usize, got: usize) -> Result<()> {
     if expected == got {

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use crate::error::{check_len, Result, SolveReport, SolverError};
+use crate::error::{check_len, is_pos, Result, SolveReport, SolverError};
 use crate::operator::{LinearOperator, Preconditioner};
 
 /// Stopping criteria for Krylov and multigrid iterations.
@@ -157,14 +157,17 @@ where
     }
     pc.apply(r, z);
     let mut rz = dot(r, z);
-    if !(rz > 0.0) {
-        return Err(breakdown(0, "preconditioner not positive definite (r.z <= 0)"));
+    if !is_pos(rz) {
+        return Err(breakdown(
+            0,
+            "preconditioner not positive definite (r.z <= 0)",
+        ));
     }
     p.copy_from_slice(z);
     for it in 1..=opts.max_iter {
         a.apply(p, q);
         let pq = dot(p, q);
-        if !(pq > 0.0) {
+        if !is_pos(pq) {
             return Err(breakdown(it, "operator not positive definite (p.Ap <= 0)"));
         }
         let alpha = rz / pq;
@@ -187,16 +190,22 @@ where
             // Residual replacement: restart from the true residual.
             pc.apply(r, z);
             rz = dot(r, z);
-            if !(rz > 0.0) {
-                return Err(breakdown(it, "preconditioner not positive definite (r.z <= 0)"));
+            if !is_pos(rz) {
+                return Err(breakdown(
+                    it,
+                    "preconditioner not positive definite (r.z <= 0)",
+                ));
             }
             p.copy_from_slice(z);
             continue;
         }
         pc.apply(r, z);
         let rz_new = dot(r, z);
-        if !(rz_new > 0.0) {
-            return Err(breakdown(it, "preconditioner not positive definite (r.z <= 0)"));
+        if !is_pos(rz_new) {
+            return Err(breakdown(
+                it,
+                "preconditioner not positive definite (r.z <= 0)",
+            ));
         }
         let beta = rz_new / rz;
         rz = rz_new;
@@ -317,7 +326,7 @@ where
         pc.apply(s, zz);
         a.apply(zz, t);
         let tt = dot(t, t);
-        if !(tt > 0.0) {
+        if !is_pos(tt) {
             return Err(breakdown(it, "||A M^-1 s|| vanished"));
         }
         omega = dot(t, s) / tt;

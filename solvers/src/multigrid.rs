@@ -44,7 +44,7 @@ use faer::sparse::SparseColMat;
 
 use crate::assembly::SparsityPattern;
 use crate::direct::Cholesky;
-use crate::error::{check_len, Result, SolveReport, SolverError};
+use crate::error::{check_len, is_pos, Result, SolveReport, SolverError};
 use crate::krylov::KrylovOptions;
 use crate::operator::Preconditioner;
 use crate::stencil::CellStencil;
@@ -183,7 +183,7 @@ impl Level {
                     for a in 0..self.ndim() {
                         d += self.a[a][p] + self.a[a][p + self.stride(a)];
                     }
-                    if !(d > 0.0) || !d.is_finite() {
+                    if !is_pos(d) || !d.is_finite() {
                         return Err(SolverError::Singular {
                             detail: format!(
                                 "multigrid: zero diagonal at cell ({i}, {j}, {k}) of a {nx}x{ny}x{nz} level"
@@ -448,7 +448,11 @@ fn coarsen_level(fine: &Level, coarse: &mut Level, tr: &mut Transfer) {
                     if m % 2 == 0 {
                         // Fine cell right of coarse face F = m / 2.
                         let f = m / 2;
-                        let rho_r = if wide(f) { 0.5 * resist(af[p + s]) } else { 0.0 };
+                        let rho_r = if wide(f) {
+                            0.5 * resist(af[p + s])
+                        } else {
+                            0.0
+                        };
                         let rho_l = if f > 0 { 0.5 * resist(af[p - s]) } else { 0.0 };
                         let cross = resist(af[p]);
                         let total = rho_l + cross + rho_r;
@@ -509,7 +513,10 @@ fn row_views<'a>(
     let south = &lo[p0 - sy..p0 - sy + nx];
     let north = &hi[p0 + sy - hb..p0 + sy - hb + nx];
     let (bottom, top): (&[f64], &[f64]) = if lv.d3 {
-        (&lo[p0 - sz..p0 - sz + nx], &hi[p0 + sz - hb..p0 + sz - hb + nx])
+        (
+            &lo[p0 - sz..p0 - sz + nx],
+            &hi[p0 + sz - hb..p0 + sz - hb + nx],
+        )
     } else {
         (&[], &[])
     };
@@ -543,11 +550,8 @@ fn gs_row<const D3: bool>(
     let fr = &f[p0..p0 + nx];
     let mut i = (j + k + color) & 1;
     while i < nx {
-        let mut s = fr[i]
-            + ax[i] * cur[i]
-            + ax[i + 1] * cur[i + 2]
-            + ays[i] * south[i]
-            + ayn[i] * north[i];
+        let mut s =
+            fr[i] + ax[i] * cur[i] + ax[i + 1] * cur[i + 2] + ays[i] * south[i] + ayn[i] * north[i];
         if D3 {
             s += azb[i] * bottom[i] + azt[i] * top[i];
         }
@@ -568,7 +572,11 @@ fn zero_row(lv: &Level, u: &mut [f64], f: &[f64], j: usize, k: usize, color: usi
     let fr = &f[p0..p0 + nx];
     let first = (j + k + color) & 1;
     for (i, ((ui, fi), di)) in ur.iter_mut().zip(fr).zip(inv).enumerate() {
-        *ui = if (i & 1) == first { omega * fi * di } else { 0.0 };
+        *ui = if (i & 1) == first {
+            omega * fi * di
+        } else {
+            0.0
+        };
     }
 }
 
@@ -697,9 +705,21 @@ fn restrict_row(
     let p0 = fine.pidx(0, j, k);
     let (yo, yn) = (ty.0 * sy, ty.1 * sy);
     let (zo, zn) = (tz.0 * sz, tz.1 * sz);
-    let wx: &[f64] = if tr.w[0].is_empty() { &[] } else { &tr.w[0][p0..p0 + nx] };
-    let wy: &[f64] = if tr.w[1].is_empty() { &[] } else { &tr.w[1][p0..p0 + nx] };
-    let wz: &[f64] = if tr.w[2].is_empty() { &[] } else { &tr.w[2][p0..p0 + nx] };
+    let wx: &[f64] = if tr.w[0].is_empty() {
+        &[]
+    } else {
+        &tr.w[0][p0..p0 + nx]
+    };
+    let wy: &[f64] = if tr.w[1].is_empty() {
+        &[]
+    } else {
+        &tr.w[1][p0..p0 + nx]
+    };
+    let wz: &[f64] = if tr.w[2].is_empty() {
+        &[]
+    } else {
+        &tr.w[2][p0..p0 + nx]
+    };
     for (i, &(xo, xn)) in tx.iter().enumerate() {
         let v = rrow[i];
         let wxi = if wx.is_empty() { 0.0 } else { wx[i] };
@@ -755,11 +775,15 @@ fn prolong_add(tr: &Transfer, fine: &Level, coarse: &Level, uc: &[f64], u: &mut 
     let (sy, sz) = (coarse.sy, coarse.sz);
     let (tx, ty, tz) = (&tr.tab[0], &tr.tab[1], &tr.tab[2]);
     let zero: &[f64] = &[];
-    let wz = if tr.w[2].is_empty() { zero } else { &tr.w[2][..] };
-    for k in 0..nz {
-        let (zo, zn) = (tz[k].0 * sz, tz[k].1 * sz);
-        for j in 0..ny {
-            let (yo, yn) = (ty[j].0 * sy, ty[j].1 * sy);
+    let wz = if tr.w[2].is_empty() {
+        zero
+    } else {
+        &tr.w[2][..]
+    };
+    for (k, tzk) in tz.iter().enumerate().take(nz) {
+        let (zo, zn) = (tzk.0 * sz, tzk.1 * sz);
+        for (j, tyj) in ty.iter().enumerate().take(ny) {
+            let (yo, yn) = (tyj.0 * sy, tyj.1 * sy);
             let row = fine.pidx(0, j, k);
             for (i, &(xo, xn)) in tx.iter().enumerate().take(nx) {
                 let p = row + i;
@@ -816,7 +840,8 @@ impl Multigrid {
                 break;
             }
             let mut coarse = Level::new(nc, d3);
-            let mut tr = Transfer::new(lv, &coarse, co, opts.prolongation == Prolongation::Constant);
+            let mut tr =
+                Transfer::new(lv, &coarse, co, opts.prolongation == Prolongation::Constant);
             coarsen_level(lv, &mut coarse, &mut tr);
             coarse.compute_diag()?;
             transfers.push(tr);
@@ -900,7 +925,15 @@ impl Multigrid {
         self.levels[0].cells()
     }
 
-    fn smooth(&self, l: usize, u: &mut [f64], f: &[f64], sweeps: usize, reverse: bool, from_zero: bool) {
+    fn smooth(
+        &self,
+        l: usize,
+        u: &mut [f64],
+        f: &[f64],
+        sweeps: usize,
+        reverse: bool,
+        from_zero: bool,
+    ) {
         let lv = &self.levels[l];
         let first = usize::from(reverse);
         for s in 0..sweeps {
@@ -965,9 +998,25 @@ impl Multigrid {
             let (fine, coarse) = (&self.levels[l], &self.levels[l + 1]);
             self.smooth(l, &mut w.u, &w.f, self.opts.pre_smooth, false, zero_guess);
             if fine.d3 {
-                restrict_residual::<true>(&self.transfers[l], fine, coarse, &w.u, &w.f, &mut w.row, &mut b[0].f);
+                restrict_residual::<true>(
+                    &self.transfers[l],
+                    fine,
+                    coarse,
+                    &w.u,
+                    &w.f,
+                    &mut w.row,
+                    &mut b[0].f,
+                );
             } else {
-                restrict_residual::<false>(&self.transfers[l], fine, coarse, &w.u, &w.f, &mut w.row, &mut b[0].f);
+                restrict_residual::<false>(
+                    &self.transfers[l],
+                    fine,
+                    coarse,
+                    &w.u,
+                    &w.f,
+                    &mut w.row,
+                    &mut b[0].f,
+                );
             }
         }
         let visits = match self.opts.cycle {

@@ -6,6 +6,10 @@ use faer::sparse::SparseColMat;
 use crate::error::{check_len, Result, SolverError};
 
 /// A square linear operator `y = A x`, possibly matrix-free.
+///
+/// The solvers of this crate check all lengths before calling
+/// [`LinearOperator::apply`]; implementations may assume
+/// `x.len() == y.len() == self.dim()` (and may panic otherwise).
 pub trait LinearOperator {
     /// Dimension `n` of the (square) operator.
     fn dim(&self) -> usize;
@@ -14,7 +18,9 @@ pub trait LinearOperator {
     fn apply(&self, x: &[f64], y: &mut [f64]);
 }
 
-/// A preconditioner `z = M^{-1} r`.
+/// A preconditioner `z = M^{-1} r`. For [`crate::pcg`] it must be symmetric
+/// positive definite. As for [`LinearOperator`], lengths are checked by the
+/// solvers before [`Preconditioner::apply`] is called.
 pub trait Preconditioner {
     /// Computes `z = M^{-1} r` (`z` is overwritten).
     fn apply(&self, r: &[f64], z: &mut [f64]);

@@ -2,7 +2,7 @@
 
 use faer::sparse::SparseColMat;
 
-use crate::error::{check_len, Result, SolverError};
+use crate::error::{check_len, is_pos, Result, SolverError};
 use crate::operator::Preconditioner;
 
 /// The identity preconditioner `z = r`.
@@ -123,7 +123,7 @@ impl IncompleteCholesky {
             col_ptr.push(row_idx.len());
         }
         for j in 0..n {
-            if !has_diag[j] || !(diag[j] > 0.0) {
+            if !has_diag[j] || !is_pos(diag[j]) {
                 return Err(SolverError::Singular {
                     detail: format!("IC(0): diagonal entry {j} is missing or not positive"),
                 });
@@ -161,7 +161,7 @@ impl IncompleteCholesky {
         let vals = &mut self.vals;
         for k in 0..self.n {
             let dk = d[k];
-            if !(dk > 1e-14 * diag[k]) || !dk.is_finite() {
+            if !is_pos(dk - 1e-14 * diag[k]) || !dk.is_finite() {
                 return false;
             }
             let lkk = dk.sqrt();

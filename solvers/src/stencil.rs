@@ -53,8 +53,10 @@ impl CellStencil {
     /// A grid of `dims = [nx, ny, nz]` cells (`nz = 1` for 2D) with all
     /// coefficients zero and all boundaries Neumann.
     pub fn new(dims: [usize; 3]) -> Result<Self> {
-        if dims.iter().any(|&d| d == 0) {
-            return Err(SolverError::invalid(format!("grid dims {dims:?} must be >= 1")));
+        if dims.contains(&0) {
+            return Err(SolverError::invalid(format!(
+                "grid dims {dims:?} must be >= 1"
+            )));
         }
         let ndim = if dims[2] > 1 { 3 } else { 2 };
         let n = dims[0] * dims[1] * dims[2];
@@ -107,7 +109,13 @@ impl CellStencil {
         let mut s = Self::new(dims)?;
         check_len(s.num_cells(), k.len())?;
         let [nx, ny, nz] = dims;
-        let harm = |a: f64, b: f64| if a + b > 0.0 { 2.0 * a * b / (a + b) } else { 0.0 };
+        let harm = |a: f64, b: f64| {
+            if a + b > 0.0 {
+                2.0 * a * b / (a + b)
+            } else {
+                0.0
+            }
+        };
         for a in 0..s.ndim {
             let na = dims[a];
             for kk in 0..nz + usize::from(a == 2) {
@@ -169,16 +177,21 @@ impl CellStencil {
         f[0] + d[0] * (f[1] + d[1] * f[2])
     }
 
-    /// Face coefficients of `axis` (length `(n_axis + 1) · Π other dims`).
-    /// Boundary positions are used only on Dirichlet faces.
+    /// Face coefficients of `axis` (length `(n_axis + 1) · Π other dims`;
+    /// empty for axis 2 of a 2D grid or an invalid axis). Boundary positions
+    /// are used only on Dirichlet faces.
     pub fn face_coeffs(&self, axis: usize) -> &[f64] {
-        &self.face[axis]
+        self.face.get(axis).map_or(&[], |v| &v[..])
     }
 
-    /// Mutable face coefficients of `axis` (call [`CellStencil::validate`]
-    /// after editing if the values are untrusted).
+    /// Mutable face coefficients of `axis` (empty for a non-existent axis).
+    /// [`Multigrid::new`](crate::Multigrid::new) and
+    /// [`CellStencil::to_matrix`] validate the values.
     pub fn face_coeffs_mut(&mut self, axis: usize) -> &mut [f64] {
-        &mut self.face[axis]
+        match self.face.get_mut(axis) {
+            Some(v) => &mut v[..],
+            None => &mut [],
+        }
     }
 
     /// Sets one face coefficient (see [`CellStencil::face_index`]).
@@ -187,11 +200,15 @@ impl CellStencil {
         for a in 0..3 {
             let lim = self.dims[a] + usize::from(a == axis);
             if f[a] >= lim {
-                return Err(SolverError::invalid(format!("face {f:?} of axis {axis} out of range")));
+                return Err(SolverError::invalid(format!(
+                    "face {f:?} of axis {axis} out of range"
+                )));
             }
         }
         if !(c >= 0.0 && c.is_finite()) {
-            return Err(SolverError::invalid(format!("face coefficient {c} must be finite and >= 0")));
+            return Err(SolverError::invalid(format!(
+                "face coefficient {c} must be finite and >= 0"
+            )));
         }
         let idx = self.face_index(axis, f);
         self.face[axis][idx] = c;
@@ -230,7 +247,12 @@ impl CellStencil {
 
     /// Sets the kind of every face on one domain side (`side` 0 = low,
     /// 1 = high end of `axis`).
-    pub fn set_boundary_side(&mut self, axis: usize, side: usize, kind: BoundaryKind) -> Result<()> {
+    pub fn set_boundary_side(
+        &mut self,
+        axis: usize,
+        side: usize,
+        kind: BoundaryKind,
+    ) -> Result<()> {
         self.check_axis(axis)?;
         if side > 1 {
             return Err(SolverError::invalid("side must be 0 or 1"));
@@ -260,21 +282,32 @@ impl CellStencil {
         Ok(())
     }
 
-    /// Kind of the boundary face of `cell` on `side` of `axis` (the cell is
-    /// assumed to touch that side).
-    pub fn boundary_kind(&self, axis: usize, side: usize, cell: [usize; 3]) -> BoundaryKind {
-        self.bc[axis][side][self.boundary_slot(axis, cell)]
+    /// Kind of the boundary face of `cell` on `side` (0 = low, 1 = high) of
+    /// `axis`; only the transverse components of `cell` are used.
+    pub fn boundary_kind(
+        &self,
+        axis: usize,
+        side: usize,
+        cell: [usize; 3],
+    ) -> Result<BoundaryKind> {
+        self.check_axis(axis)?;
+        if side > 1 || (0..3).any(|a| a != axis && cell[a] >= self.dims[a]) {
+            return Err(SolverError::invalid(format!(
+                "no boundary face for cell {cell:?} on side {side} of axis {axis}"
+            )));
+        }
+        Ok(self.kind_unchecked(axis, side, cell))
     }
 
-    /// True if every face on that side is Dirichlet.
-    pub fn side_all_dirichlet(&self, axis: usize, side: usize) -> bool {
-        self.bc[axis][side].iter().all(|&k| k == BoundaryKind::Dirichlet)
+    #[inline]
+    fn kind_unchecked(&self, axis: usize, side: usize, cell: [usize; 3]) -> BoundaryKind {
+        self.bc[axis][side][self.boundary_slot(axis, cell)]
     }
 
     /// Effective coefficient of a boundary face (0 for Neumann).
     #[inline]
     pub(crate) fn boundary_coeff(&self, axis: usize, side: usize, cell: [usize; 3]) -> f64 {
-        if self.boundary_kind(axis, side, cell) == BoundaryKind::Dirichlet {
+        if self.kind_unchecked(axis, side, cell) == BoundaryKind::Dirichlet {
             let mut f = cell;
             f[axis] = if side == 0 { 0 } else { self.dims[axis] };
             self.face[axis][self.face_index(axis, f)]
@@ -289,12 +322,12 @@ impl CellStencil {
             // Branch-free scan first (vectorisable), then locate.
             let bad = x
                 .iter()
-                .fold(false, |acc, &c| acc | !(c >= 0.0 && c <= f64::MAX));
+                .fold(false, |acc, &c| acc | !(0.0..=f64::MAX).contains(&c));
             if bad {
                 x.iter()
                     .copied()
                     .enumerate()
-                    .find(|&(_, c)| !(c >= 0.0 && c <= f64::MAX))
+                    .find(|&(_, c)| !(0.0..=f64::MAX).contains(&c))
             } else {
                 None
             }
@@ -349,7 +382,9 @@ impl CellStencil {
         // Fast path: every interior face has c > 0, so the grid is connected.
         let all_connected = (0..self.ndim).all(|a| {
             let na = self.dims[a];
-            self.interior_faces(a).all(|(f, _, _)| self.face[a][f] > 0.0) || na == 1
+            self.interior_faces(a)
+                .all(|(f, _, _)| self.face[a][f] > 0.0)
+                || na == 1
         });
         if all_connected {
             if anchored.iter().any(|&x| x) {
@@ -382,8 +417,8 @@ impl CellStencil {
             }
         }
         let mut root_ok = vec![false; n];
-        for p in 0..n {
-            if anchored[p] {
+        for (p, &anch) in anchored.iter().enumerate() {
+            if anch {
                 let r = find(&mut parent, p);
                 root_ok[r] = true;
             }

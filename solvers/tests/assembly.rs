@@ -7,11 +7,8 @@ use solvers::{Assembler, SolverError, SparsityPattern};
 
 fn dense(a: &solvers::SparseColMat<usize, f64>) -> Vec<Vec<f64>> {
     let mut d = vec![vec![0.0; a.ncols()]; a.nrows()];
-    let (sym, val) = a.parts();
-    for j in 0..a.ncols() {
-        for k in sym.col_range(j) {
-            d[sym.row_idx()[k]][j] += val[k];
-        }
+    for (i, j, v) in a.triplet_iter().map(|t| (t.row, t.col, *t.val)) {
+        d[i][j] += v;
     }
     d
 }

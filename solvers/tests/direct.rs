@@ -10,15 +10,26 @@ fn problems() -> Vec<(&'static str, CellStencil)> {
     let d2 = [64, 64, 1];
     let d3 = [16, 16, 16];
     vec![
-        ("2D Laplacian Dirichlet", poisson(d2, BoundaryKind::Dirichlet, 0.0)),
-        ("3D Laplacian Dirichlet", poisson(d3, BoundaryKind::Dirichlet, 0.0)),
+        (
+            "2D Laplacian Dirichlet",
+            poisson(d2, BoundaryKind::Dirichlet, 0.0),
+        ),
+        (
+            "3D Laplacian Dirichlet",
+            poisson(d3, BoundaryKind::Dirichlet, 0.0),
+        ),
         (
             "2D inclusion 1e3 Neumann+1e-6",
             from_field(d2, &inclusion_field(d2, 1e3), BoundaryKind::Neumann, 1e-6),
         ),
         (
             "2D checkerboard 1e3 Dirichlet",
-            from_field(d2, &checkerboard_field(d2, 8, 1e3), BoundaryKind::Dirichlet, 0.0),
+            from_field(
+                d2,
+                &checkerboard_field(d2, 8, 1e3),
+                BoundaryKind::Dirichlet,
+                0.0,
+            ),
         ),
         (
             "3D inclusion 1e3 Dirichlet",
@@ -38,12 +49,19 @@ fn cholesky_and_lu_solve_test_problems() {
         let mut x = b.clone();
         let rep = chol.solve_in_place(&mut x).unwrap();
         let res = rel_residual(&st, &b, &x);
-        assert!(res < 1e-10 && rep.rel_residual < 1e-10, "{name}: Cholesky {res:e}");
+        assert!(
+            res < 1e-10 && rep.rel_residual < 1e-10,
+            "{name}: Cholesky {res:e}"
+        );
         assert!(rep.setup_s > 0.0 && rep.iterations == 0);
         let mut lu = Lu::new(&a).unwrap();
         let mut y = b.clone();
         let rep = lu.solve_in_place(&mut y).unwrap();
-        assert!(rep.rel_residual < 1e-10, "{name}: LU {:e}", rep.rel_residual);
+        assert!(
+            rep.rel_residual < 1e-10,
+            "{name}: LU {:e}",
+            rep.rel_residual
+        );
         assert!(rel_diff(&y, &x) < 1e-8, "{name}: LU vs Cholesky");
     }
 }
@@ -54,8 +72,18 @@ fn cholesky_and_lu_solve_test_problems() {
 #[test]
 fn cholesky_refactor_matches_fresh() {
     let dims = [20, 17, 1];
-    let s1 = from_field(dims, &inclusion_field(dims, 5.0), BoundaryKind::Dirichlet, 0.0);
-    let s2 = from_field(dims, &checkerboard_field(dims, 3, 50.0), BoundaryKind::Neumann, 0.1);
+    let s1 = from_field(
+        dims,
+        &inclusion_field(dims, 5.0),
+        BoundaryKind::Dirichlet,
+        0.0,
+    );
+    let s2 = from_field(
+        dims,
+        &checkerboard_field(dims, 3, 50.0),
+        BoundaryKind::Neumann,
+        0.1,
+    );
     let a1 = s1.to_matrix().unwrap();
     let a2 = s2.to_matrix().unwrap();
     let b = pseudo_random(s1.num_cells(), 9);
@@ -79,11 +107,13 @@ fn cholesky_refactor_matches_fresh() {
     lu.solve_in_place(&mut w).unwrap();
     assert!(rel_diff(&w, &y) < 1e-10);
     // Different pattern: error.
-    let other = poisson([17, 20, 1], BoundaryKind::Dirichlet, 0.0).to_matrix().unwrap();
+    let other = poisson([17, 20, 1], BoundaryKind::Dirichlet, 0.0)
+        .to_matrix()
+        .unwrap();
     assert!(chol.refactor(&other).is_err());
     // Wrong rhs length: error.
     assert!(matches!(
-        chol.solve_in_place(&mut vec![0.0; 3]),
+        chol.solve_in_place(&mut [0.0; 3]),
         Err(SolverError::Dimension { .. })
     ));
 }
@@ -97,7 +127,10 @@ fn direct_singular_detection() {
         let st = poisson(dims, BoundaryKind::Neumann, 0.0);
         let a = st.to_matrix().unwrap();
         let err = Cholesky::new(&a).unwrap_err();
-        assert!(matches!(err, SolverError::Singular { .. }), "{dims:?}: {err}");
+        assert!(
+            matches!(err, SolverError::Singular { .. }),
+            "{dims:?}: {err}"
+        );
     }
     // Indefinite: Laplacian shifted by -5.
     let st = poisson([10, 10, 1], BoundaryKind::Dirichlet, 0.0);
@@ -107,8 +140,13 @@ fn direct_singular_detection() {
             v[k] -= 5.0;
         }
     }
-    let a = Assembler::from_triplets(100, 100, &r, &c, &v).unwrap().into_matrix();
-    assert!(matches!(Cholesky::new(&a), Err(SolverError::Singular { .. })));
+    let a = Assembler::from_triplets(100, 100, &r, &c, &v)
+        .unwrap()
+        .into_matrix();
+    assert!(matches!(
+        Cholesky::new(&a),
+        Err(SolverError::Singular { .. })
+    ));
     // LU handles the indefinite (nonsingular) matrix.
     let mut lu = Lu::new(&a).unwrap();
     let b = pseudo_random(100, 1);

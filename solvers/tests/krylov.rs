@@ -9,19 +9,35 @@ fn problems() -> Vec<(&'static str, CellStencil)> {
     let d2 = [64, 64, 1];
     let d3 = [16, 16, 16];
     vec![
-        ("2D Laplacian Dirichlet", poisson(d2, BoundaryKind::Dirichlet, 0.0)),
-        ("3D Laplacian Neumann+1e-6", poisson(d3, BoundaryKind::Neumann, 1e-6)),
+        (
+            "2D Laplacian Dirichlet",
+            poisson(d2, BoundaryKind::Dirichlet, 0.0),
+        ),
+        (
+            "3D Laplacian Neumann+1e-6",
+            poisson(d3, BoundaryKind::Neumann, 1e-6),
+        ),
         (
             "2D inclusion 1e3 Neumann+1e-6",
             from_field(d2, &inclusion_field(d2, 1e3), BoundaryKind::Neumann, 1e-6),
         ),
         (
             "2D checkerboard 1e3 Dirichlet",
-            from_field(d2, &checkerboard_field(d2, 8, 1e3), BoundaryKind::Dirichlet, 0.0),
+            from_field(
+                d2,
+                &checkerboard_field(d2, 8, 1e3),
+                BoundaryKind::Dirichlet,
+                0.0,
+            ),
         ),
         (
             "3D checkerboard 1e3 Dirichlet",
-            from_field(d3, &checkerboard_field(d3, 4, 1e3), BoundaryKind::Dirichlet, 0.0),
+            from_field(
+                d3,
+                &checkerboard_field(d3, 4, 1e3),
+                BoundaryKind::Dirichlet,
+                0.0,
+            ),
         ),
         (
             "3D inclusion 1e-3 Neumann+1e-6",
@@ -69,29 +85,62 @@ fn krylov_paths_agree_with_cholesky() {
         let check = |label: &str, rep: Result<SolveReport>, x: &[f64]| {
             let rep = rep.unwrap_or_else(|e| panic!("{name} {label}: {e}"));
             let res = rel_residual(&st, &b, x);
-            assert!(rep.rel_residual <= 1e-10 && res <= 1.5e-10, "{name} {label}: {res:e}");
+            assert!(
+                rep.rel_residual <= 1e-10 && res <= 1.5e-10,
+                "{name} {label}: {res:e}"
+            );
             let err = rel_diff(&demean(x), &xd0);
-            assert!(err < 1e-8, "{name} {label}: differs from Cholesky by {err:e}");
+            assert!(
+                err < 1e-8,
+                "{name} {label}: differs from Cholesky by {err:e}"
+            );
             rep.iterations
         };
         let mut x = vec![0.0; n];
-        let it_j = check("PCG-Jacobi/CSR", pcg(&csr, &jac, &b, &mut x, &OPTS, &mut ws), &x);
+        let it_j = check(
+            "PCG-Jacobi/CSR",
+            pcg(&csr, &jac, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         let mut x = vec![0.0; n];
-        check("PCG-Jacobi/stencil", pcg(&st, &jac, &b, &mut x, &OPTS, &mut ws), &x);
+        check(
+            "PCG-Jacobi/stencil",
+            pcg(&st, &jac, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         let mut x = vec![0.0; n];
         let it_ic = check("PCG-IC0", pcg(&csr, &ic, &b, &mut x, &OPTS, &mut ws), &x);
         let mut x = vec![0.0; n];
         let it_mg = check("PCG-MG", pcg(&st, &mg, &b, &mut x, &OPTS, &mut ws), &x);
         let mut x = vec![0.0; n];
-        check("BiCGStab-Jacobi", bicgstab(&csr, &jac, &b, &mut x, &OPTS, &mut ws), &x);
+        check(
+            "BiCGStab-Jacobi",
+            bicgstab(&csr, &jac, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         let mut x = vec![0.0; n];
-        check("BiCGStab-IC0", bicgstab(&st, &ic, &b, &mut x, &OPTS, &mut ws), &x);
+        check(
+            "BiCGStab-IC0",
+            bicgstab(&st, &ic, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         let mut x = vec![0.0; n];
-        check("BiCGStab-MG", bicgstab(&st, &mg, &b, &mut x, &OPTS, &mut ws), &x);
+        check(
+            "BiCGStab-MG",
+            bicgstab(&st, &mg, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         let mut x = vec![0.0; n];
-        check("PCG-identity", pcg(&a, &Identity, &b, &mut x, &OPTS, &mut ws), &x);
+        check(
+            "PCG-identity",
+            pcg(&a, &Identity, &b, &mut x, &OPTS, &mut ws),
+            &x,
+        );
         assert!(it_mg <= 20, "{name}: PCG-MG took {it_mg} iterations");
-        assert!(it_mg < it_ic && it_ic < it_j, "{name}: {it_mg} {it_ic} {it_j}");
+        assert!(
+            it_mg < it_ic && it_ic < it_j,
+            "{name}: {it_mg} {it_ic} {it_j}"
+        );
     }
 }
 
@@ -219,7 +268,9 @@ fn incomplete_cholesky_shift_on_breakdown() {
             }
         }
     }
-    let a = Assembler::from_triplets(4, 4, &r, &c, &v).unwrap().into_matrix();
+    let a = Assembler::from_triplets(4, 4, &r, &c, &v)
+        .unwrap()
+        .into_matrix();
     let ic = IncompleteCholesky::new(&a).unwrap();
     assert!(ic.shift() > 0.0, "Kershaw's matrix should need a shift");
     let b = [1.0, 2.0, 3.0, 4.0];
