@@ -17,7 +17,12 @@ fn main() {
     };
     let steps: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(200);
     let n = 200;
-    let grid = Grid::<2>::new(SVector::zeros(), SVector::repeat(1.0), [n, n], [[Boundary::Fixed; 2]; 2]);
+    let grid = Grid::<2>::new(
+        SVector::zeros(),
+        SVector::repeat(1.0),
+        [n, n],
+        [[Boundary::Fixed; 2]; 2],
+    );
     let mat = SolidMaterial {
         name: "b".into(),
         density: 1000.0,
@@ -29,14 +34,26 @@ fn main() {
     let vol = h * h / 4.0;
     for j in 0..320 {
         for i in 0..320 {
-            let x = SVector::from([0.1 + (i as f64 + 0.5) * h / 2.0, 0.1 + (j as f64 + 0.5) * h / 2.0]);
+            let x = SVector::from([
+                0.1 + (i as f64 + 0.5) * h / 2.0,
+                0.1 + (j as f64 + 0.5) * h / 2.0,
+            ]);
             let v = SVector::from([-(x[1] - 0.5), x[0] - 0.5]) * 0.01;
             p.push(x, v, 1000.0 * vol, vol, SVector::repeat(h / 4.0), 0);
         }
     }
-    let params = ExplicitParams { shape, scheme: UpdateScheme::Usl, mass_floor: 1e-12 };
+    let params = ExplicitParams {
+        shape,
+        scheme: UpdateScheme::Usl,
+        mass_floor: 1e-12,
+    };
     let c = mat.wave_speed(1000.0);
-    let time = TimeControl { end: f64::INFINITY, cfl: 0.3, dt: Some(0.3 * h / c), max_steps: Some(steps) };
+    let time = TimeControl {
+        end: f64::INFINITY,
+        cfl: 0.3,
+        dt: Some(0.3 * h / c),
+        max_steps: Some(steps),
+    };
     let mut run = SolidRun::new(grid, vec![mat], p, params, time);
     let np = run.particles.len() as f64;
     let start = std::time::Instant::now();

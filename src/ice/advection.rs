@@ -17,6 +17,7 @@
 
 use nalgebra::SVector;
 
+use super::par::{par_face_rows, Out};
 use super::state::CellLayout;
 
 /// Slope limiter of the second-order reconstruction.
@@ -27,6 +28,10 @@ pub enum Limiter {
     VanLeer,
     /// Monotonised central: `minmod(2a, (a + b)/2, 2b)`.
     MonotonizedCentral,
+    /// Roe's superbee: `maxmod(minmod(2a, b), minmod(a, 2b))`.
+    Superbee,
+    /// Minmod: `minmod(a, b)`.
+    Minmod,
 }
 
 /// Advection scheme.
@@ -53,6 +58,11 @@ pub fn limited_slope(a: f64, b: f64, limiter: Limiter) -> f64 {
             let m = (2.0 * a.abs()).min(2.0 * b.abs()).min(c.abs());
             m.copysign(a)
         }
+        Limiter::Superbee => {
+            let (x, y) = (a.abs(), b.abs());
+            (2.0 * x).min(y).max(x.min(2.0 * y)).copysign(a)
+        }
+        Limiter::Minmod => a.abs().min(b.abs()).copysign(a),
     }
 }
 
@@ -125,11 +135,16 @@ pub fn scalar_fluxes<const D: usize>(
 ) {
     let s = layout.strides[d];
     let h = layout.h[d];
-    for &f in &layout.faces[d] {
-        let u = ustar[f];
-        let (c, sign, nu) = donor(f, s, u, dt, h);
-        flux[f] = u * dt / h * face_value(q, c, s, sign, nu, scheme);
-    }
+    let out = Out::new(flux);
+    par_face_rows(layout, d, |row| {
+        for f in row {
+            let u = ustar[f];
+            let (c, sign, nu) = donor(f, s, u, dt, h);
+            let v = u * dt / h * face_value(q, c, s, sign, nu, scheme);
+            // SAFETY: each face is written by one task only.
+            unsafe { out.set(f, v) };
+        }
+    });
 }
 
 /// Buffers for the advection fluxes of one material (per direction, per
@@ -162,6 +177,7 @@ impl<const D: usize> AdvectionFluxes<D> {
 }
 
 /// Specific quantities of one material to be advected (ghosts filled).
+#[derive(Clone, Copy)]
 pub struct AdvectedFields<'a, const D: usize> {
     /// Mass `M`.
     pub mass: &'a [f64],
@@ -189,24 +205,32 @@ pub fn material_fluxes<const D: usize>(
         let h = layout.h[d];
         let us = &ustar[d];
         let (fm, fmu, fe, fv, fk) = (
-            &mut out.mass[d],
-            &mut out.momentum[d],
-            &mut out.energy[d],
-            &mut out.volume[d],
-            &mut out.kinetic[d],
+            Out::new(&mut out.mass[d]),
+            Out::new(&mut out.momentum[d]),
+            Out::new(&mut out.energy[d]),
+            Out::new(&mut out.volume[d]),
+            Out::new(&mut out.kinetic[d]),
         );
-        for &f in &layout.faces[d] {
-            let u = us[f];
-            let (c, sign, nu) = donor(f, s, u, dt, h);
-            let m_flux = u * dt / h * face_value(q.mass, c, s, sign, nu, scheme);
-            fm[f] = m_flux;
-            fmu[f] = face_value_vec(q.velocity, c, s, sign, nu, scheme) * m_flux;
-            fe[f] = m_flux * face_value(q.energy, c, s, sign, nu, scheme);
-            fv[f] = m_flux * face_value(q.sp_vol, c, s, sign, nu, scheme);
-            if let Some(k) = q.kinetic {
-                fk[f] = m_flux * face_value(k, c, s, sign, nu, scheme);
+        par_face_rows(layout, d, |row| {
+            for f in row {
+                let u = us[f];
+                let (c, sign, nu) = donor(f, s, u, dt, h);
+                let m_flux = u * dt / h * face_value(q.mass, c, s, sign, nu, scheme);
+                // SAFETY: each face is written by one task only.
+                unsafe {
+                    fm.set(f, m_flux);
+                    fmu.set(
+                        f,
+                        face_value_vec(q.velocity, c, s, sign, nu, scheme) * m_flux,
+                    );
+                    fe.set(f, m_flux * face_value(q.energy, c, s, sign, nu, scheme));
+                    fv.set(f, m_flux * face_value(q.sp_vol, c, s, sign, nu, scheme));
+                    if let Some(k) = q.kinetic {
+                        fk.set(f, m_flux * face_value(k, c, s, sign, nu, scheme));
+                    }
+                }
             }
-        }
+        });
     }
 }
 
@@ -246,7 +270,12 @@ mod tests {
         assert_eq!(limited_slope(1.0, 3.0, Limiter::MonotonizedCentral), 2.0);
         assert_eq!(limited_slope(-1.0, -1.2, Limiter::MonotonizedCentral), -1.1);
         // Odd and homogeneous of degree one (needed for the interface test).
-        for lim in [Limiter::VanLeer, Limiter::MonotonizedCentral] {
+        for lim in [
+            Limiter::VanLeer,
+            Limiter::MonotonizedCentral,
+            Limiter::Superbee,
+            Limiter::Minmod,
+        ] {
             let (a, b) = (0.3, 0.7);
             assert_eq!(limited_slope(-a, -b, lim), -limited_slope(a, b, lim));
             assert!(

@@ -51,7 +51,7 @@ fn for_each_ghost<const D: usize>(
         let n = layout.cells[d];
         for side in 0..2 {
             let bc = &bcs[d][side];
-            for &b in &layout.boundary_cells[d][side] {
+            for &b in &layout.fill_cells[d][side] {
                 for g in 1..=NGHOST {
                     let (ghost, src) = if side == 0 {
                         let ghost = b - g * s;

@@ -36,6 +36,7 @@ pub mod boundary;
 pub mod equilibration;
 pub mod exchange;
 pub mod faces;
+mod par;
 pub mod setups;
 pub mod state;
 pub mod step;

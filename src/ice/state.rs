@@ -37,6 +37,19 @@ pub struct CellLayout<const D: usize> {
     /// Per direction and side (`0` lower, `1` upper): the interior cells
     /// adjacent to that domain face.
     pub boundary_cells: [[Vec<usize>; 2]; D],
+    /// Per direction and side: the cells whose ghost neighbours in `d` the
+    /// boundary fill sets, i.e. the cells next to that domain face that are
+    /// interior in the directions after `d` and interior or ghost in the
+    /// directions before `d` (filling the directions in order then fills the
+    /// corner ghosts as well, consistently with both boundaries).
+    pub fill_cells: [[Vec<usize>; 2]; D],
+    /// Flat index of the first cell of every interior x-row (a row is
+    /// `cells[0]` consecutive flat indices); the unit of parallel work.
+    pub rows: Vec<usize>,
+    /// Per direction `d`: flat index of the first face of every x-row of the
+    /// faces normal to `d` (`cells[0] + 1` faces per row for `d = 0`,
+    /// `cells[0]` otherwise).
+    pub face_rows: [Vec<usize>; D],
 }
 
 impl<const D: usize> CellLayout<D> {
@@ -77,11 +90,35 @@ impl<const D: usize> CellLayout<D> {
         let mut faces: [Vec<usize>; D] = std::array::from_fn(|_| Vec::new());
         let mut boundary_cells: [[Vec<usize>; 2]; D] =
             std::array::from_fn(|_| [Vec::new(), Vec::new()]);
+        let mut fill_cells: [[Vec<usize>; 2]; D] =
+            std::array::from_fn(|_| [Vec::new(), Vec::new()]);
+        let mut rows = Vec::new();
+        let mut face_rows: [Vec<usize>; D] = std::array::from_fn(|_| Vec::new());
+        let within = |i: isize, n: usize| i >= 0 && i < n as isize;
         for c in 0..total {
             let ijk = coords_of(c, &dims);
-            let inside = (0..D).all(|d| ijk[d] >= 0 && ijk[d] < cells[d] as isize);
+            let inside = (0..D).all(|d| within(ijk[d], cells[d]));
             if inside {
                 interior.push(c);
+                if ijk[0] == 0 {
+                    rows.push(c);
+                }
+            }
+            for d in 0..D {
+                // Faces normal to d: ijk[d] in 0..=cells[d], others interior.
+                let others = (0..D).filter(|&e| e != d).all(|e| within(ijk[e], cells[e]));
+                if others && ijk[0] == 0 && ijk[d] >= 0 && ijk[d] <= cells[d] as isize {
+                    face_rows[d].push(c);
+                }
+                let fill = (0..D).all(|e| e <= d || within(ijk[e], cells[e]));
+                if fill {
+                    if ijk[d] == 0 {
+                        fill_cells[d][0].push(c);
+                    }
+                    if ijk[d] == cells[d] as isize - 1 {
+                        fill_cells[d][1].push(c);
+                    }
+                }
             }
             for d in 0..D {
                 let others = (0..D)
@@ -107,6 +144,9 @@ impl<const D: usize> CellLayout<D> {
             interior,
             faces,
             boundary_cells,
+            fill_cells,
+            rows,
+            face_rows,
         })
     }
 

@@ -27,6 +27,8 @@ fn label(adv: Advection) -> &'static str {
         Advection::FirstOrder => "first order (donor cell)",
         Advection::SecondOrder(Limiter::VanLeer) => "second order (van Leer)",
         Advection::SecondOrder(Limiter::MonotonizedCentral) => "second order (MC)",
+        Advection::SecondOrder(Limiter::Superbee) => "second order (superbee)",
+        Advection::SecondOrder(Limiter::Minmod) => "second order (minmod)",
     }
 }
 
@@ -52,28 +54,60 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
         PrimitiveState::new(r.0, r.1, r.2),
         1.4,
     )?;
-    let variants: [(Advection, f64, &str); 4] = [
-        (Advection::FirstOrder, 1.0, ""),
-        (Advection::SecondOrder(Limiter::VanLeer), 1.0, ""),
-        (Advection::SecondOrder(Limiter::MonotonizedCentral), 1.0, ""),
+    let bcs = [[IceBoundary::Outflow, IceBoundary::Outflow]];
+    let literal = |adv: Advection, face_dt: f64| {
+        let mut p = IceParams::new(bcs.clone());
+        p.advection = adv;
+        p.face_dt_factor = face_dt;
+        p
+    };
+    let variants: Vec<(IceParams<1>, String)> = vec![
         (
-            Advection::SecondOrder(Limiter::VanLeer),
-            0.5,
-            ", Eq. 28 with Δt/2",
+            literal(Advection::FirstOrder, 1.0),
+            label(Advection::FirstOrder).into(),
+        ),
+        (
+            literal(Advection::SecondOrder(Limiter::VanLeer), 1.0),
+            label(Advection::SecondOrder(Limiter::VanLeer)).into(),
+        ),
+        (
+            literal(Advection::SecondOrder(Limiter::MonotonizedCentral), 1.0),
+            label(Advection::SecondOrder(Limiter::MonotonizedCentral)).into(),
+        ),
+        (
+            literal(Advection::SecondOrder(Limiter::VanLeer), 0.5),
+            "second order (van Leer), Eq. 28 with Δt/2".into(),
+        ),
+        (
+            IceParams::high_resolution(bcs.clone()),
+            "high resolution (MUSCL Eq. 28, p_eq + Δp/2, superbee, cfl 0.4)".into(),
+        ),
+        (
+            IceParams {
+                cfl: 0.5,
+                ..IceParams::high_resolution(bcs.clone())
+            },
+            "high resolution, cfl 0.5".into(),
+        ),
+        (
+            IceParams {
+                advection: Advection::SecondOrder(Limiter::MonotonizedCentral),
+                face_reconstruction: Some(Limiter::MonotonizedCentral),
+                cfl: 0.5,
+                ..IceParams::high_resolution(bcs.clone())
+            },
+            "high resolution with MC, cfl 0.5".into(),
         ),
     ];
     let mut series = Vec::new();
     let mut notes = vec![
-        "explicit ICE (Guilkey Sec. 3.1), conservative energy form, forward Euler, cfl = 0.5 on |u| + c".to_string(),
+        "explicit ICE (Guilkey Sec. 3.1), conservative energy form, forward Euler; literal variants cfl = 0.5 on |u| + c".to_string(),
         "reference: a Fortran Roe/MC code reaches L1 = 5.1e-4 in 0.053 s (N = 800) and 3.1e-4 in 0.16 s (N = 1600) on this machine".to_string(),
     ];
-    for (adv, face_dt, suffix) in variants {
+    for (params, series_label) in variants {
         let mut points = Vec::new();
         for &n in ns {
             let st = shock_tube(gas(1.4)?, n, l, r, 0.5)?;
-            let mut params = IceParams::new([[IceBoundary::Outflow, IceBoundary::Outflow]]);
-            params.advection = adv;
-            params.face_dt_factor = face_dt;
             let run =
                 run_fluid(st, &params, 0.2, 10_000_000).with_context(|| format!("Sod N = {n}"))?;
             let s = &run.state;
@@ -88,7 +122,6 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups).with_extra("steps", run.steps as f64));
         }
-        let series_label = format!("{}{}", label(adv), suffix);
         if let Some(p) = points.iter().find(|p| (p.h - 1.0 / 400.0).abs() < 1e-12) {
             notes.push(format!(
                 "{series_label}: L1 at N = 400 = {:.3e} (target ≤ 1.5e-3)",
@@ -174,9 +207,32 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
     let eps = 1e-5;
     let wave = |x: f64| (2.0 * PI * x).sin();
     let mut series = Vec::new();
-    for (time, tag) in [
-        (mpmice::ice::TimeIntegration::ForwardEuler, "forward Euler"),
-        (mpmice::ice::TimeIntegration::Heun, "Heun"),
+    let lit = |time| {
+        let mut p = IceParams::new(periodic1());
+        p.time = time;
+        p
+    };
+    for (params, tag) in [
+        (
+            lit(mpmice::ice::TimeIntegration::ForwardEuler),
+            "second order (van Leer), forward Euler",
+        ),
+        (
+            lit(mpmice::ice::TimeIntegration::Heun),
+            "second order (van Leer), Heun",
+        ),
+        (
+            IceParams::high_resolution(periodic1()),
+            "high resolution (MUSCL Eq. 28, p_eq + Δp/2, superbee, cfl 0.4)",
+        ),
+        (
+            IceParams {
+                advection: Advection::SecondOrder(Limiter::MonotonizedCentral),
+                face_reconstruction: Some(Limiter::MonotonizedCentral),
+                ..IceParams::high_resolution(periodic1())
+            },
+            "high resolution with MC, cfl 0.4",
+        ),
     ] {
         let mut points = Vec::new();
         for &n in ns {
@@ -192,8 +248,6 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
                     SVector::<f64, 1>::new(w),
                 )]
             })?;
-            let mut params = IceParams::new(periodic1());
-            params.time = time;
             let run = run_fluid(st, &params, 1.0, 10_000_000)?;
             let s = &run.state;
             let err = s
@@ -208,15 +262,11 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups));
         }
-        series.push(Series::new(
-            format!("second order (van Leer), {tag}"),
-            "L1/eps",
-            points,
-        ));
+        series.push(Series::new(tag, "L1/eps", points));
     }
     Ok(StudyResult {
         study: "ice_acoustic".into(),
         series,
-        notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5; error relative to the amplitude".into()],
+        notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5 (high resolution 0.4); error relative to the amplitude".into()],
     })
 }
