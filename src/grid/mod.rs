@@ -82,6 +82,8 @@ pub struct Grid<const D: usize> {
     pub cells: [usize; D],
     /// Cell size per direction.
     pub h: SVector<f64, D>,
+    /// 1/h per direction.
+    pub inv_h: SVector<f64, D>,
     /// Nodes per direction including ghosts: `cells + 1 + 2 GHOST`.
     pub node_dims: [usize; D],
     /// Boundary condition per direction, `[lower, upper]`.
@@ -107,6 +109,7 @@ impl<const D: usize> Grid<D> {
             upper,
             cells,
             h,
+            inv_h: h.map(|v| 1.0 / v),
             node_dims,
             bc,
         }
@@ -166,7 +169,7 @@ impl<const D: usize> Grid<D> {
     /// Position in node units: `(x - lower) / h`.
     #[inline]
     pub fn to_grid_units(&self, x: &SVector<f64, D>) -> SVector<f64, D> {
-        (x - self.lower).component_div(&self.h)
+        (x - self.lower).component_mul(&self.inv_h)
     }
 
     /// Volume of one cell.

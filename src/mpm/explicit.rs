@@ -345,7 +345,7 @@ fn p2g<
 ) {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let inv_h = grid.h.map(|v| 1.0 / v);
+    let inv_h = grid.inv_h;
     let mass = SharedMut::new(&mut gs.mass);
     let momentum = SharedMut::new(&mut gs.momentum);
     let force = SharedMut::new(&mut gs.force);
@@ -405,31 +405,37 @@ fn grid_velocity<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
 }
 
 /// Grid momentum equation: v = p/m, vᴸ = v + Δt f/m (Guilkey Eqs. 21, 25) on
-/// the folded fields, ghosts mirrored, and a = (vᴸ − v)/Δt.
+/// the folded fields with a = f/m, ghosts mirrored.
 fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
     let floor = ctx.params.mass_floor;
     let dt = ctx.dt;
+    // One pass: the wall conditions are already in the folded p and f (their
+    // odd components vanish on the boundary nodes), so a = f/m needs no fix-up
+    // on domain nodes; ghosts are mirrored afterwards.
     gs.velocity
         .par_iter_mut()
         .zip(gs.velocity_new.par_iter_mut())
-        .zip(gs.mass.par_iter())
-        .zip(gs.momentum.par_iter().zip(gs.force.par_iter()))
-        .for_each(|(((v, vl), &m), (p, f))| {
+        .zip(gs.accel.par_iter_mut())
+        .zip(
+            gs.mass
+                .par_iter()
+                .zip(gs.momentum.par_iter().zip(gs.force.par_iter())),
+        )
+        .for_each(|(((v, vl), a), (&m, (p, f)))| {
             if m > floor {
-                *v = p / m;
-                *vl = *v + f * (dt / m);
+                let inv_m = 1.0 / m;
+                *v = p * inv_m;
+                *a = f * inv_m;
+                *vl = *v + *a * dt;
             } else {
                 *v = SVector::zeros();
+                *a = SVector::zeros();
                 *vl = SVector::zeros();
             }
         });
     ctx.grid.mirror_ghosts(&mut gs.velocity);
     ctx.grid.mirror_ghosts(&mut gs.velocity_new);
-    let inv_dt = 1.0 / dt;
-    gs.accel
-        .par_iter_mut()
-        .zip(gs.velocity.par_iter().zip(gs.velocity_new.par_iter()))
-        .for_each(|(a, (v, vl))| *a = (vl - v) * inv_dt);
+    ctx.grid.mirror_ghosts(&mut gs.accel);
 }
 
 /// Grid to particle (Guilkey Eqs. 23, 26, 27) and the constitutive update.
@@ -449,7 +455,7 @@ fn g2p<
 ) -> Result<()> {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let inv_h = grid.h.map(|v| 1.0 / v);
+    let inv_h = grid.inv_h;
     let dt = ctx.dt;
     let np = particles.len();
     if POS == POS_STORE {

@@ -16,6 +16,10 @@ use crate::grid::Grid;
 /// Cells per slab along the last axis (must exceed 2, see module docs).
 pub const SLAB_WIDTH: usize = 4;
 
+/// Particles per chunk of the parallel binning (fixed, so the result does
+/// not depend on the thread count).
+const BIN_CHUNK: usize = 8192;
+
 /// Particle indices grouped by slab.
 #[derive(Debug, Clone, Default)]
 pub struct Bins {
@@ -24,13 +28,19 @@ pub struct Bins {
     /// `order[start[s]..start[s + 1]]` are the particles of slab `s`.
     pub start: Vec<usize>,
     slab: Vec<u32>,
-    cursor: Vec<usize>,
+    /// Per chunk and slab: count, then the chunk's write offset.
+    chunk_slab: Vec<usize>,
 }
 
 impl Bins {
     /// Bins particle positions (no allocation once the buffers have grown).
     /// Returns the first particle (lowest index) that is off the grid or not
     /// finite, if any.
+    ///
+    /// A stable counting sort done in fixed chunks: each chunk counts its
+    /// particles per slab, an exclusive prefix over (slab, chunk) gives every
+    /// chunk its write offset, and the chunks fill `order` in parallel. The
+    /// order equals that of a serial stable sort.
     pub fn build<const D: usize>(
         &mut self,
         grid: &Grid<D>,
@@ -38,40 +48,61 @@ impl Bins {
     ) -> Result<(), usize> {
         let axis = D - 1;
         let n_slabs = (grid.cells[axis] + 2).div_ceil(SLAB_WIDTH);
+        let n = x.len();
+        let n_chunks = n.div_ceil(BIN_CHUNK).max(1);
+        self.slab.resize(n, 0);
+        self.chunk_slab.clear();
+        self.chunk_slab.resize(n_chunks * n_slabs, 0);
+        // Classify and count per chunk (u32::MAX marks a particle off the grid).
+        self.slab
+            .par_chunks_mut(BIN_CHUNK)
+            .zip(x.par_chunks(BIN_CHUNK))
+            .zip(self.chunk_slab.par_chunks_mut(n_slabs))
+            .for_each(|((slabs, xs), counts)| {
+                for (s, xp) in slabs.iter_mut().zip(xs) {
+                    let xi = grid.to_grid_units(xp);
+                    *s = if xi.iter().all(|v| v.is_finite()) && grid.holds(&xi) {
+                        // xi ≥ −1 on the grid, so the cast truncates like floor.
+                        let k = ((xi[axis] + 1.0) as usize / SLAB_WIDTH).min(n_slabs - 1);
+                        counts[k] += 1;
+                        k as u32
+                    } else {
+                        u32::MAX
+                    };
+                }
+            });
+        if let Some(p) = self.slab.par_iter().position_first(|&s| s == u32::MAX) {
+            return Err(p);
+        }
+        // Exclusive prefix in (slab, chunk) order.
         self.start.clear();
         self.start.resize(n_slabs + 1, 0);
-        self.slab.resize(x.len(), 0);
-        // Classify in parallel (u32::MAX marks a particle off the grid), then
-        // count and fill serially in index order.
-        self.slab
-            .par_iter_mut()
-            .zip(x.par_iter())
-            .with_min_len(4096)
-            .for_each(|(s, xp)| {
-                let xi = grid.to_grid_units(xp);
-                *s = if xi.iter().all(|v| v.is_finite()) && grid.holds(&xi) {
-                    // xi ≥ −1 on the grid, so the cast truncates like floor.
-                    (((xi[axis] + 1.0) as usize / SLAB_WIDTH).min(n_slabs - 1)) as u32
-                } else {
-                    u32::MAX
-                };
-            });
-        for (p, &s) in self.slab.iter().enumerate() {
-            if s == u32::MAX {
-                return Err(p);
+        let mut total = 0;
+        for k in 0..n_slabs {
+            self.start[k] = total;
+            for c in 0..n_chunks {
+                let cell = &mut self.chunk_slab[c * n_slabs + k];
+                let count = *cell;
+                *cell = total;
+                total += count;
             }
-            self.start[s as usize + 1] += 1;
         }
-        for s in 0..n_slabs {
-            self.start[s + 1] += self.start[s];
-        }
-        self.order.resize(x.len(), 0);
-        self.cursor.clone_from(&self.start);
-        for p in 0..x.len() {
-            let s = self.slab[p] as usize;
-            self.order[self.cursor[s]] = p as u32;
-            self.cursor[s] += 1;
-        }
+        self.start[n_slabs] = total;
+        self.order.resize(n, 0);
+        let order = SharedMut::new(&mut self.order);
+        self.slab
+            .par_chunks(BIN_CHUNK)
+            .zip(self.chunk_slab.par_chunks_mut(n_slabs))
+            .enumerate()
+            .for_each(|(c, (slabs, offsets))| {
+                for (i, &k) in slabs.iter().enumerate() {
+                    let at = &mut offsets[k as usize];
+                    // SAFETY: the offsets of distinct (slab, chunk) pairs
+                    // cover disjoint ranges of `order`.
+                    unsafe { *order.get(*at) = (c * BIN_CHUNK + i) as u32 };
+                    *at += 1;
+                }
+            });
         Ok(())
     }
 
@@ -124,5 +155,48 @@ impl<T> SharedMut<T> {
     #[allow(clippy::mut_from_ref)]
     pub unsafe fn get(&self, i: usize) -> &mut T {
         &mut *self.0.add(i)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Boundary;
+
+    #[test]
+    fn parallel_binning_equals_a_serial_stable_sort() {
+        let grid = Grid::<2>::new(
+            SVector::zeros(),
+            SVector::repeat(1.0),
+            [37, 50],
+            [[Boundary::Free; 2]; 2],
+        );
+        // 30 000 pseudo-random positions: several chunks, every slab.
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let x: Vec<SVector<f64, 2>> = (0..30_000)
+            .map(|_| SVector::from([rnd(), 1.04 * rnd() - 0.02]))
+            .collect();
+        let mut bins = Bins::default();
+        bins.build(&grid, &x).expect("on grid");
+        let slab_of = |p: &SVector<f64, 2>| ((p[1] * 50.0 + 1.0) as usize / SLAB_WIDTH).min(13);
+        let mut expected: Vec<u32> = (0..x.len() as u32).collect();
+        expected.sort_by_key(|&p| slab_of(&x[p as usize]));
+        assert_eq!(bins.order, expected);
+        for s in 0..bins.num_slabs() {
+            for &p in &bins.order[bins.start[s]..bins.start[s + 1]] {
+                assert_eq!(slab_of(&x[p as usize]), s);
+            }
+        }
+        // The first particle off the grid is reported.
+        let mut y = x.clone();
+        y[20_000] = SVector::from([0.5, 3.0]);
+        y[25_000] = SVector::from([f64::NAN, 0.5]);
+        assert_eq!(bins.build(&grid, &y), Err(20_000));
     }
 }
