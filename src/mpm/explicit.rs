@@ -322,6 +322,20 @@ fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
     o
 }
 
+/// Determinant of a D×D matrix, D ≤ 3, in closed form.
+#[inline(always)]
+fn det_small<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
+    match D {
+        1 => m[(0, 0)],
+        2 => m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)],
+        _ => {
+            m[(0, 0)] * (m[(1, 1)] * m[(2, 2)] - m[(1, 2)] * m[(2, 1)])
+                - m[(0, 1)] * (m[(1, 0)] * m[(2, 2)] - m[(1, 2)] * m[(2, 0)])
+                + m[(0, 2)] * (m[(1, 0)] * m[(2, 1)] - m[(1, 1)] * m[(2, 0)])
+        }
+    }
+}
+
 /// The D×D block of a 3×3 tensor.
 #[inline(always)]
 fn block<const D: usize>(s: &Matrix3<f64>) -> SMatrix<f64, D, D> {
@@ -518,8 +532,17 @@ fn g2p<
                 // SAFETY: as above.
                 let (fp, sp, wp, vp_vol) =
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
-                let f_new = (Matrix3::identity() + l3 * dt) * *fp;
-                let j = f_new.determinant();
+                // L lives in the D×D block, so F stays diag(F_D, I) and only
+                // that block changes: F_D ← (I + Δt L) F_D, J = det F_D.
+                let fd = block::<D>(fp);
+                let fd_new = fd + (l * fd) * dt;
+                let j = det_small(&fd_new);
+                let mut f_new = *fp;
+                for a in 0..D {
+                    for b in 0..D {
+                        f_new[(a, b)] = fd_new[(a, b)];
+                    }
+                }
                 if !j.is_finite() || j <= 0.0 {
                     failed.fetch_min(p, Ordering::Relaxed);
                     return;

@@ -122,26 +122,21 @@ pub fn quadratic_bspline(xi: f64) -> Weights1<3> {
 #[inline(always)]
 pub fn cubic_bspline(xi: f64) -> Weights1<4> {
     let base = floor_on_grid(xi) - 1.0;
-    let f = xi - base; // ∈ [1, 2): distances f, f-1, f-2, f-3
-    let mut w = [0.0; 4];
-    let mut dw = [0.0; 4];
-    for k in 0..4 {
-        let r = f - k as f64;
-        let a = r.abs();
-        let s = r.signum();
-        if a < 1.0 {
-            w[k] = 0.5 * a * a * a - a * a + 2.0 / 3.0;
-            dw[k] = s * (1.5 * a * a - 2.0 * a);
-        } else if a < 2.0 {
-            let q = 2.0 - a;
-            w[k] = q * q * q / 6.0;
-            dw[k] = -s * 0.5 * q * q;
-        }
-    }
+    // f ∈ [1, 2): distances f, f − 1, f − 2, f − 3 each fall in a fixed piece,
+    // so the weights are branch-free: with g = f − 1 ∈ [0, 1) and a = 1 − g,
+    // w = (a³/6, g³/2 − g² + 2/3, a³/2 − a² + 2/3, g³/6).
+    let g = xi - base - 1.0;
+    let a = 1.0 - g;
+    let (g2, a2) = (g * g, a * a);
     Weights1 {
         base: base as isize,
-        w,
-        dw,
+        w: [
+            a2 * a / 6.0,
+            0.5 * g2 * g - g2 + 2.0 / 3.0,
+            0.5 * a2 * a - a2 + 2.0 / 3.0,
+            g2 * g / 6.0,
+        ],
+        dw: [-0.5 * a2, 1.5 * g2 - 2.0 * g, -1.5 * a2 + 2.0 * a, 0.5 * g2],
     }
 }
 
