@@ -43,6 +43,7 @@ fn block(shape: ShapeKind) -> SolidRun<2> {
         shape,
         scheme: UpdateScheme::Usl,
         mass_floor: 1e-12,
+        damping: 0.0,
     };
     let c = mat.wave_speed(1000.0);
     let time = TimeControl {

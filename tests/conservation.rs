@@ -54,6 +54,7 @@ fn free_block(
         shape,
         scheme,
         mass_floor: 0.0,
+        damping: 0.0,
     };
     let time = TimeControl {
         end: f64::INFINITY,

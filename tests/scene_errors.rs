@@ -124,6 +124,11 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "box",
         ),
         (edit("end = 0.1", "end = 0.1\ndt = -1.0"), "time.dt", "> 0"),
+        (
+            edit("[[materials]]", "[mpm]\ndamping = -2.0\n\n[[materials]]"),
+            "mpm.damping",
+            "≥ 0",
+        ),
         ("this is = not toml [".to_string(), "<toml>", "TOML"),
     ];
     let mut wrong = Vec::new();

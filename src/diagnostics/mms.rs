@@ -202,6 +202,7 @@ pub fn run_mms<const D: usize>(
         shape,
         scheme,
         mass_floor: 1e-12 * particles.mass[0],
+        damping: 0.0,
     };
     let np = particles.len();
     let time = TimeControl {
@@ -233,7 +234,10 @@ pub fn run_mms<const D: usize>(
 }
 
 /// The first mode of a 1D elastic bar of length `length`, fixed at x = 0 and
-/// free at x = L, with wave speed c = √(E/ρ) (ν = 0).
+/// free at x = L, with wave speed c = √(E/ρ) (ν = 0), optionally with
+/// mass-proportional damping α: the modal equation q̈ + α q̇ + ω² q = 0 with
+/// q(0) = 0, q̇(0) = v₀ gives q = (v₀/ω_d) e^(−αt/2) sin(ω_d t),
+/// ω_d = √(ω² − α²/4), and u = q(t) sin(π x / 2L).
 #[derive(Debug, Clone, Copy)]
 pub struct BarMode1 {
     /// Bar length L.
@@ -244,6 +248,8 @@ pub struct BarMode1 {
     pub rho: f64,
     /// Velocity amplitude v₀.
     pub v0: f64,
+    /// Mass-proportional damping α [1/s] (0: undamped).
+    pub damping: f64,
 }
 
 impl BarMode1 {
@@ -257,16 +263,27 @@ impl BarMode1 {
         std::f64::consts::PI * self.c() / (2.0 * self.length)
     }
 
+    /// Damped angular frequency ω_d = √(ω² − α²/4) (under-damped only).
+    pub fn omega_d(&self) -> f64 {
+        (self.omega().powi(2) - 0.25 * self.damping * self.damping).sqrt()
+    }
+
     /// Exact displacement.
     pub fn displacement(&self, x0: f64, t: f64) -> f64 {
         let k = std::f64::consts::PI / (2.0 * self.length);
-        self.v0 / self.omega() * (k * x0).sin() * (self.omega() * t).sin()
+        let wd = self.omega_d();
+        self.v0 / wd * (-0.5 * self.damping * t).exp() * (k * x0).sin() * (wd * t).sin()
     }
 
     /// Exact velocity.
     pub fn velocity(&self, x0: f64, t: f64) -> f64 {
         let k = std::f64::consts::PI / (2.0 * self.length);
-        self.v0 * (k * x0).sin() * (self.omega() * t).cos()
+        let wd = self.omega_d();
+        let decay = (-0.5 * self.damping * t).exp();
+        self.v0
+            * decay
+            * (k * x0).sin()
+            * ((wd * t).cos() - 0.5 * self.damping / wd * (wd * t).sin())
     }
 }
 
@@ -275,7 +292,7 @@ impl BarMode1 {
 /// ν = 0, to one period 4L/c at Courant number `cfl`.
 ///
 /// Error: maximum over all steps of the volume-weighted RMS displacement
-/// error divided by the displacement amplitude v₀/ω.
+/// error divided by the displacement amplitude v₀/ω_d.
 pub fn run_bar(
     bar: &BarMode1,
     shape: ShapeKind,
@@ -312,6 +329,7 @@ pub fn run_bar(
         shape,
         scheme,
         mass_floor: 1e-12 * particles.mass[0],
+        damping: bar.damping,
     };
     let np = particles.len();
     let time = TimeControl {
@@ -322,7 +340,7 @@ pub fn run_bar(
     };
     let mut run = SolidRun::new(grid, vec![mat], particles, params, time);
     let e0 = run.energies().total();
-    let amp = bar.v0 / bar.omega();
+    let amp = bar.v0 / bar.omega_d();
     let start = Instant::now();
     let (mut err, mut max_err) = (0.0f64, 0.0f64);
     while !run.finished() {

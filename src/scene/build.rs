@@ -132,6 +132,7 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         shape: scene.mpm.shape,
         scheme: scene.mpm.update,
         mass_floor: 1e-12 * min_mass,
+        damping: scene.mpm.damping,
     };
     let time = TimeControl {
         end: scene.time.end,

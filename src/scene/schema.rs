@@ -140,6 +140,9 @@ pub struct MpmSpec {
     /// Default particles per cell per direction.
     #[serde(default = "default_ppc")]
     pub particles_per_cell: usize,
+    /// Mass-proportional damping α ≥ 0 [1/s] (quasistatic end states).
+    #[serde(default)]
+    pub damping: f64,
 }
 
 fn default_shape() -> ShapeKind {
@@ -158,6 +161,7 @@ impl Default for MpmSpec {
             shape: default_shape(),
             update: default_update(),
             particles_per_cell: default_ppc(),
+            damping: 0.0,
         }
     }
 }
@@ -444,6 +448,12 @@ impl Scene {
             return Err(err(
                 "mpm.particles_per_cell",
                 format!("must be 1 … 16 (got {})", self.mpm.particles_per_cell),
+            ));
+        }
+        if !(self.mpm.damping.is_finite() && self.mpm.damping >= 0.0) {
+            return Err(err(
+                "mpm.damping",
+                format!("must be a finite number ≥ 0 (got {})", self.mpm.damping),
             ));
         }
         if self.materials.is_empty() {

@@ -32,6 +32,7 @@ pub fn mpm_bar_1d(quick: bool) -> anyhow::Result<StudyResult> {
         youngs: 100.0,
         rho: 1.0,
         v0: 1e-3,
+        damping: 0.0,
     };
     let ns: &[usize] = if quick {
         &[8, 16, 32]
