@@ -49,8 +49,16 @@ pub struct Summary {
     pub n_particles: usize,
     /// Number of grid cells.
     pub n_cells: usize,
-    /// Particle updates per second of stepping (output excluded).
+    /// Particle updates per second of stepping (output excluded; 0 without
+    /// particles).
     pub particle_steps_per_s: f64,
+    /// Cell updates per second of stepping, all fluid materials of a cell
+    /// counted once (0 without fluids).
+    pub cell_steps_per_s: f64,
+    /// Fluid materials.
+    pub n_fluid_materials: usize,
+    /// Fluid steps repeated with a smaller timestep.
+    pub retries: u64,
     /// Worker threads.
     pub threads: usize,
     /// Smallest and largest timestep.
@@ -63,7 +71,8 @@ pub struct Summary {
     pub momentum_drift: f64,
     /// (E_end − E_0)/E_0 of kinetic + strain + body-force potential energy.
     pub energy_drift: f64,
-    /// Energies at the start.
+    /// Energies at the start (kinetic, strain, potential for solids; for
+    /// fluids `strain` holds the internal energy).
     pub initial_energy: Energies,
     /// Energies at the end.
     pub final_energy: Energies,
@@ -80,16 +89,23 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
         .build()
         .map_err(|e| Error::io(&opts.out_dir, std::io::Error::other(e.to_string())))?;
     let threads = pool.current_num_threads();
-    pool.install(|| match scene.grid.dim {
-        1 => run_dim::<1>(scene, opts, threads),
-        2 => run_dim::<2>(scene, opts, threads),
-        _ => run_dim::<3>(scene, opts, threads),
+    let fluid = scene
+        .materials
+        .iter()
+        .any(|m| m.kind == crate::scene::MaterialKind::Fluid);
+    pool.install(|| match (scene.grid.dim, fluid) {
+        (1, false) => run_dim::<1>(scene, opts, threads),
+        (2, false) => run_dim::<2>(scene, opts, threads),
+        (_, false) => run_dim::<3>(scene, opts, threads),
+        (1, true) => crate::driver_fluid::run_fluid_dim::<1>(scene, opts, threads),
+        (2, true) => crate::driver_fluid::run_fluid_dim::<2>(scene, opts, threads),
+        (_, true) => crate::driver_fluid::run_fluid_dim::<3>(scene, opts, threads),
     })
 }
 
 /// Unit of a quantity per unit of the dimensions a run does not resolve
 /// (2D plane strain is per metre of depth, 1D per square metre of section).
-fn per_depth(dim: usize) -> &'static str {
+pub(crate) fn per_depth(dim: usize) -> &'static str {
     match dim {
         1 => "/m^2",
         2 => "/m",
@@ -168,7 +184,7 @@ impl Writer {
     }
 }
 
-fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
+pub(crate) fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
     std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
 }
 
@@ -368,6 +384,9 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         } else {
             0.0
         },
+        cell_steps_per_s: 0.0,
+        n_fluid_materials: 0,
+        retries: 0,
         threads,
         dt_min: if run.steps > 0 { dt_min } else { 0.0 },
         dt_max,
@@ -379,14 +398,19 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         phase_times: run.phase_times(),
         error: failure.as_ref().map(|e| e.to_string()),
     };
-    let path = opts.out_dir.join("summary.json");
-    atomic_write(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
-        std::io::Write::write_all(w, b"\n")
-    })
-    .map_err(|e| Error::io(&path, e))?;
+    write_summary(&opts.out_dir, &summary)?;
     match failure {
         Some(e) => Err(e),
         None => Ok(summary),
     }
+}
+
+/// Writes `summary.json` atomically.
+pub(crate) fn write_summary(dir: &Path, summary: &Summary) -> Result<()> {
+    let path = dir.join("summary.json");
+    atomic_write(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, summary).map_err(std::io::Error::other)?;
+        std::io::Write::write_all(w, b"\n")
+    })
+    .map_err(|e| Error::io(&path, e))
 }

@@ -62,6 +62,9 @@ pub enum Error {
         /// What went wrong.
         what: String,
     },
+    /// A fluid (ICE) failure; names step, time, cell and material.
+    #[error("fluid: {0}")]
+    Fluid(#[from] crate::ice::IceError),
     /// File output failed.
     #[error("I/O error on {path}: {source}")]
     Io {

@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 pub mod diagnostics;
 pub mod driver;
+mod driver_fluid;
 pub mod error;
 pub mod grid;
 pub mod ice;

@@ -81,16 +81,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 progress: !quiet,
             };
             let sum = mpmice::driver::run_scene(&s, &opts)?;
+            let rate = if sum.n_particles > 0 {
+                format!(
+                    "{} particles, {} cells, {:.3e} particle-steps/s",
+                    sum.n_particles, sum.n_cells, sum.particle_steps_per_s
+                )
+            } else {
+                format!(
+                    "{} cells, {} fluid materials, {:.3e} cell-steps/s",
+                    sum.n_cells, sum.n_fluid_materials, sum.cell_steps_per_s
+                )
+            };
             println!(
-                "{}: {} steps to t = {:.6e} in {:.2} s ({} particles, {} cells, {:.3e} \
-                 particle-steps/s on {} threads)",
+                "{}: {} steps to t = {:.6e} in {:.2} s ({rate} on {} threads)",
                 scene.display(),
                 sum.steps,
                 sum.final_time,
                 sum.wall_s,
-                sum.n_particles,
-                sum.n_cells,
-                sum.particle_steps_per_s,
                 sum.threads
             );
             println!(

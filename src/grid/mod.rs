@@ -18,6 +18,8 @@ pub enum Boundary {
     Fixed,
     /// Free / outflow: nothing imposed.
     Free,
+    /// Periodic (fluid-only scenes; both sides of an axis).
+    Periodic,
 }
 
 /// Number of ghost node layers on each side of the domain. Cubic B-splines
@@ -59,7 +61,7 @@ impl<const D: usize> Reflect<D> for SVector<f64, D> {
                 r[axis] = -r[axis];
                 r
             }
-            Boundary::Free => *self,
+            Boundary::Free | Boundary::Periodic => *self,
         }
     }
     #[inline]
@@ -225,7 +227,7 @@ impl<const D: usize> Grid<D> {
             let n = self.cells[axis] as isize;
             for side in 0..2 {
                 let bc = self.bc[axis][side];
-                if bc == Boundary::Free {
+                if matches!(bc, Boundary::Free | Boundary::Periodic) {
                     continue;
                 }
                 // Boundary layer first, then ghosts from the outermost in:

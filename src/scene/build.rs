@@ -2,9 +2,14 @@
 
 use nalgebra::SVector;
 
-use super::schema::{MaterialSpec, Scene};
+use super::schema::{EosKind, FluidVariant, LimiterKind, MaterialKind, MaterialSpec, Scene};
 use crate::error::SceneError;
 use crate::grid::{Boundary, Grid};
+use crate::ice::{
+    Advection, CellLayout, ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState,
+    Limiter, MaterialInit,
+};
+use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
 use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
 use crate::mpm::explicit::Uniform;
 use crate::mpm::{ExplicitParams, Particles};
@@ -24,7 +29,7 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
     };
     SolidMaterial {
         name: m.name.clone(),
-        density: m.density,
+        density: m.density.unwrap_or_default(),
         model: m.model.unwrap_or(SolidModel::NeoHookean),
         elastic,
     }
@@ -125,7 +130,12 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         ));
     }
     let grid = grid_of::<D>(scene);
-    let materials: Vec<SolidMaterial> = scene.materials.iter().map(solid_material).collect();
+    let materials: Vec<SolidMaterial> = scene
+        .materials
+        .iter()
+        .filter(|m| m.kind == MaterialKind::Solid)
+        .map(solid_material)
+        .collect();
     let particles = fill_particles(scene, &grid, &materials)?;
     let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
     let params = ExplicitParams {
@@ -149,4 +159,172 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         }
     }
     Ok(run)
+}
+
+fn fluid_eos(m: &MaterialSpec, i: usize) -> Result<FluidEos, SceneError> {
+    let gamma = m.gamma.unwrap_or_default();
+    let cv = m.cv.unwrap_or_default();
+    let eos: Result<FluidEos, _> = match m.eos {
+        Some(EosKind::StiffenedGas) => {
+            StiffenedGas::new(gamma, m.p_inf.unwrap_or_default(), cv).map(FluidEos::from)
+        }
+        _ => IdealGas::new(gamma, cv).map(FluidEos::from),
+    };
+    eos.map_err(|e| SceneError::new(format!("materials[{i}]"), e.to_string()))
+}
+
+/// Volume fraction given to a fluid material absent from a region.
+pub const TRACE_VOLUME_FRACTION: f64 = 1e-10;
+
+/// Temperature at which `eos` gives pressure `p` at density `rho` (both EOS
+/// are linear in T at fixed ρ).
+fn temperature_of(eos: &FluidEos, rho: f64, p: f64) -> f64 {
+    let t0 = 1.0;
+    t0 + (p - eos.pressure(rho, t0)) / eos.dp_dt(rho, t0)
+}
+
+/// Builds the fluid-only ICE run of a validated scene with `D == dim`: the
+/// initial state sampled at cell centres from `[[regions]]` (the last region
+/// containing a centre wins) and the parameters from `[fluid]`.
+pub fn build_fluid_run<const D: usize>(
+    scene: &Scene,
+) -> Result<(IceState<D>, IceParams<D>), SceneError> {
+    let grid = grid_of::<D>(scene);
+    let layout =
+        CellLayout::from_grid(&grid).map_err(|e| SceneError::new("grid", e.to_string()))?;
+    let fluids: Vec<(usize, &MaterialSpec)> = scene
+        .materials
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.kind == MaterialKind::Fluid)
+        .collect();
+    let mut materials = Vec::with_capacity(fluids.len());
+    for (i, m) in &fluids {
+        materials.push(IceMaterial::new(m.name.clone(), fluid_eos(m, *i)?));
+    }
+    // Every cell centre must lie in some region.
+    for &c in &layout.interior {
+        let x = layout.centre(c);
+        let xs: Vec<f64> = x.iter().copied().collect();
+        if !scene
+            .regions
+            .iter()
+            .any(|r| r.geometry.as_ref().is_none_or(|g| g.contains(&xs)))
+        {
+            return Err(SceneError::new(
+                "regions",
+                format!(
+                    "the cell centred at {xs:?} lies in no region (start with a region without \
+                     geometry, which covers everything)"
+                ),
+            ));
+        }
+    }
+    // Per region: one MaterialInit per fluid material, computed once.
+    let mut inits: Vec<Vec<MaterialInit<D>>> = Vec::with_capacity(scene.regions.len());
+    for (ri, r) in scene.regions.iter().enumerate() {
+        let mut states = Vec::with_capacity(materials.len());
+        // Reference temperature for the absent materials: the first listed.
+        let first = &r.states[0];
+        let first_eos = &materials[fluids
+            .iter()
+            .position(|(_, m)| m.name == first.material)
+            .unwrap_or(0)]
+        .eos;
+        let t_ref = match (first.temperature, first.density) {
+            (Some(t), _) => t,
+            (None, Some(rho)) => temperature_of(first_eos, rho, r.pressure),
+            _ => 300.0,
+        };
+        for mat in &materials {
+            let listed = r.states.iter().find(|s| s.material == mat.name);
+            let (theta, rho, vel) = match listed {
+                Some(s) => {
+                    let rho = match s.density {
+                        Some(rho) => rho,
+                        // Validation guarantees a temperature here; the EOS
+                        // rejects a missing (NaN) one anyway.
+                        None => mat
+                            .eos
+                            .density(r.pressure, s.temperature.unwrap_or(f64::NAN))
+                            .map_err(|e| {
+                                SceneError::new(format!("regions[{ri}].states"), e.to_string())
+                            })?,
+                    };
+                    let v = s
+                        .velocity
+                        .as_deref()
+                        .map(to_vec::<D>)
+                        .unwrap_or_else(SVector::zeros);
+                    (s.volume_fraction, rho, v)
+                }
+                None => {
+                    let rho = mat.eos.density(r.pressure, t_ref).map_err(|e| {
+                        SceneError::new(format!("regions[{ri}].pressure"), e.to_string())
+                    })?;
+                    (0.0, rho, SVector::zeros())
+                }
+            };
+            states.push(MaterialInit::new(theta, rho, r.pressure, vel));
+        }
+        // Multi-material ICE needs every material present in every cell:
+        // raise absent ones to a trace fraction and renormalise to Σθ = 1.
+        for st in states.iter_mut() {
+            st.vol_frac = st.vol_frac.max(TRACE_VOLUME_FRACTION);
+        }
+        let sum: f64 = states.iter().map(|st| st.vol_frac).sum();
+        for st in states.iter_mut() {
+            st.vol_frac /= sum;
+        }
+        inits.push(states);
+    }
+    let regions = &scene.regions;
+    let state = IceState::new(layout, materials, |x| {
+        let xs: Vec<f64> = x.iter().copied().collect();
+        let k = regions
+            .iter()
+            .rposition(|r| r.geometry.as_ref().is_none_or(|g| g.contains(&xs)))
+            .unwrap_or(0);
+        inits[k].clone()
+    })
+    .map_err(|e| SceneError::new("regions", e.to_string()))?;
+    let bcs: [[IceBoundary<D>; 2]; D] = std::array::from_fn(|d| {
+        std::array::from_fn(|side| match grid.bc[d][side] {
+            Boundary::Fixed | Boundary::Symmetry => IceBoundary::Wall,
+            Boundary::Free => IceBoundary::Outflow,
+            Boundary::Periodic => IceBoundary::Periodic,
+        })
+    });
+    let mut params = match scene.fluid.variant {
+        FluidVariant::Literal => IceParams::new(bcs),
+        FluidVariant::HighResolution => IceParams::high_resolution(bcs),
+    };
+    params.cfl = scene.time.cfl;
+    if let Some(l) = scene.fluid.limiter {
+        params.advection = match l {
+            LimiterKind::FirstOrder => Advection::FirstOrder,
+            LimiterKind::VanLeer => Advection::SecondOrder(Limiter::VanLeer),
+            LimiterKind::Mc => Advection::SecondOrder(Limiter::MonotonizedCentral),
+            LimiterKind::Superbee => Advection::SecondOrder(Limiter::Superbee),
+            LimiterKind::Minmod => Advection::SecondOrder(Limiter::Minmod),
+        };
+    }
+    let n = fluids.len();
+    if let Some(ex) = scene.fluid.exchange {
+        params.exchange = Some(ExchangeCoefficients::uniform(n, ex.momentum, ex.heat));
+    }
+    let mu: Vec<f64> = fluids
+        .iter()
+        .map(|(_, m)| m.viscosity.unwrap_or(0.0))
+        .collect();
+    if mu.iter().any(|&v| v > 0.0) {
+        params.viscosity = Some(mu);
+    }
+    if let Some(g) = &scene.gravity {
+        params.gravity = to_vec::<D>(g);
+    }
+    params
+        .validate(&state)
+        .map_err(|e| SceneError::new("fluid", e.to_string()))?;
+    Ok((state, params))
 }

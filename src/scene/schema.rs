@@ -27,6 +27,13 @@ pub struct Scene {
     /// Bodies filled with particles.
     #[serde(default)]
     pub objects: Vec<ObjectSpec>,
+    /// Fluid discretisation choices.
+    #[serde(default)]
+    pub fluid: FluidSpec,
+    /// Initial fluid states by region, applied in order (a later region
+    /// overrides an earlier one where both contain a cell centre).
+    #[serde(default)]
+    pub regions: Vec<RegionSpec>,
     /// Uniform body force per unit mass (length `dim`), e.g. `[0, -9.81]`.
     #[serde(default)]
     pub gravity: Option<Vec<f64>>,
@@ -172,10 +179,24 @@ impl Default for MpmSpec {
 pub enum MaterialKind {
     /// A solid on material points.
     Solid,
+    /// A fluid in cell-centred multi-material ICE.
+    Fluid,
 }
 
-/// A material. Elastic constants are given either as `youngs_modulus` and
-/// `poisson_ratio` or as `bulk_modulus` and `shear_modulus`.
+/// Equation of state of a fluid material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EosKind {
+    /// p = (γ − 1) ρ c_v T.
+    IdealGas,
+    /// p = (γ − 1) ρ c_v T − γ p_inf (liquids).
+    StiffenedGas,
+}
+
+/// A material. Solids: `model`, `density` and elastic constants, given either
+/// as `youngs_modulus` and `poisson_ratio` or as `bulk_modulus` and
+/// `shear_modulus`. Fluids: `eos`, `gamma`, `cv` (and `p_inf` for a stiffened
+/// gas), optional `viscosity`; their densities come from `[[regions]]`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
@@ -186,8 +207,8 @@ pub struct MaterialSpec {
     pub kind: MaterialKind,
     /// Constitutive model (solids).
     pub model: Option<SolidModel>,
-    /// Reference density (> 0).
-    pub density: f64,
+    /// Reference density (> 0; solids).
+    pub density: Option<f64>,
     /// Young's modulus E (> 0).
     pub youngs_modulus: Option<f64>,
     /// Poisson's ratio, −1 < ν < 0.5.
@@ -196,6 +217,16 @@ pub struct MaterialSpec {
     pub bulk_modulus: Option<f64>,
     /// Shear modulus G (> 0).
     pub shear_modulus: Option<f64>,
+    /// Equation of state (fluids).
+    pub eos: Option<EosKind>,
+    /// Ratio of specific heats γ > 1 (fluids).
+    pub gamma: Option<f64>,
+    /// Specific heat at constant volume c_v > 0 (fluids).
+    pub cv: Option<f64>,
+    /// Stiffening pressure p_inf ≥ 0 (stiffened gas).
+    pub p_inf: Option<f64>,
+    /// Dynamic viscosity μ ≥ 0 (fluids; default 0 = inviscid).
+    pub viscosity: Option<f64>,
 }
 
 /// Region filled by an object.
@@ -223,6 +254,13 @@ pub enum Geometry {
         /// Radius.
         radius: f64,
     },
+    /// Half space of the points x with (x − point)·normal ≥ 0.
+    HalfSpace {
+        /// A point on the bounding plane.
+        point: Vec<f64>,
+        /// Normal pointing into the region.
+        normal: Vec<f64>,
+    },
     /// Annulus (2D) or cylindrical shell along z (3D): distance from the
     /// centre (in the x–y plane) between the radii.
     Annulus {
@@ -245,6 +283,12 @@ impl Geometry {
             Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
                 dist2(x, center, x.len()) <= radius * radius
             }
+            Geometry::HalfSpace { point, normal } => {
+                (0..x.len())
+                    .map(|d| (x[d] - point[d]) * normal[d])
+                    .sum::<f64>()
+                    >= 0.0
+            }
             Geometry::Annulus {
                 center,
                 inner_radius,
@@ -259,6 +303,7 @@ impl Geometry {
     /// Axis-aligned bounding box.
     pub fn bounds(&self, dim: usize) -> (Vec<f64>, Vec<f64>) {
         match self {
+            Geometry::HalfSpace { .. } => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
             Geometry::Box { lower, upper } => (lower.clone(), upper.clone()),
             Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => (
                 center.iter().map(|c| c - radius).collect(),
@@ -324,6 +369,89 @@ pub enum Format {
     Csv,
 }
 
+/// Which ICE discretisation variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FluidVariant {
+    /// Guilkey Eqs. 28–31 as written.
+    #[default]
+    Literal,
+    /// Limited reconstruction in Eq. 28, face velocity and pressure force
+    /// time-centred (see `ice::IceParams::high_resolution`).
+    HighResolution,
+}
+
+/// Slope limiter of the second-order reconstruction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LimiterKind {
+    /// First-order donor cell (no reconstruction).
+    FirstOrder,
+    /// van Leer.
+    VanLeer,
+    /// Monotonised central.
+    Mc,
+    /// Superbee.
+    Superbee,
+    /// Minmod.
+    Minmod,
+}
+
+/// Momentum and heat exchange coefficients, uniform over material pairs.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExchangeSpec {
+    /// Momentum exchange coefficient K ≥ 0 (Guilkey Eq. 38).
+    pub momentum: f64,
+    /// Heat exchange coefficient H ≥ 0 (Guilkey Eq. 39).
+    #[serde(default)]
+    pub heat: f64,
+}
+
+/// Fluid discretisation choices.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSpec {
+    /// Discretisation variant (default `literal`).
+    #[serde(default)]
+    pub variant: FluidVariant,
+    /// Advection limiter (default: van Leer for `literal`, superbee for
+    /// `high_resolution`).
+    pub limiter: Option<LimiterKind>,
+    /// Exchange among fluid materials (default: none).
+    pub exchange: Option<ExchangeSpec>,
+}
+
+/// The initial state of one fluid material in a region.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidStateSpec {
+    /// Name of a fluid material.
+    pub material: String,
+    /// Volume fraction in [0, 1]; the fractions of a region sum to 1.
+    pub volume_fraction: f64,
+    /// True density (> 0); give this or `temperature`.
+    pub density: Option<f64>,
+    /// Temperature (> 0); give this or `density`.
+    pub temperature: Option<f64>,
+    /// Velocity (length `dim`; default zero).
+    pub velocity: Option<Vec<f64>>,
+}
+
+/// A region of initial fluid state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// Region (default: everywhere).
+    pub geometry: Option<Geometry>,
+    /// Pressure (> 0 for gases; > −p_inf for a stiffened gas), shared by all
+    /// materials of the region.
+    pub pressure: f64,
+    /// States of the materials present; fluid materials not listed get
+    /// volume fraction 0.
+    pub states: Vec<FluidStateSpec>,
+}
+
 /// What to write.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -349,6 +477,237 @@ impl Default for OutputSpec {
             formats: default_formats(),
             history_interval: None,
         }
+    }
+}
+
+fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    for (v, k) in [
+        (m.eos.is_some(), "eos"),
+        (m.gamma.is_some(), "gamma"),
+        (m.cv.is_some(), "cv"),
+        (m.p_inf.is_some(), "p_inf"),
+        (m.viscosity.is_some(), "viscosity"),
+    ] {
+        if v {
+            return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
+        }
+    }
+    match m.density {
+        Some(d) => positive(&p("density"), d)?,
+        None => return Err(err(p("density"), "missing; solids need a density > 0")),
+    }
+    if m.model.is_none() {
+        return Err(err(
+            p("model"),
+            format!("missing; solids need one of: {}", SolidModel::NAMES),
+        ));
+    }
+    match (
+        m.youngs_modulus,
+        m.poisson_ratio,
+        m.bulk_modulus,
+        m.shear_modulus,
+    ) {
+        (Some(e), Some(nu), None, None) => {
+            positive(&p("youngs_modulus"), e)?;
+            if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+                return Err(err(
+                    p("poisson_ratio"),
+                    format!("must satisfy -1 < ν < 0.5 (got {nu})"),
+                ));
+            }
+        }
+        (None, None, Some(k), Some(g)) => {
+            positive(&p("bulk_modulus"), k)?;
+            positive(&p("shear_modulus"), g)?;
+        }
+        _ => {
+            return Err(err(
+                p("youngs_modulus"),
+                "give exactly one pair: youngs_modulus + poisson_ratio, or \
+                 bulk_modulus + shear_modulus",
+            ))
+        }
+    }
+    Ok(())
+}
+
+fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    for (v, k) in [
+        (m.model.is_some(), "model"),
+        (m.density.is_some(), "density"),
+        (m.youngs_modulus.is_some(), "youngs_modulus"),
+        (m.poisson_ratio.is_some(), "poisson_ratio"),
+        (m.bulk_modulus.is_some(), "bulk_modulus"),
+        (m.shear_modulus.is_some(), "shear_modulus"),
+    ] {
+        if v {
+            let extra = if k == "density" {
+                " (fluid densities are set per region in [[regions]])"
+            } else {
+                ""
+            };
+            return Err(err(p(k), format!("only for solid materials{extra}")));
+        }
+    }
+    let Some(eos) = m.eos else {
+        return Err(err(
+            p("eos"),
+            "missing; fluids need one of: ideal_gas, stiffened_gas",
+        ));
+    };
+    match m.gamma {
+        Some(g) if g.is_finite() && g > 1.0 => {}
+        Some(g) => return Err(err(p("gamma"), format!("must be > 1 (got {g})"))),
+        None => return Err(err(p("gamma"), "missing; must be > 1")),
+    }
+    match m.cv {
+        Some(c) => positive(&p("cv"), c)?,
+        None => return Err(err(p("cv"), "missing; must be > 0")),
+    }
+    match (eos, m.p_inf) {
+        (EosKind::IdealGas, Some(_)) => {
+            return Err(err(p("p_inf"), "only for eos = \"stiffened_gas\""))
+        }
+        (EosKind::StiffenedGas, None) => {
+            return Err(err(p("p_inf"), "missing; stiffened gas needs p_inf ≥ 0"))
+        }
+        (EosKind::StiffenedGas, Some(pi)) if !(pi.is_finite() && pi >= 0.0) => {
+            return Err(err(p("p_inf"), format!("must be ≥ 0 (got {pi})")))
+        }
+        _ => {}
+    }
+    if let Some(mu) = m.viscosity {
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(err(p("viscosity"), format!("must be ≥ 0 (got {mu})")));
+        }
+    }
+    Ok(())
+}
+
+fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneError> {
+    if let Geometry::HalfSpace { point, normal } = g {
+        vec_len(&format!("{path}.point"), point, dim)?;
+        vec_len(&format!("{path}.normal"), normal, dim)?;
+        if normal.iter().all(|v| *v == 0.0) {
+            return Err(err(format!("{path}.normal"), "must not be zero"));
+        }
+    }
+    Ok(())
+}
+
+impl Scene {
+    fn validate_fluid_regions(&self) -> Result<(), SceneError> {
+        let dim = self.grid.dim;
+        if self.regions.is_empty() {
+            return Err(err("regions", "a fluid scene needs at least one region"));
+        }
+        if let Some(ex) = &self.fluid.exchange {
+            for (v, k) in [(ex.momentum, "momentum"), (ex.heat, "heat")] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(err(
+                        format!("fluid.exchange.{k}"),
+                        format!("must be a finite number ≥ 0 (got {v})"),
+                    ));
+                }
+            }
+        }
+        for (i, r) in self.regions.iter().enumerate() {
+            let p = |k: &str| format!("regions[{i}].{k}");
+            if let Some(g) = &r.geometry {
+                validate_geometry(g, &p("geometry"), dim)?;
+                match g {
+                    Geometry::Box { lower, upper } => {
+                        vec_len(&p("geometry.lower"), lower, dim)?;
+                        vec_len(&p("geometry.upper"), upper, dim)?;
+                    }
+                    Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
+                        vec_len(&p("geometry.center"), center, dim)?;
+                        positive(&p("geometry.radius"), *radius)?;
+                    }
+                    Geometry::Annulus { center, .. } => {
+                        vec_len(&p("geometry.center"), center, dim)?
+                    }
+                    Geometry::HalfSpace { .. } => {}
+                }
+            }
+            if !r.pressure.is_finite() {
+                return Err(err(p("pressure"), "must be finite"));
+            }
+            if r.states.is_empty() {
+                return Err(err(p("states"), "at least one material state is required"));
+            }
+            let mut sum = 0.0;
+            for (k, st) in r.states.iter().enumerate() {
+                let q = |key: &str| format!("regions[{i}].states[{k}].{key}");
+                let Some(m) = self
+                    .materials
+                    .iter()
+                    .find(|m| m.name == st.material && m.kind == MaterialKind::Fluid)
+                else {
+                    let names: Vec<&str> = self
+                        .materials
+                        .iter()
+                        .filter(|m| m.kind == MaterialKind::Fluid)
+                        .map(|m| m.name.as_str())
+                        .collect();
+                    return Err(err(
+                        q("material"),
+                        format!(
+                            "unknown fluid material `{}`; defined: {}",
+                            st.material,
+                            names.join(", ")
+                        ),
+                    ));
+                };
+                if r.states[..k].iter().any(|o| o.material == st.material) {
+                    return Err(err(
+                        q("material"),
+                        format!("`{}` listed twice", st.material),
+                    ));
+                }
+                if !(st.volume_fraction.is_finite() && (0.0..=1.0).contains(&st.volume_fraction)) {
+                    return Err(err(
+                        q("volume_fraction"),
+                        format!("must be in [0, 1] (got {})", st.volume_fraction),
+                    ));
+                }
+                sum += st.volume_fraction;
+                match (st.density, st.temperature) {
+                    (Some(d), None) => positive(&q("density"), d)?,
+                    (None, Some(t)) => positive(&q("temperature"), t)?,
+                    _ => {
+                        return Err(err(
+                            q("density"),
+                            "give exactly one of density or temperature",
+                        ))
+                    }
+                }
+                if let Some(v) = &st.velocity {
+                    vec_len(&q("velocity"), v, dim)?;
+                }
+                let p_min = match m.eos {
+                    Some(EosKind::StiffenedGas) => -m.p_inf.unwrap_or(0.0),
+                    _ => 0.0,
+                };
+                if r.pressure <= p_min {
+                    return Err(err(
+                        p("pressure"),
+                        format!(
+                            "must be > {p_min} for material `{}` (got {})",
+                            st.material, r.pressure
+                        ),
+                    ));
+                }
+            }
+            if (sum - 1.0).abs() > 1e-9 {
+                return Err(err(
+                    p("states"),
+                    format!("volume fractions must sum to 1 (got {sum})"),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -467,39 +826,34 @@ impl Scene {
             if self.materials[..i].iter().any(|o| o.name == m.name) {
                 return Err(err(p("name"), format!("`{}` is used twice", m.name)));
             }
-            positive(&p("density"), m.density)?;
-            if m.model.is_none() {
+            match m.kind {
+                MaterialKind::Solid => validate_solid(m, &p)?,
+                MaterialKind::Fluid => validate_fluid(m, &p)?,
+            }
+        }
+        let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);
+        let has_fluid = self.materials.iter().any(|m| m.kind == MaterialKind::Fluid);
+        if has_solid && has_fluid {
+            return Err(err(
+                "materials",
+                "solid and fluid materials in one scene need the MPM-ICE coupling, which is \
+                 not available yet; allowed: only solids, or only fluids",
+            ));
+        }
+        for faces in g.boundary.faces().iter().take(dim) {
+            let periodic = faces.map(|(bc, _)| bc == Some(Boundary::Periodic));
+            if periodic[0] != periodic[1] {
                 return Err(err(
-                    p("model"),
-                    format!("missing; solids need one of: {}", SolidModel::NAMES),
+                    format!("grid.boundary.{}", faces[0].1),
+                    "periodic must be set on both faces of an axis",
                 ));
             }
-            match (
-                m.youngs_modulus,
-                m.poisson_ratio,
-                m.bulk_modulus,
-                m.shear_modulus,
-            ) {
-                (Some(e), Some(nu), None, None) => {
-                    positive(&p("youngs_modulus"), e)?;
-                    if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
-                        return Err(err(
-                            p("poisson_ratio"),
-                            format!("must satisfy -1 < ν < 0.5 (got {nu})"),
-                        ));
-                    }
-                }
-                (None, None, Some(k), Some(g)) => {
-                    positive(&p("bulk_modulus"), k)?;
-                    positive(&p("shear_modulus"), g)?;
-                }
-                _ => {
-                    return Err(err(
-                        p("youngs_modulus"),
-                        "give exactly one pair: youngs_modulus + poisson_ratio, or \
-                         bulk_modulus + shear_modulus",
-                    ))
-                }
+            if periodic[0] && has_solid {
+                return Err(err(
+                    format!("grid.boundary.{}", faces[0].1),
+                    "periodic faces are available for fluid-only scenes; allowed for solids: \
+                     fixed, symmetry, free",
+                ));
             }
         }
         if let Some(gv) = &self.gravity {
@@ -518,6 +872,19 @@ impl Scene {
                     ),
                 ));
             }
+            if self
+                .materials
+                .iter()
+                .any(|m| m.name == o.material && m.kind != MaterialKind::Solid)
+            {
+                return Err(err(
+                    p("material"),
+                    format!(
+                        "`{}` is a fluid; objects are filled with solid particles",
+                        o.material
+                    ),
+                ));
+            }
             if let Some(ppc) = o.particles_per_cell {
                 if !(1..=16).contains(&ppc) {
                     return Err(err(
@@ -530,6 +897,7 @@ impl Scene {
                 vec_len(&p("velocity"), v, dim)?;
             }
             match &o.geometry {
+                Geometry::HalfSpace { .. } => {}
                 Geometry::Box { lower, upper } => {
                     vec_len(&p("geometry.lower"), lower, dim)?;
                     vec_len(&p("geometry.upper"), upper, dim)?;
@@ -584,8 +952,22 @@ impl Scene {
                 }
             }
         }
-        if self.objects.is_empty() {
-            return Err(err("objects", "at least one object is required"));
+        for (i, o) in self.objects.iter().enumerate() {
+            validate_geometry(&o.geometry, &format!("objects[{i}].geometry"), dim)?;
+        }
+        if has_solid && self.objects.is_empty() {
+            return Err(err(
+                "objects",
+                "a scene with solids needs at least one object",
+            ));
+        }
+        if has_fluid {
+            self.validate_fluid_regions()?;
+        } else if !self.regions.is_empty() {
+            return Err(err(
+                "regions",
+                "regions set fluid states; the scene has no fluid",
+            ));
         }
         let out = &self.output;
         if let Some(iv) = out.interval {
