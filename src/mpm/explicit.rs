@@ -127,6 +127,9 @@ pub struct PhaseTimes {
 pub struct StepScratch<const D: usize> {
     bins: Bins,
     dx: Vec<SVector<f64, D>>,
+    /// GIMP half-widths (cell units) of the step, frozen at its start so
+    /// every transfer of the step uses the same particle domains.
+    lp: Vec<SVector<f64, D>>,
     /// Accumulated phase timings.
     pub times: PhaseTimes,
 }
@@ -249,55 +252,67 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
             "particle position is not finite or has left the grid",
         ));
     }
+    if ctx.params.shape == ShapeKind::Gimp {
+        let inv_h = ctx.grid.inv_h;
+        scratch.lp.resize(particles.len(), SVector::zeros());
+        scratch
+            .lp
+            .par_iter_mut()
+            .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
+            .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
+    } else {
+        scratch.lp.clear();
+    }
     lap(&mut t.bin_s);
     let bins = &scratch.bins;
     let dx = &mut scratch.dx;
+    let lp = &scratch.lp;
     match ctx.params.scheme {
         UpdateScheme::Usl => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
+            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Musl => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, particles, gs);
+            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_STORE, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
             // Map the updated momenta back (Sulsky's modified USL).
             gs.momentum
                 .par_iter_mut()
                 .for_each(|m| *m = SVector::zeros());
             lap(&mut t.grid_s);
-            p2g::<D, S, K, false, true, false>(ctx, kernel, bins, particles, gs);
+            p2g::<D, S, K, false, true, false>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Usf => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, false>(ctx, kernel, bins, particles, gs);
+            p2g::<D, S, K, true, true, false>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(ctx, kernel, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
-            p2g::<D, S, K, false, false, true>(ctx, kernel, bins, particles, gs);
+            p2g::<D, S, K, false, false, true>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
         }
     }
@@ -324,6 +339,25 @@ fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
         o += m[d] * strides[d];
     }
     o
+}
+
+/// GIMP particle half-width in cell units, following the deformation
+/// (cpGIMP-style, axis-aligned): l_d = l⁰_d |F_dd|, capped at half a cell
+/// (where the uGIMP weight formula holds). Other shape functions ignore it.
+#[inline(always)]
+fn gimp_half_width<const D: usize>(
+    l0: &SVector<f64, D>,
+    f: &Matrix3<f64>,
+    inv_h: &SVector<f64, D>,
+) -> SVector<f64, D> {
+    SVector::from_fn(|d, _| (l0[d] * f[(d, d)].abs() * inv_h[d]).min(0.5))
+}
+
+/// The frozen GIMP half-width of particle `p` (zero for other kernels, which
+/// ignore it).
+#[inline(always)]
+fn half_width<const D: usize>(lp: &[SVector<f64, D>], p: usize) -> SVector<f64, D> {
+    lp.get(p).copied().unwrap_or_else(SVector::zeros)
 }
 
 /// Determinant of a D×D matrix, D ≤ 3, in closed form.
@@ -358,6 +392,7 @@ fn p2g<
     ctx: &Ctx<'_, D>,
     kernel: K,
     bins: &Bins,
+    lp: &[SVector<f64, D>],
     particles: &Particles<D>,
     gs: &mut GridState<D>,
 ) {
@@ -370,8 +405,7 @@ fn p2g<
     let (t, body) = (ctx.t, ctx.body);
     bins.for_each_colored(|p| {
         let xi = grid.to_grid_units(&particles.x[p]);
-        let lp = particles.half_size[p].component_mul(&inv_h);
-        let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &lp, &inv_h);
+        let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &half_width(lp, p), &inv_h);
         let base = grid.node_index(pw.base());
         let mp = particles.mass[p];
         let mv = particles.v[p] * mp;
@@ -472,6 +506,7 @@ fn g2p<
 >(
     ctx: &Ctx<'_, D>,
     kernel: K,
+    lp: &[SVector<f64, D>],
     particles: &mut Particles<D>,
     gs: &GridState<D>,
     dx_store: &mut Vec<SVector<f64, D>>,
@@ -498,13 +533,12 @@ fn g2p<
         let work = SharedMut::new(&mut particles.work);
         let vol = SharedMut::new(&mut particles.vol);
         let dxs = SharedMut::new(dx_store);
-        let (half, vol0, mat) = (&particles.half_size, &particles.vol0, &particles.material);
+        let (vol0, mat) = (&particles.vol0, &particles.material);
         (0..np).into_par_iter().with_min_len(512).for_each(|p| {
             // SAFETY: each task touches only particle p's entries.
             let (xp, vp) = unsafe { (x.get(p), v.get(p)) };
             let xi = grid.to_grid_units(xp);
-            let lp = half[p].component_mul(&inv_h);
-            let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &lp, &inv_h);
+            let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &half_width(lp, p), &inv_h);
             let base = grid.node_index(pw.base());
             let mut acc = SVector::<f64, D>::zeros();
             let mut vel = SVector::<f64, D>::zeros();
