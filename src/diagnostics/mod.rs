@@ -1,4 +1,5 @@
 //! Diagnostics: conservation, error norms and exact reference solutions.
 
+pub mod bench_cases;
 pub mod mms;
 pub mod riemann;
