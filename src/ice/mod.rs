@@ -25,6 +25,11 @@
 //!    compatible fluxes, first-order donor cell or second-order limited
 //!    ([`advection`]).
 //!
+//! With [`IceParams::implicit`] set, step 4 is the semi-implicit pressure
+//! ([`implicit`]): Guilkey Eq. 29 solved implicitly for the pressure
+//! increment by an outer iteration on a 5-/7-point SPD matrix, so that the
+//! time step is limited by advection only.
+//!
 //! Cells are indexed with the module's own ghost layers ([`CellLayout`]);
 //! [`crate::grid::Grid`] is used for geometry only.
 
@@ -36,6 +41,7 @@ pub mod boundary;
 pub mod equilibration;
 pub mod exchange;
 pub mod faces;
+pub mod implicit;
 mod par;
 pub mod setups;
 pub mod state;
@@ -47,11 +53,12 @@ pub use advection::{Advection, Limiter};
 pub use boundary::{IceBoundary, InflowState};
 pub use equilibration::EquilibrationSettings;
 pub use exchange::ExchangeCoefficients;
-pub use setups::shock_tube;
+pub use implicit::{LinearSolver, SemiImplicit};
+pub use setups::{periodic_vortex, periodic_vortex_exact, shock_tube};
 pub use state::{CellLayout, IceState, MaterialCells, MaterialInit, NGHOST};
 pub use step::{
-    equilibrate, run_fluid, step, step_with_dt, timestep, EnergyForm, FluidRun, IceParams,
-    IceWorkspace, StepInfo, TimeIntegration,
+    equilibrate, run_fluid, step, step_with_dt, timestep, timestep_with, EnergyForm, FluidRun,
+    IceParams, IceWorkspace, StepInfo, TimeIntegration,
 };
 
 /// Largest number of fluid materials in one scene (per-cell kernels use
@@ -154,6 +161,25 @@ pub enum IceError {
         /// Last pressure iterate.
         pressure: f64,
     },
+    /// The semi-implicit pressure solve failed: a singular pressure matrix
+    /// (not retryable), a failed linear solve, a diverging or too long outer
+    /// iteration, or a non-physical pressure (retryable with a smaller
+    /// `Δt`; the state is unchanged).
+    #[error("pressure solve failed at {site} (dt = {dt:e}, outer iteration {outer}, max |residual|/V = {residual:e}): {reason}")]
+    PressureSolve {
+        /// Where (the cell of the largest residual).
+        site: Site,
+        /// What went wrong.
+        reason: String,
+        /// Outer iteration at which it failed.
+        outer: usize,
+        /// Largest `|residual|/V` of the pressure equation (Guilkey Eq. 29).
+        residual: f64,
+        /// The time step that was tried.
+        dt: f64,
+        /// `true` when a smaller time step may help.
+        retryable: bool,
+    },
     /// An equation of state rejected a state.
     #[error("equation of state failed at {site}: {source}")]
     Eos {
@@ -167,7 +193,20 @@ pub enum IceError {
 impl IceError {
     /// `true` when retrying the step with a smaller time step may help.
     pub fn is_retryable(&self) -> bool {
-        matches!(self, IceError::TimestepTooLarge { .. })
+        self.retry_dt().is_some()
+    }
+
+    /// The time step that failed, for a retryable error (`None` otherwise).
+    pub fn retry_dt(&self) -> Option<f64> {
+        match self {
+            IceError::TimestepTooLarge { dt, .. } => Some(*dt),
+            IceError::PressureSolve {
+                dt,
+                retryable: true,
+                ..
+            } => Some(*dt),
+            _ => None,
+        }
     }
 }
 
@@ -181,3 +220,5 @@ pub(crate) fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Ic
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_implicit;

@@ -15,6 +15,7 @@ use super::boundary::{fill_scalar, fill_vector, zero_wall_faces, Boundaries, Ice
 use super::equilibration::{equilibrate_cell, min_pressure, EquilibrationSettings};
 use super::exchange::{exchange_heat, exchange_momentum, ExchangeCoefficients};
 use super::faces::{face_exchange, face_pressure, face_velocities};
+use super::implicit::SemiImplicit;
 use super::par::{max_rows, par_face_rows, par_rows, try_rows, Out};
 use super::state::{CellLayout, IceState};
 use super::{invalid, IceError, Site, MAX_MATERIALS};
@@ -62,6 +63,11 @@ pub struct IceParams<const D: usize> {
     /// sources, `p = p_eq + w Δp` (Guilkey Eq. 30 has `w = 1`); `w = 1/2`
     /// centres the pressure force at `t + Δt/2`. `0 ≤ w ≤ 1`.
     pub pressure_weight: f64,
+    /// Semi-implicit (implicit-pressure) ICE: `Some` replaces the explicit
+    /// `Δp` of Guilkey Eq. 29 by the pressure equation solved with an outer
+    /// iteration ([`super::implicit`]); the sound speed then no longer
+    /// limits the time step. `None` is the explicit step.
+    pub implicit: Option<SemiImplicit>,
 }
 
 /// Time integration of the step sequence.
@@ -118,6 +124,7 @@ impl<const D: usize> IceParams<D> {
             viscosity: None,
             face_smooth_factor: 0.0,
             pressure_weight: 1.0,
+            implicit: None,
         }
     }
 
@@ -145,7 +152,22 @@ impl<const D: usize> IceParams<D> {
     /// # Errors
     /// [`IceError::InvalidInput`] naming the offending parameter.
     pub fn validate(&self, state: &IceState<D>) -> Result<(), IceError> {
-        if !(self.cfl.is_finite() && self.cfl > 0.0 && self.cfl <= 1.0) {
+        if let Some(sp) = &self.implicit {
+            // The Courant number is on `|u| + sound_speed_factor c`: above 1
+            // it is an acoustic Courant number; the advective limit is
+            // checked per step (`TimestepTooLarge`).
+            if !(self.cfl.is_finite() && self.cfl > 0.0 && self.cfl <= 1.0e4) {
+                return Err(invalid(
+                    "cfl",
+                    format!("must be in (0, 1e4] (semi-implicit), got {}", self.cfl),
+                ));
+            }
+            let periodic = self
+                .boundaries
+                .iter()
+                .any(|b| b.contains(&IceBoundary::Periodic));
+            sp.validate(periodic)?;
+        } else if !(self.cfl.is_finite() && self.cfl > 0.0 && self.cfl <= 1.0) {
             return Err(invalid(
                 "cfl",
                 format!("must be in (0, 1], got {}", self.cfl),
@@ -227,27 +249,29 @@ impl<const D: usize> IceParams<D> {
 /// Scratch memory of the step, allocated once per layout and material count.
 #[derive(Debug, Clone)]
 pub struct IceWorkspace<const D: usize> {
-    ustar: Vec<[Vec<f64>; D]>,
-    div: Vec<Vec<f64>>,
-    kappa: Vec<Vec<f64>>,
-    div_sum: Vec<f64>,
-    sum_theta_kappa: Vec<f64>,
-    mix_mass: Vec<f64>,
-    press: Vec<f64>,
-    pstar: [Vec<f64>; D],
-    theta_flux: [Vec<f64>; D],
-    mix_vflux: [Vec<f64>; D],
-    ke: Vec<Vec<f64>>,
-    vel_l: Vec<Vec<SVector<f64, D>>>,
-    temp_l: Vec<Vec<f64>>,
-    e_l: Vec<Vec<f64>>,
-    v_l: Vec<Vec<f64>>,
-    fluxes: AdvectionFluxes<D>,
-    new_mass: Vec<Vec<f64>>,
-    new_vel: Vec<Vec<SVector<f64, D>>>,
-    new_temp: Vec<Vec<f64>>,
-    new_spvol: Vec<Vec<f64>>,
-    saved: Vec<super::state::MaterialCells<D>>,
+    pub(super) ustar: Vec<[Vec<f64>; D]>,
+    pub(super) div: Vec<Vec<f64>>,
+    pub(super) kappa: Vec<Vec<f64>>,
+    pub(super) div_sum: Vec<f64>,
+    pub(super) sum_theta_kappa: Vec<f64>,
+    pub(super) mix_mass: Vec<f64>,
+    pub(super) press: Vec<f64>,
+    pub(super) pstar: [Vec<f64>; D],
+    pub(super) theta_flux: [Vec<f64>; D],
+    pub(super) mix_vflux: [Vec<f64>; D],
+    pub(super) ke: Vec<Vec<f64>>,
+    pub(super) vel_l: Vec<Vec<SVector<f64, D>>>,
+    pub(super) temp_l: Vec<Vec<f64>>,
+    pub(super) e_l: Vec<Vec<f64>>,
+    pub(super) v_l: Vec<Vec<f64>>,
+    pub(super) fluxes: AdvectionFluxes<D>,
+    pub(super) new_mass: Vec<Vec<f64>>,
+    pub(super) new_vel: Vec<Vec<SVector<f64, D>>>,
+    pub(super) new_temp: Vec<Vec<f64>>,
+    pub(super) new_spvol: Vec<Vec<f64>>,
+    pub(super) saved: Vec<super::state::MaterialCells<D>>,
+    pub(super) implicit: super::implicit::ImplicitSlot<D>,
+    pub(super) last_dt: Option<f64>,
 }
 
 impl<const D: usize> IceWorkspace<D> {
@@ -279,6 +303,8 @@ impl<const D: usize> IceWorkspace<D> {
             new_temp: (0..nm).map(|_| s()).collect(),
             new_spvol: (0..nm).map(|_| s()).collect(),
             saved: state.cells.clone(),
+            implicit: Default::default(),
+            last_dt: None,
         }
     }
 }
@@ -290,6 +316,12 @@ pub struct StepInfo {
     pub dt: f64,
     /// Largest number of equilibration iterations in a cell.
     pub max_equilibration_iterations: usize,
+    /// Semi-implicit pressure: outer iterations (linear solves) of the step
+    /// (0 for the explicit pressure).
+    pub outer_iterations: usize,
+    /// Semi-implicit pressure: Krylov iterations summed over the outer
+    /// iterations (0 for the direct solver and the explicit pressure).
+    pub linear_iterations: usize,
 }
 
 fn site<const D: usize>(state: &IceState<D>, c: usize, material: Option<usize>) -> Site {
@@ -424,6 +456,13 @@ pub fn equilibrate<const D: usize>(
 /// `c̃ = c √(max_f v_f / v)` seen through the face specific volumes of
 /// Guilkey Eq. 28.
 pub fn timestep<const D: usize>(state: &IceState<D>, cfl: f64) -> f64 {
+    timestep_with(state, cfl, 1.0)
+}
+
+/// [`timestep`] with the sound speed scaled by `sound_factor`
+/// (`cfl / max_c Σ_d max_r (|u_r,d| + sound_factor c̃_r)/h_d`): `0` is the
+/// advective limit of the semi-implicit pressure.
+pub fn timestep_with<const D: usize>(state: &IceState<D>, cfl: f64, sound_factor: f64) -> f64 {
     let layout = &state.layout;
     let rate = max_rows(layout, |row| {
         let mut rate: f64 = 0.0;
@@ -439,7 +478,13 @@ pub fn timestep<const D: usize>(state: &IceState<D>, cfl: f64) -> f64 {
                     // (< 2 v_n): the effective sound speed is c √(max v_f/v_c).
                     let hm = |vn: f64| 2.0 * v * vn / (v + vn);
                     let vf = hm(mc.sp_vol[c - s]).max(hm(mc.sp_vol[c + s])).max(v);
-                    let cs = mat.eos.sound_speed(1.0 / v, mc.temperature[c]) * (vf / v).sqrt();
+                    let cs = if sound_factor > 0.0 {
+                        sound_factor
+                            * mat.eos.sound_speed(1.0 / v, mc.temperature[c])
+                            * (vf / v).sqrt()
+                    } else {
+                        0.0
+                    };
                     w = w.max(mc.velocity[c][d].abs() + cs);
                 }
                 sum += w / layout.h[d];
@@ -518,6 +563,18 @@ fn advance<const D: usize>(
     dt_max: f64,
     fixed: bool,
 ) -> Result<StepInfo, IceError> {
+    let info = advance_inner(state, params, ws, dt_max, fixed)?;
+    ws.last_dt = Some(info.dt);
+    Ok(info)
+}
+
+fn advance_inner<const D: usize>(
+    state: &mut IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    dt_max: f64,
+    fixed: bool,
+) -> Result<StepInfo, IceError> {
     match params.time {
         TimeIntegration::ForwardEuler => stage(state, params, ws, dt_max, fixed),
         TimeIntegration::Heun => {
@@ -578,6 +635,8 @@ fn advance<const D: usize>(
                 max_equilibration_iterations: first
                     .max_equilibration_iterations
                     .max(second.max_equilibration_iterations),
+                outer_iterations: first.outer_iterations + second.outer_iterations,
+                linear_iterations: first.linear_iterations + second.linear_iterations,
             })
         }
     }
@@ -601,15 +660,23 @@ fn stage<const D: usize>(
         .viscosity
         .as_deref()
         .filter(|m| m.iter().any(|&x| x > 0.0));
+    let implicit = params.implicit.as_ref();
     let dt = if fixed {
         dt_max
     } else {
-        let mut dt = timestep(state, params.cfl);
+        // Semi-implicit: the sound speed no longer limits the step (only
+        // through `sound_speed_factor`, default 0), and the step grows by at
+        // most `max_dt_growth` per step.
+        let factor = implicit.map_or(1.0, |sp| sp.sound_speed_factor);
+        let mut dt = timestep_with(state, params.cfl, factor);
         if let Some(mu) = mu {
             let rate = viscous_rate(state, mu);
             if rate > 0.0 {
-                dt = dt.min(params.cfl / rate);
+                dt = dt.min(params.cfl.min(1.0) / rate);
             }
+        }
+        if let (Some(sp), Some(last)) = (implicit, ws.last_dt) {
+            dt = dt.min(sp.max_dt_growth * last);
         }
         dt.min(dt_max)
     };
@@ -652,98 +719,34 @@ fn stage<const D: usize>(
             zero_wall_faces(layout, bcs, d, out);
         }
     }
+    if let Some(sp) = implicit {
+        // The implicit correction starts from the pre-exchange values.
+        super::implicit::save_pre_exchange(state, params, sp, ws)?;
+    }
     if let Some(ex) = k_on {
         for d in 0..D {
             face_exchange(layout, d, &ex.momentum, dt, &state.cells, &mut ws.ustar);
         }
     }
-    // Outflux larger than a cell's content: ask for a smaller step.
-    {
-        let ustar = &ws.ustar;
-        let st: &IceState<D> = state;
-        try_rows(layout, |row| {
-            for c in row {
-                for r in 0..nm {
-                    let mut courant = 0.0;
-                    for d in 0..D {
-                        let s = layout.strides[d];
-                        let (lo, hi) = (ustar[r][d][c], ustar[r][d][c + s]);
-                        courant += (hi.max(0.0) - lo.min(0.0)) * dt / layout.h[d];
-                    }
-                    if courant > 1.0 {
-                        return Err(IceError::TimestepTooLarge {
-                            site: site(st, c, Some(r)),
-                            courant,
-                            dt,
-                        });
-                    }
-                }
-            }
-            Ok(())
-        })?;
-    }
-
-    // Step 5: Δp (Guilkey Eq. 29) and p = p_eq + Δp (Eq. 30).
-    for r in 0..nm {
-        let mc = &state.cells[r];
-        let eos = &state.materials[r].eos;
-        for d in 0..D {
-            scalar_fluxes(
-                layout,
-                d,
-                &ws.ustar[r][d],
-                &mc.vol_frac,
-                dt,
-                scheme,
-                &mut ws.theta_flux[d],
-            );
-            let tf = &ws.theta_flux[d];
-            let acc = Out::new(&mut ws.mix_vflux[d]);
-            par_face_rows(layout, d, |row| {
-                for f in row {
-                    // SAFETY: face f is read and written by this task only.
-                    unsafe {
-                        let prev = if r == 0 { 0.0 } else { acc.get(f) };
-                        acc.set(f, prev + tf[f]);
-                    }
-                }
-            });
-        }
-        let tf = &ws.theta_flux;
-        let (div, kappa) = (Out::new(&mut ws.div[r]), Out::new(&mut ws.kappa[r]));
-        let (div_sum, stk) = (Out::new(&mut ws.div_sum), Out::new(&mut ws.sum_theta_kappa));
-        par_rows(layout, |row| {
-            for c in row {
-                // ∇·(θ u*)_r; the fluxes carry Δt/h.
-                let dv = -net_inflow(layout, tf, c) / dt;
-                let k = eos.compressibility(1.0 / mc.sp_vol[c], mc.temperature[c]);
-                // SAFETY: cell c is read and written by this task only.
-                unsafe {
-                    div.set(c, dv);
-                    kappa.set(c, k);
-                    let (ds, sk) = if r == 0 {
-                        (0.0, 0.0)
-                    } else {
-                        (div_sum.get(c), stk.get(c))
-                    };
-                    div_sum.set(c, ds + dv);
-                    stk.set(c, sk + mc.vol_frac[c] * k);
-                }
-            }
-        });
-    }
-    let p_min = state
-        .materials
-        .iter()
-        .map(|m| min_pressure(&m.eos))
-        .fold(f64::NEG_INFINITY, f64::max);
-    {
+    let (outer_iterations, linear_iterations) = if let Some(sp) = implicit {
+        // Semi-implicit: the pressure equation solved by the outer
+        // iteration of `implicit` (fills `ws.press`, the volume fluxes and
+        // the face velocities consistent with the new pressure).
+        let its = super::implicit::implicit_pressure(state, params, sp, ws, dt, fdt)?;
+        courant_check(state, &ws.ustar, dt)?;
+        its
+    } else {
+        courant_check(state, &ws.ustar, dt)?;
+        // Step 5: Δp (Guilkey Eq. 29) and p = p_eq + Δp (Eq. 30).
+        volume_fluxes(state, scheme, ws, dt);
+        let p_min = min_pressure_all(state);
         let (div_sum, stk) = (&ws.div_sum, &ws.sum_theta_kappa);
         let press = Out::new(&mut ws.press);
         let st: &IceState<D> = state;
         let w = params.pressure_weight;
         try_rows(layout, |row| {
             for c in row {
+                // Guilkey Eq. 29.
                 let dp = -dt * div_sum[c] / stk[c];
                 let p = st.p_eq[c] + dp;
                 if !(p.is_finite() && p > p_min) {
@@ -758,7 +761,8 @@ fn stage<const D: usize>(
             }
             Ok(())
         })?;
-    }
+        (0, 0)
+    };
     let eos0 = state.materials[0].eos;
     fill_scalar(layout, bcs, &mut ws.press, |s| {
         eos0.pressure(s[0].density, s[0].temperature)
@@ -1055,6 +1059,8 @@ fn stage<const D: usize>(
     Ok(StepInfo {
         dt,
         max_equilibration_iterations: max_it,
+        outer_iterations,
+        linear_iterations,
     })
 }
 
@@ -1123,11 +1129,38 @@ pub struct FluidRun<const D: usize> {
     pub retries: u64,
     /// Wall-clock time of the time loop in seconds.
     pub wall_s: f64,
+    /// Semi-implicit pressure: outer iterations summed over the steps.
+    pub outer_iterations: u64,
+    /// Semi-implicit pressure: Krylov iterations summed over the steps.
+    pub linear_iterations: u64,
+    /// Semi-implicit pressure: largest outer iteration count of a step.
+    pub max_outer_iterations: usize,
+    /// Semi-implicit pressure: largest Krylov iteration count of a step.
+    pub max_linear_iterations: usize,
+}
+
+impl<const D: usize> FluidRun<D> {
+    /// One line for a run summary: steps, retries, wall time and (for the
+    /// semi-implicit pressure) the outer and linear iterations per step.
+    pub fn summary(&self) -> String {
+        let per = |x: u64| x as f64 / self.steps.max(1) as f64;
+        format!(
+            "{} steps ({} retried) in {:.3} s; pressure solve: {:.2} outer (max {}) and {:.1} linear (max {}) iterations per step",
+            self.steps,
+            self.retries,
+            self.wall_s,
+            per(self.outer_iterations),
+            self.max_outer_iterations,
+            per(self.linear_iterations),
+            self.max_linear_iterations
+        )
+    }
 }
 
 /// Runs a fluid-only scene from `state` to `t_end` (at most `max_steps`
-/// steps), retrying a step with half the time step when it reports
-/// [`IceError::TimestepTooLarge`] (up to 20 times in a row).
+/// steps), retrying a step with half the time step when it reports a
+/// retryable error ([`IceError::TimestepTooLarge`], or a failed semi-implicit
+/// pressure solve, [`IceError::PressureSolve`]; up to 20 times in a row).
 ///
 /// # Errors
 /// [`IceError::InvalidInput`] for invalid parameters, a non-finite `t_end`
@@ -1152,6 +1185,7 @@ pub fn run_fluid<const D: usize>(
     let start = Instant::now();
     let mut steps = 0u64;
     let mut retries = 0u64;
+    let (mut outer, mut linear, mut max_outer, mut max_linear) = (0u64, 0u64, 0usize, 0usize);
     // Stop within a relative round-off of t_end.
     while state.time < t_end * (1.0 - 1e-14) {
         if steps >= max_steps {
@@ -1167,9 +1201,15 @@ pub fn run_fluid<const D: usize>(
         let mut tries = 0;
         loop {
             match step(&mut state, params, &mut ws, dt_max) {
-                Ok(_) => break,
-                Err(IceError::TimestepTooLarge { dt, .. }) if tries < 20 => {
-                    dt_max = 0.5 * dt;
+                Ok(info) => {
+                    outer += info.outer_iterations as u64;
+                    linear += info.linear_iterations as u64;
+                    max_outer = max_outer.max(info.outer_iterations);
+                    max_linear = max_linear.max(info.linear_iterations);
+                    break;
+                }
+                Err(e) if tries < 20 && e.retry_dt().is_some() => {
+                    dt_max = 0.5 * e.retry_dt().unwrap_or(dt_max);
                     tries += 1;
                     retries += 1;
                 }
@@ -1185,5 +1225,112 @@ pub fn run_fluid<const D: usize>(
         steps,
         retries,
         wall_s,
+        outer_iterations: outer,
+        linear_iterations: linear,
+        max_outer_iterations: max_outer,
+        max_linear_iterations: max_linear,
     })
+}
+
+/// Largest of the materials' lowest admissible pressures.
+pub(super) fn min_pressure_all<const D: usize>(state: &IceState<D>) -> f64 {
+    state
+        .materials
+        .iter()
+        .map(|m| min_pressure(&m.eos))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Returns [`IceError::TimestepTooLarge`] when the face velocities would
+/// take more than a cell's content out of a cell in `Δt`.
+pub(super) fn courant_check<const D: usize>(
+    state: &IceState<D>,
+    ustar: &[[Vec<f64>; D]],
+    dt: f64,
+) -> Result<(), IceError> {
+    let layout = &state.layout;
+    let nm = state.num_materials();
+    try_rows(layout, |row| {
+        for c in row {
+            for r in 0..nm {
+                let mut courant = 0.0;
+                for d in 0..D {
+                    let s = layout.strides[d];
+                    let (lo, hi) = (ustar[r][d][c], ustar[r][d][c + s]);
+                    courant += (hi.max(0.0) - lo.min(0.0)) * dt / layout.h[d];
+                }
+                if courant > 1.0 {
+                    return Err(IceError::TimestepTooLarge {
+                        site: site(state, c, Some(r)),
+                        courant,
+                        dt,
+                    });
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+/// The volume fluxes of Guilkey Eq. 29 from the current face velocities
+/// `ws.ustar`: per face the `θ` fluxes (`Δt A/V θ_f u*_f`, advected with
+/// the step's scheme) summed over the materials (`ws.mix_vflux`), per cell
+/// `∇·(θu*)_r` (`ws.div`), their sum (`ws.div_sum`), `κ_r` (`ws.kappa`) and
+/// `Σ_r θ_r κ_r` (`ws.sum_theta_kappa`).
+pub(super) fn volume_fluxes<const D: usize>(
+    state: &IceState<D>,
+    scheme: Advection,
+    ws: &mut IceWorkspace<D>,
+    dt: f64,
+) {
+    let layout = &state.layout;
+    let nm = state.num_materials();
+    for r in 0..nm {
+        let mc = &state.cells[r];
+        let eos = &state.materials[r].eos;
+        for d in 0..D {
+            scalar_fluxes(
+                layout,
+                d,
+                &ws.ustar[r][d],
+                &mc.vol_frac,
+                dt,
+                scheme,
+                &mut ws.theta_flux[d],
+            );
+            let tf = &ws.theta_flux[d];
+            let acc = Out::new(&mut ws.mix_vflux[d]);
+            par_face_rows(layout, d, |row| {
+                for f in row {
+                    // SAFETY: face f is read and written by this task only.
+                    unsafe {
+                        let prev = if r == 0 { 0.0 } else { acc.get(f) };
+                        acc.set(f, prev + tf[f]);
+                    }
+                }
+            });
+        }
+        let tf = &ws.theta_flux;
+        let (div, kappa) = (Out::new(&mut ws.div[r]), Out::new(&mut ws.kappa[r]));
+        let (div_sum, stk) = (Out::new(&mut ws.div_sum), Out::new(&mut ws.sum_theta_kappa));
+        par_rows(layout, |row| {
+            for c in row {
+                // ∇·(θ u*)_r; the fluxes carry Δt/h.
+                let dv = -net_inflow(layout, tf, c) / dt;
+                let k = eos.compressibility(1.0 / mc.sp_vol[c], mc.temperature[c]);
+                // SAFETY: cell c is read and written by this task only.
+                unsafe {
+                    div.set(c, dv);
+                    kappa.set(c, k);
+                    let (ds, sk) = if r == 0 {
+                        (0.0, 0.0)
+                    } else {
+                        (div_sum.get(c), stk.get(c))
+                    };
+                    div_sum.set(c, ds + dv);
+                    stk.set(c, sk + mc.vol_frac[c] * k);
+                }
+            }
+        });
+    }
 }

@@ -463,7 +463,7 @@ fn sod_high_resolution_n400_meets_target() {
 }
 
 /// A Mach 1.2 shock in air and a helium bubble, 2D.
-fn shock_bubble(nx: usize) -> IceState<2> {
+pub(crate) fn shock_bubble(nx: usize) -> IceState<2> {
     let ny = nx / 2;
     let h = 0.2 / nx as f64;
     let layout = CellLayout::<2>::new(
@@ -495,7 +495,7 @@ fn shock_bubble(nx: usize) -> IceState<2> {
     .unwrap()
 }
 
-fn closed2() -> [[IceBoundary<2>; 2]; 2] {
+pub(crate) fn closed2() -> [[IceBoundary<2>; 2]; 2] {
     [
         [IceBoundary::Wall, IceBoundary::Wall],
         [IceBoundary::Wall, IceBoundary::Wall],

@@ -7,11 +7,12 @@ use std::f64::consts::PI;
 use anyhow::{Context, Result};
 use nalgebra::SVector;
 
-use crate::harness::{Point, Series, StudyResult};
+use crate::harness::{plot_xy, PlotSeries, Point, Series, StudyResult, Style};
 use mpmice::diagnostics::riemann::{ExactRiemann, PrimitiveState};
 use mpmice::ice::{
-    run_fluid, shock_tube, Advection, CellLayout, IceBoundary, IceMaterial, IceParams, IceState,
-    Limiter, MaterialInit,
+    periodic_vortex, periodic_vortex_exact, run_fluid, shock_tube, Advection, CellLayout,
+    IceBoundary, IceMaterial, IceParams, IceState, Limiter, LinearSolver, MaterialInit,
+    SemiImplicit,
 };
 use mpmice::material::eos::IdealGas;
 
@@ -269,4 +270,353 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
         series,
         notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5 (high resolution 0.4); error relative to the amplitude".into()],
     })
+}
+
+/// Directory of the study outputs (as the `verification` binary's default).
+fn results_dir(quick: bool) -> std::path::PathBuf {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
+    if quick {
+        root.join("quick")
+    } else {
+        root
+    }
+}
+
+/// Semi-implicit ICE parameters with `cfl` an acoustic Courant number
+/// (`sound_speed_factor = 1`).
+fn semi_params<const D: usize>(
+    bcs: [[IceBoundary<D>; 2]; D],
+    solver: LinearSolver,
+    acoustic_cfl: f64,
+) -> IceParams<D> {
+    let mut p = IceParams::new(bcs);
+    p.cfl = acoustic_cfl;
+    p.implicit = Some(SemiImplicit {
+        sound_speed_factor: 1.0,
+        ..SemiImplicit::with_solver(solver)
+    });
+    p
+}
+
+/// Sod's shock tube (as [`ice_sod`], second order van Leer, literal
+/// Eq. 28) with the explicit and the semi-implicit pressure at acoustic
+/// Courant numbers 0.5 and 1: both errors against the exact Riemann
+/// solution, and the L1 distance between the two solutions.
+///
+/// # Errors
+/// Any solver or exact-solution error.
+pub fn ice_sod_semi_implicit(quick: bool) -> Result<StudyResult> {
+    let ns: &[usize] = if quick {
+        &[100, 200, 400]
+    } else {
+        &[100, 200, 400, 800, 1600]
+    };
+    let (l, r) = ((1.0, 0.0, 1.0), (0.125, 0.0, 0.1));
+    let exact = ExactRiemann::solve(
+        PrimitiveState::new(l.0, l.1, l.2),
+        PrimitiveState::new(r.0, r.1, r.2),
+        1.4,
+    )?;
+    let bcs = [[IceBoundary::Outflow, IceBoundary::Outflow]];
+    let mut variants: Vec<(IceParams<1>, String)> = Vec::new();
+    for cfl in [0.5, 1.0] {
+        let mut p = IceParams::new(bcs.clone());
+        p.cfl = cfl;
+        variants.push((p, format!("explicit, cfl {cfl}")));
+        variants.push((
+            semi_params(bcs.clone(), LinearSolver::Direct, cfl),
+            format!("semi-implicit (direct), acoustic cfl {cfl}"),
+        ));
+    }
+    variants.push((
+        semi_params(bcs.clone(), LinearSolver::Direct, 2.0),
+        "semi-implicit (direct), acoustic cfl 2".into(),
+    ));
+    let mut series = Vec::new();
+    let mut notes = vec![
+        "explicit vs semi-implicit ICE: same discretisation (Guilkey Eqs. 28-41, second order van Leer, conservative energy); the semi-implicit mode solves Eq. 29 implicitly (outer iteration, Cholesky); cfl is on |u| + c".to_string(),
+    ];
+    let mut finals: Vec<Vec<Vec<f64>>> = Vec::new();
+    for (params, series_label) in &variants {
+        let mut points = Vec::new();
+        let mut sols = Vec::new();
+        for &n in ns {
+            let st = shock_tube(gas(1.4)?, n, l, r, 0.5)?;
+            let run = run_fluid(st, params, 0.2, 10_000_000)
+                .with_context(|| format!("Sod N = {n}, {series_label}"))?;
+            let s = &run.state;
+            let h = 1.0 / n as f64;
+            let mut err = 0.0;
+            let mut rho = Vec::with_capacity(n);
+            for &c in &s.layout.interior {
+                let x = s.layout.centre(c)[0];
+                let avg = exact.cell_average(x - 0.5 * h, x + 0.5 * h, 0.5, s.time, 4)?;
+                err += (s.mixture_density(c) - avg.rho).abs();
+                rho.push(s.mixture_density(c));
+            }
+            err /= n as f64;
+            sols.push(rho);
+            let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
+            let per = |x: u64| x as f64 / run.steps.max(1) as f64;
+            points.push(
+                Point::new(h, err, run.wall_s, ups)
+                    .with_extra("steps", run.steps as f64)
+                    .with_extra("outer_per_step", per(run.outer_iterations))
+                    .with_extra("linear_per_step", per(run.linear_iterations)),
+            );
+        }
+        finals.push(sols);
+        series.push(Series::new(series_label.clone(), "L1", points));
+    }
+    // Explicit vs semi-implicit at the same cfl: distance of the solutions.
+    for (k, cfl) in [0.5, 1.0].iter().enumerate() {
+        let (ex, si) = (&finals[2 * k], &finals[2 * k + 1]);
+        let (se, ss) = (&series[2 * k], &series[2 * k + 1]);
+        for (i, &n) in ns.iter().enumerate() {
+            let d: f64 = ex[i]
+                .iter()
+                .zip(&si[i])
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f64>()
+                / n as f64;
+            notes.push(format!(
+                "cfl {cfl}, N = {n}: L1 explicit {:.3e}, semi-implicit {:.3e}, |explicit − semi-implicit| {:.3e}",
+                se.points[i].error, ss.points[i].error, d
+            ));
+        }
+    }
+    Ok(StudyResult {
+        study: "ice_sod_semi_implicit".into(),
+        series,
+        notes,
+    })
+}
+
+/// RMS velocity error `sqrt(mean |u − u_exact|²)` and the RMS error of the
+/// pressure fluctuation (means removed) of the periodic vortex.
+fn vortex_errors(s: &IceState<2>, amplitude: f64) -> (f64, f64) {
+    let n = s.layout.num_interior() as f64;
+    let (mut eu, mut pm, mut pem) = (0.0, 0.0, 0.0);
+    for &c in &s.layout.interior {
+        let x = s.layout.centre(c);
+        let (u, v, p) = periodic_vortex_exact(&x, s.time, amplitude, 0.0);
+        let w = s.cells[0].velocity[c];
+        eu += (w[0] - u).powi(2) + (w[1] - v).powi(2);
+        pm += s.p_eq[c];
+        pem += p;
+    }
+    let (pm, pem) = (pm / n, pem / n);
+    let mut ep = 0.0;
+    for &c in &s.layout.interior {
+        let x = s.layout.centre(c);
+        let (_, _, p) = periodic_vortex_exact(&x, s.time, amplitude, 0.0);
+        ep += ((s.p_eq[c] - pm) - (p - pem)).powi(2);
+    }
+    ((eu / n).sqrt(), (ep / n).sqrt())
+}
+
+/// Time needed to reach `target` error along a work-precision curve
+/// (log-log interpolation between the points, sorted by wall time); `None`
+/// if the curve never gets there.
+fn time_to_error(points: &[Point], target: f64) -> Option<f64> {
+    let mut pts: Vec<(f64, f64)> = points.iter().map(|p| (p.wall_s, p.error)).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some(&(t, e)) = pts.first() {
+        if e <= target {
+            return Some(t);
+        }
+    }
+    for w in pts.windows(2) {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        if e1 <= target && e0 > target {
+            let s = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
+            return Some((t0.ln() + s * (t1.ln() - t0.ln())).exp());
+        }
+    }
+    None
+}
+
+/// The low-Mach periodic vortex (`ice_low_mach`): the inviscid (`ν = 0`)
+/// 2D periodic vortex on `[0, 2π]²`, `u = 1 − A cos(x−t) sin(y−t)`,
+/// `v = 1 + A sin(x−t) cos(y−t)`, `p = p_ref − (A²/4)[cos 2(x−t) + cos 2(y−t)]`,
+/// `A = 0.5`, run as an ideal gas (`γ = 1.4`, `ρ = 1` uniform initially,
+/// pressure from the formula) with `c = 100` (Mach ≤ 0.021) to `t = 1`, on
+/// 16² … 128², explicit (cfl 1) and semi-implicit at acoustic Courant
+/// numbers 1, 10 and 50; RMS velocity error against the exact solution
+/// against wall time, and the Mach-number floor at fixed resolution.
+///
+/// # Errors
+/// Any solver error.
+pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
+    let amplitude = 0.5;
+    let gamma = 1.4;
+    let ns: &[usize] = if quick {
+        &[16, 32, 64]
+    } else {
+        &[16, 32, 64, 128]
+    };
+    let t_end = if quick { 0.5 } else { 1.0 };
+    let c0 = 100.0;
+    let periodic = || {
+        [
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+        ]
+    };
+    let run_case = |params: &IceParams<2>, n: usize, c: f64| -> Result<(f64, f64, FluidRunStats)> {
+        let st = periodic_vortex(gas(gamma)?, n, amplitude, c * c / gamma)?;
+        let run = run_fluid(st, params, t_end, 10_000_000)
+            .with_context(|| format!("low-Mach vortex N = {n}, c = {c}"))?;
+        let (eu, ep) = vortex_errors(&run.state, amplitude);
+        Ok((
+            eu,
+            ep,
+            FluidRunStats {
+                steps: run.steps,
+                wall_s: run.wall_s,
+                outer: run.outer_iterations,
+                linear: run.linear_iterations,
+                retries: run.retries,
+            },
+        ))
+    };
+    let mut modes: Vec<(IceParams<2>, String)> = Vec::new();
+    let mut ex = IceParams::new(periodic());
+    ex.cfl = 1.0;
+    modes.push((ex, "explicit, acoustic cfl 1".into()));
+    for cfl in [1.0, 10.0, 50.0] {
+        modes.push((
+            semi_params(periodic(), LinearSolver::Direct, cfl),
+            format!("semi-implicit (direct), acoustic cfl {cfl}"),
+        ));
+    }
+    modes.push((
+        semi_params(periodic(), LinearSolver::PcgJacobi, 10.0),
+        "semi-implicit (pcg_jacobi), acoustic cfl 10".into(),
+    ));
+    let mut series = Vec::new();
+    let mut notes = vec![format!(
+        "inviscid (nu = 0) periodic vortex, A = {amplitude}, gamma = {gamma}, rho = 1, c = {c0} (max Mach {:.3}), t = {t_end}; error = RMS velocity error vs the exact incompressible solution at the cell centres; cfl on |u| + c (explicit ICE, second order van Leer, Guilkey Eq. 28 as written)",
+        (2.0f64.sqrt() * (1.0 + amplitude)) / c0
+    )];
+    for (params, label) in &modes {
+        let mut points = Vec::new();
+        let mut pressure_points = Vec::new();
+        for &n in ns {
+            let (eu, ep, st) = run_case(params, n, c0)?;
+            let h = 2.0 * PI / n as f64;
+            let ups = (n * n) as f64 * st.steps as f64 / st.wall_s.max(1e-12);
+            let per = |x: u64| x as f64 / st.steps.max(1) as f64;
+            points.push(
+                Point::new(h, eu, st.wall_s, ups)
+                    .with_extra("steps", st.steps as f64)
+                    .with_extra("retries", st.retries as f64)
+                    .with_extra("outer_per_step", per(st.outer))
+                    .with_extra("linear_per_step", per(st.linear)),
+            );
+            pressure_points.push(Point::new(h, ep, st.wall_s, ups));
+            notes.push(format!(
+                "{label}, N = {n}: velocity RMS {eu:.3e}, pressure RMS {ep:.3e}, wall {:.3} s, {} steps, {:.2} outer / {:.1} linear iterations per step",
+                st.wall_s,
+                st.steps,
+                per(st.outer),
+                per(st.linear)
+            ));
+        }
+        series.push(Series::new(label.clone(), "RMS velocity", points));
+        series.push(Series::new(
+            format!("{label} (pressure)"),
+            "RMS p'",
+            pressure_points,
+        ));
+    }
+    // Work-precision: time for each semi-implicit series to reach the
+    // explicit error on the finest grid.
+    let explicit = &series[0];
+    if let Some(last) = explicit.points.last() {
+        for s in series.iter().skip(2).step_by(2) {
+            match time_to_error(&s.points, last.error) {
+                Some(t) => notes.push(format!(
+                    "{}: reaches the explicit N = {} error {:.3e} in {:.3} s vs {:.3} s explicit: {:.1}x faster",
+                    s.label,
+                    ns[ns.len() - 1],
+                    last.error,
+                    t,
+                    last.wall_s,
+                    last.wall_s / t
+                )),
+                None => notes.push(format!(
+                    "{}: does not reach the explicit N = {} error {:.3e} on these grids",
+                    s.label,
+                    ns[ns.len() - 1],
+                    last.error
+                )),
+            }
+        }
+    }
+    // Compressibility floor: error against Mach number at a fixed grid.
+    let nf = if quick { 32 } else { 64 };
+    let mut floor = Vec::new();
+    for c in [10.0, 20.0, 40.0, 100.0] {
+        let params = semi_params(periodic(), LinearSolver::Direct, 10.0);
+        let (eu, _, st) = run_case(&params, nf, c)?;
+        let mach = 2.0f64.sqrt() * (1.0 + amplitude) / c;
+        floor.push(Point::new(mach, eu, st.wall_s, 0.0));
+        notes.push(format!(
+            "Mach floor, N = {nf}, semi-implicit cfl 10: c = {c} (Mach {mach:.3}): velocity RMS {eu:.3e}"
+        ));
+    }
+    // Order of the Mach-dependent part: error minus the low-Mach limit.
+    let lim = floor.last().map_or(0.0, |p| p.error);
+    let excess: Vec<Point> = floor
+        .iter()
+        .take(floor.len() - 1)
+        .map(|p| Point::new(p.h, (p.error - lim).abs().max(1e-300), p.wall_s, 0.0))
+        .collect();
+    let mut fs = Series::new(
+        format!("Mach floor at N = {nf}: |e(M) - e(M_min)| vs M (h column = Mach)"),
+        "RMS velocity",
+        excess,
+    );
+    fs.observed_order = crate::harness::fit_order(&fs.points);
+    notes.push(format!(
+        "Mach-dependent part of the error scales as M^{:.2}",
+        fs.observed_order
+    ));
+    series.push(fs);
+
+    let dir = results_dir(quick);
+    std::fs::create_dir_all(&dir)?;
+    let plot: Vec<PlotSeries> = series
+        .iter()
+        .filter(|s| s.norm == "RMS velocity" && !s.label.starts_with("Mach"))
+        .map(|s| PlotSeries {
+            label: s.label.clone(),
+            points: s.points.iter().map(|p| (p.wall_s, p.error)).collect(),
+            style: Style::LineMarkers,
+        })
+        .collect();
+    plot_xy(
+        &dir.join("ice_low_mach_work_precision.png"),
+        "low-Mach periodic vortex: RMS velocity error vs wall time",
+        "wall time [s]",
+        "RMS velocity error",
+        true,
+        true,
+        &plot,
+    )?;
+    Ok(StudyResult {
+        study: "ice_low_mach".into(),
+        series,
+        notes,
+    })
+}
+
+/// Counters of one run of [`ice_low_mach`].
+struct FluidRunStats {
+    steps: u64,
+    wall_s: f64,
+    outer: u64,
+    linear: u64,
+    retries: u64,
 }

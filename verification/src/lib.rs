@@ -39,4 +39,14 @@ pub const STUDIES: &[Study] = &[
         "small-amplitude acoustic wave vs linear acoustics",
         ice_studies::ice_acoustic,
     ),
+    (
+        "ice_sod_semi_implicit",
+        "Sod shock tube, explicit vs semi-implicit (implicit pressure) ICE, both vs exact Riemann",
+        ice_studies::ice_sod_semi_implicit,
+    ),
+    (
+        "ice_low_mach",
+        "low-Mach periodic vortex, explicit vs semi-implicit ICE at acoustic CFL 1/10/50: order, Mach floor, work-precision",
+        ice_studies::ice_low_mach,
+    ),
 ];
