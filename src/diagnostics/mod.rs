@@ -1,5 +1,6 @@
 //! Diagnostics: conservation, error norms and exact reference solutions.
 
 pub mod bench_cases;
+pub mod impm;
 pub mod mms;
 pub mod riemann;

@@ -117,6 +117,54 @@ impl SolidMaterial {
         }
     }
 
+    /// Stress at the end of an implicit step from the incremental deformation
+    /// gradient `df` (ΔF = ∂x/∂xⁿ over the step), the new total `f_new` with
+    /// determinant `j`, and the stress `stress_old` at the start of the step.
+    ///
+    /// Neo-Hookean: the hyperelastic stress of `f_new`. Hypo-elastic: the
+    /// update of [`Self::update_stress`] with `Δt L = ΔF − I`, i.e.
+    /// σ = σⁿ + (ΔW σⁿ − σⁿ ΔW) + λ tr(Δε) I + 2μ Δε.
+    pub fn implicit_stress(
+        &self,
+        df: &Matrix3<f64>,
+        f_new: &Matrix3<f64>,
+        j: f64,
+        stress_old: &Matrix3<f64>,
+    ) -> Matrix3<f64> {
+        let ElasticConstants { lambda, mu } = self.elastic;
+        match self.model {
+            SolidModel::LinearElastic => {
+                let g = df - Matrix3::identity();
+                let d = 0.5 * (g + g.transpose());
+                let w = 0.5 * (g - g.transpose());
+                stress_old
+                    + (w * stress_old - stress_old * w)
+                    + lambda * d.trace() * Matrix3::identity()
+                    + 2.0 * mu * d
+            }
+            SolidModel::NeoHookean => neo_hookean_stress_j(lambda, mu, f_new, j),
+        }
+    }
+
+    /// The spatial elasticity tensor used by the implicit tangent, which for
+    /// both models is isotropic, c_abcd = λ' δ_ab δ_cd + μ' (δ_ac δ_bd +
+    /// δ_ad δ_bc); returns `(λ', μ')` at total Jacobian `j`, or `None` for a
+    /// model without a tangent.
+    ///
+    /// Neo-Hookean (Bonet & Wood, *Nonlinear continuum mechanics for finite
+    /// element analysis*, Eq. 5.53 with their σ of Eq. 5.52, the same as
+    /// [`neo_hookean_stress`]): λ' = λ/J, μ' = (μ − λ ln J)/J (exact
+    /// linearisation of the Truesdell rate). Hypo-elastic: the small-strain
+    /// moduli λ' = λ, μ' = μ (the Jaumann spin terms are left out of the
+    /// tangent, so Newton converges linearly when rotations are large).
+    pub fn spatial_tangent(&self, j: f64) -> Option<(f64, f64)> {
+        let ElasticConstants { lambda, mu } = self.elastic;
+        match self.model {
+            SolidModel::LinearElastic => Some((lambda, mu)),
+            SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
+        }
+    }
+
     /// Strain energy per unit reference volume.
     #[inline]
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {

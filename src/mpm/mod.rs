@@ -1,7 +1,9 @@
 //! Material point method: particles (struct of arrays) and the explicit step
-//! (Guilkey Sec. 3.2, Eqs. 21–27) with USF, USL and MUSL orderings.
+//! (Guilkey Sec. 3.2, Eqs. 21–27) with USF, USL and MUSL orderings, and the
+//! implicit step (Newmark + Newton, quasistatic load steps).
 
 pub mod explicit;
+pub mod implicit;
 pub mod particles;
 mod scatter;
 
@@ -9,4 +11,5 @@ pub use explicit::{
     explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, PhaseTimes, StepScratch,
     UpdateScheme,
 };
+pub use implicit::{ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad};
 pub use particles::Particles;

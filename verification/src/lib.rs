@@ -3,6 +3,7 @@
 
 pub mod harness;
 pub mod ice_studies;
+pub mod impm_studies;
 pub mod mpm_studies;
 
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
@@ -23,6 +24,26 @@ pub const STUDIES: &[Study] = &[
         "mpm_mms_axis_aligned",
         "Wallstedt-Guilkey axis-aligned MMS, 1D/2D, all shape functions, A = 1e-4 and 0.05",
         mpm_studies::mpm_mms_axis_aligned,
+    ),
+    (
+        "impm_column",
+        "implicit quasistatic self-weight column, stress error vs h, linear hat and GIMP",
+        impm_studies::impm_column,
+    ),
+    (
+        "impm_cylinder",
+        "Guilkey 4.1 pressurised cylinder, implicit quasistatic, Eq. 43 and Lame u_r error vs dx",
+        impm_studies::impm_cylinder,
+    ),
+    (
+        "impm_vs_explicit",
+        "error vs wall time: implicit vs damped explicit cylinder, dynamic bar across dt",
+        impm_studies::impm_vs_explicit,
+    ),
+    (
+        "impm_mms",
+        "axis-aligned MMS run implicitly (Newmark): order vs explicit, stability at large dt",
+        impm_studies::impm_mms,
     ),
     (
         "ice_sod",
