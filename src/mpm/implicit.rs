@@ -1165,7 +1165,8 @@ fn node_map<const D: usize>(grid: &Grid<D>) -> (Vec<usize>, Vec<SVector<f64, D>>
     let flip = |s: &mut SVector<f64, D>, axis: usize, bc: Boundary| match bc {
         Boundary::Fixed => *s = -*s,
         Boundary::Symmetry => s[axis] = -s[axis],
-        Boundary::Free => {}
+        // Periodic faces are rejected for solids by scene validation.
+        Boundary::Free | Boundary::Periodic => {}
     };
     for idx in 0..nn {
         let mut c = grid.node_coords(idx);
@@ -1175,10 +1176,10 @@ fn node_map<const D: usize>(grid: &Grid<D>) -> (Vec<usize>, Vec<SVector<f64, D>>
             let [lo, hi] = grid.bc[d];
             // Reflect repeatedly until inside (narrow domains, wide stencils).
             for _ in 0..8 {
-                if c[d] < 0 && lo != Boundary::Free {
+                if c[d] < 0 && !matches!(lo, Boundary::Free | Boundary::Periodic) {
                     c[d] = -c[d];
                     flip(&mut s, d, lo);
-                } else if c[d] > n && hi != Boundary::Free {
+                } else if c[d] > n && !matches!(hi, Boundary::Free | Boundary::Periodic) {
                     c[d] = 2 * n - c[d];
                     flip(&mut s, d, hi);
                 } else {
@@ -1197,7 +1198,7 @@ fn node_map<const D: usize>(grid: &Grid<D>) -> (Vec<usize>, Vec<SVector<f64, D>>
                 match bc {
                     Boundary::Fixed => fixed[idx].iter_mut().for_each(|f| *f = true),
                     Boundary::Symmetry => fixed[idx][d] = true,
-                    Boundary::Free => {}
+                    Boundary::Free | Boundary::Periodic => {}
                 }
             }
         }
