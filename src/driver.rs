@@ -76,10 +76,58 @@ pub struct Summary {
     pub initial_energy: Energies,
     /// Energies at the end.
     pub final_energy: Energies,
-    /// Wall time per phase of the step (binning, P2G, grid, G2P + stress).
+    /// Wall time per phase of the explicit step (binning, P2G, grid, G2P +
+    /// stress).
     pub phase_times: crate::mpm::PhaseTimes,
+    /// Iteration counts and time split of implicit modes (absent for
+    /// explicit runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<IterationStats>,
     /// Error that stopped the run early, if any.
     pub error: Option<String>,
+}
+
+/// Iterations per step of an implicit mode: Newton iterations (implicit MPM)
+/// or outer pressure iterations (semi-implicit ICE), and the linear
+/// iterations behind them; plus the time split where measured.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct IterationStats {
+    /// Mean nonlinear (Newton / outer) iterations per step.
+    pub nonlinear_mean: f64,
+    /// Largest nonlinear iterations in a step.
+    pub nonlinear_max: usize,
+    /// Mean Krylov iterations per step (0 with a direct solver).
+    pub linear_mean: f64,
+    /// Largest Krylov iterations in a step.
+    pub linear_max: usize,
+    /// Steps retried with a smaller timestep.
+    pub retries: u64,
+    /// Seconds assembling (implicit MPM).
+    pub assembly_s: f64,
+    /// Seconds factorising (implicit MPM).
+    pub factor_s: f64,
+    /// Seconds in linear solves (implicit MPM).
+    pub solve_s: f64,
+    /// Seconds in particle updates (implicit MPM).
+    pub particles_s: f64,
+}
+
+impl IterationStats {
+    /// Accumulates one step.
+    pub fn add(&mut self, nonlinear: usize, linear: usize) {
+        self.nonlinear_mean += nonlinear as f64;
+        self.linear_mean += linear as f64;
+        self.nonlinear_max = self.nonlinear_max.max(nonlinear);
+        self.linear_max = self.linear_max.max(linear);
+    }
+
+    /// Turns the sums into means over `steps`.
+    pub fn finish(mut self, steps: u64) -> Self {
+        let n = steps.max(1) as f64;
+        self.nonlinear_mean /= n;
+        self.linear_mean /= n;
+        self
+    }
 }
 
 /// Runs a validated scene with outputs in `opts.out_dir`.
@@ -93,7 +141,11 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
         .materials
         .iter()
         .any(|m| m.kind == crate::scene::MaterialKind::Fluid);
+    let implicit = scene.time.mode == crate::scene::Mode::Implicit;
     pool.install(|| match (scene.grid.dim, fluid) {
+        (1, false) if implicit => run_implicit_dim::<1>(scene, opts, threads),
+        (2, false) if implicit => run_implicit_dim::<2>(scene, opts, threads),
+        (_, false) if implicit => run_implicit_dim::<3>(scene, opts, threads),
         (1, false) => run_dim::<1>(scene, opts, threads),
         (2, false) => run_dim::<2>(scene, opts, threads),
         (_, false) => run_dim::<3>(scene, opts, threads),
@@ -158,25 +210,37 @@ impl Writer {
     }
 
     fn snapshot<const D: usize>(&mut self, run: &SolidRun<D>) -> Result<()> {
+        self.particle_snapshot(run.t, &run.particles, Some(run))
+    }
+
+    /// Particles (and, for explicit runs, the grid) at time `t`.
+    fn particle_snapshot<const D: usize>(
+        &mut self,
+        t: f64,
+        particles: &Particles<D>,
+        grid: Option<&SolidRun<D>>,
+    ) -> Result<()> {
         let start = Instant::now();
         let k = self.snapshots;
         if self.formats.contains(&Format::Vtk) {
             let name = format!("particles_{k:04}.vtu");
             let path = self.dir.join(&name);
-            write_particles_vtu(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+            write_particles_vtu(&path, particles).map_err(|e| Error::io(&path, e))?;
             self.particles_pvd
-                .push(run.t, &name)
+                .push(t, &name)
                 .map_err(|e| Error::io(self.particles_pvd.path().to_path_buf(), e))?;
-            let gname = format!("grid_{k:04}.vti");
-            let gpath = self.dir.join(&gname);
-            write_grid_vti(&gpath, run).map_err(|e| Error::io(&gpath, e))?;
-            self.grid_pvd
-                .push(run.t, &gname)
-                .map_err(|e| Error::io(self.grid_pvd.path().to_path_buf(), e))?;
+            if let Some(run) = grid {
+                let gname = format!("grid_{k:04}.vti");
+                let gpath = self.dir.join(&gname);
+                write_grid_vti(&gpath, run).map_err(|e| Error::io(&gpath, e))?;
+                self.grid_pvd
+                    .push(t, &gname)
+                    .map_err(|e| Error::io(self.grid_pvd.path().to_path_buf(), e))?;
+            }
         }
         if self.formats.contains(&Format::Csv) {
             let path = self.dir.join(format!("particles_{k:04}.csv"));
-            write_particles_csv(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+            write_particles_csv(&path, particles).map_err(|e| Error::io(&path, e))?;
         }
         self.snapshots += 1;
         self.output_s += start.elapsed().as_secs_f64();
@@ -396,6 +460,7 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         initial_energy: e0,
         final_energy: e1,
         phase_times: run.phase_times(),
+        iterations: None,
         error: failure.as_ref().map(|e| e.to_string()),
     };
     write_summary(&opts.out_dir, &summary)?;
@@ -413,4 +478,108 @@ pub(crate) fn write_summary(dir: &Path, summary: &Summary) -> Result<()> {
         std::io::Write::write_all(w, b"\n")
     })
     .map_err(|e| Error::io(&path, e))
+}
+
+/// Energies of a particle set (no body-force potential: implicit runs ramp
+/// their loads, so the total is not conserved anyway).
+fn particle_energies<const D: usize>(
+    particles: &Particles<D>,
+    materials: &[crate::material::SolidMaterial],
+) -> Energies {
+    Energies {
+        kinetic: particles.kinetic_energy(),
+        strain: particles.strain_energy(materials),
+        potential: 0.0,
+    }
+}
+
+/// Runs a validated solid scene in implicit mode (Newmark + Newton or
+/// quasistatic load steps).
+fn run_implicit_dim<const D: usize>(
+    scene: &Scene,
+    opts: &RunOptions,
+    threads: usize,
+) -> Result<Summary> {
+    let mut run = crate::scene::build_implicit_run::<D>(scene)?;
+    let mut writer = Writer::new(&opts.out_dir, &scene.output.formats, D)?;
+    let e0 = particle_energies(&run.particles, &run.materials);
+    let m0 = run.particles.total_mass();
+    let p0 = run.particles.momentum();
+    writer.particle_snapshot(0.0, &run.particles, None)?;
+    writer.history_row(0.0, &e0)?;
+    let interval = scene.output.interval;
+    let mut next_out = interval.unwrap_or(f64::INFINITY);
+    let start = Instant::now();
+    let mut stats = IterationStats::default();
+    let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
+    let mut failure = None;
+    let max_steps = scene.time.max_steps.unwrap_or(u64::MAX);
+    while !run.finished() && run.steps < max_steps {
+        match run.step() {
+            Ok(st) => {
+                stats.add(st.newton_iterations, st.linear_iterations);
+                stats.retries += st.retries as u64;
+                stats.assembly_s += st.assembly_s;
+                stats.factor_s += st.factor_s;
+                stats.solve_s += st.solve_s;
+                stats.particles_s += st.particles_s;
+                dt_min = dt_min.min(st.dt);
+                dt_max = dt_max.max(st.dt);
+            }
+            Err(e) => {
+                failure = Some(e);
+                break;
+            }
+        }
+        writer.history_row(run.t, &particle_energies(&run.particles, &run.materials))?;
+        if run.t >= next_out * (1.0 - 1e-12) && !run.finished() {
+            writer.particle_snapshot(run.t, &run.particles, None)?;
+            next_out += interval.unwrap_or(f64::INFINITY);
+        }
+    }
+    writer.particle_snapshot(run.t, &run.particles, None)?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let e1 = particle_energies(&run.particles, &run.materials);
+    let dp = (run.particles.momentum() - p0).norm();
+    let summary = Summary {
+        dim: D,
+        mode: scene.time.mode.name().to_string(),
+        shape: format!("{:?}", scene.mpm.shape),
+        update: if scene.implicit.dynamic {
+            "newmark".into()
+        } else {
+            "quasistatic".into()
+        },
+        steps: run.steps,
+        final_time: run.t,
+        wall_s,
+        output_s: writer.output_s,
+        n_particles: run.particles.len(),
+        n_cells: run.grid.num_cells(),
+        particle_steps_per_s: run.particles.len() as f64 * run.steps as f64
+            / (wall_s - writer.output_s).max(1e-12),
+        cell_steps_per_s: 0.0,
+        n_fluid_materials: 0,
+        retries: stats.retries,
+        threads,
+        dt_min: if run.steps > 0 { dt_min } else { 0.0 },
+        dt_max,
+        mass_drift: (run.particles.total_mass() - m0) / m0,
+        momentum_drift: dp,
+        energy_drift: if e0.total().abs() > 0.0 {
+            (e1.total() - e0.total()) / e0.total()
+        } else {
+            e1.total()
+        },
+        initial_energy: e0,
+        final_energy: e1,
+        phase_times: Default::default(),
+        iterations: Some(stats.finish(run.steps)),
+        error: failure.as_ref().map(|e| e.to_string()),
+    };
+    write_summary(&opts.out_dir, &summary)?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use crate::driver::{pad3, per_depth, write_summary, RunOptions, Summary};
 use crate::error::{Error, Result};
-use crate::ice::{equilibrate, step, IceError, IceParams, IceState, IceWorkspace};
+use crate::ice::{equilibrate, step, IceError, IceParams, IceState, IceWorkspace, StepInfo};
 use crate::material::eos::EquationOfState;
 use crate::output::csv::{write_columns, CsvAppender};
 use crate::output::vtk::{write_vti, Field, PvdSeries};
@@ -217,19 +217,21 @@ impl CellFields {
     }
 }
 
-/// One step with retries on [`IceError::TimestepTooLarge`]; returns the
-/// timestep taken and the retries used.
+/// One step with retries on a retryable error (an outflux larger than a
+/// cell's content, or a failed implicit pressure solve); returns what the
+/// step did and the retries used.
 fn step_with_retries<const D: usize>(
     state: &mut IceState<D>,
     params: &IceParams<D>,
     ws: &mut IceWorkspace<D>,
     mut dt_max: f64,
-) -> std::result::Result<(f64, u64), IceError> {
+) -> std::result::Result<(StepInfo, u64), IceError> {
     let mut retries = 0;
     loop {
         match step(state, params, ws, dt_max) {
-            Ok(info) => return Ok((info.dt, retries)),
-            Err(IceError::TimestepTooLarge { dt, .. }) if retries < MAX_RETRIES as u64 => {
+            Ok(info) => return Ok((info, retries)),
+            Err(e) if e.is_retryable() && retries < MAX_RETRIES as u64 => {
+                let dt = e.retry_dt().unwrap_or(dt_max);
                 dt_max = 0.5 * dt;
                 retries += 1;
             }
@@ -287,12 +289,15 @@ pub(crate) fn run_fluid_dim<const D: usize>(
     let (mut dt_min, mut dt_max_seen) = (f64::INFINITY, 0.0f64);
     let (mut steps, mut retries) = (0u64, 0u64);
     let mut failure = None;
+    let mut iters = crate::driver::IterationStats::default();
     let finished = |t: f64, steps: u64| t >= end * (1.0 - 1e-12) || steps >= max_steps;
     while !finished(state.time, steps) {
         let s = Instant::now();
         let dt_cap = scene.time.dt.unwrap_or(f64::INFINITY).min(end - state.time);
         match step_with_retries(&mut state, &params, &mut ws, dt_cap) {
-            Ok((dt, r)) => {
+            Ok((info, r)) => {
+                let dt = info.dt;
+                iters.add(info.outer_iterations, info.linear_iterations);
                 retries += r;
                 dt_min = dt_min.min(dt);
                 dt_max_seen = dt_max_seen.max(dt);
@@ -355,6 +360,11 @@ pub(crate) fn run_fluid_dim<const D: usize>(
         initial_energy: e0,
         final_energy: e1,
         phase_times: Default::default(),
+        iterations: params.implicit.as_ref().map(|_| {
+            let mut it = iters.finish(steps);
+            it.retries = retries;
+            it
+        }),
         error: failure.as_ref().map(|e| e.to_string()),
     };
     write_summary(&opts.out_dir, &summary)?;

@@ -114,9 +114,46 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "unknown material",
         ),
         (
-            edit("cfl = 0.5", "cfl = 0.5\nmode = \"implicit\""),
+            edit("cfl = 0.5", "cfl = 0.5\nmode = \"semi_implicit\""),
             "time.mode",
-            "explicit",
+            "explicit, implicit",
+        ),
+        (
+            edit("cfl = 0.5", "cfl = 0.5\nmode = \"implicit\""),
+            "time.dt",
+            "first timestep",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[implicit]\nmax_newton_iterations = 0\n\n[[materials]]",
+            ),
+            "implicit.max_newton_iterations",
+            "≥ 1",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[implicit]\ntolerance_displacement = 0.0\n\n[[materials]]",
+            ),
+            "implicit.tolerance_displacement",
+            "> 0",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[implicit]\nlinear_solver = \"magic\"\n\n[[materials]]",
+            ),
+            "implicit.linear_solver",
+            "cholesky",
+        ),
+        (
+            edit(
+                "velocity = [1.0, 0.0]",
+                "velocity = [1.0, 0.0]\ninner_pressure = 1e6",
+            ),
+            "objects[0].inner_pressure",
+            "annulus",
         ),
         (
             edit("type = \"box\"", "type = \"cone\""),
@@ -307,6 +344,43 @@ fn bad_fluid_input_names_its_key() {
             fluid_edit("x_lower = \"fixed\"", "x_lower = \"periodic\""),
             "grid.boundary.x_lower",
             "both faces",
+        ),
+        (
+            fluid_edit("end = 0.1", "end = 0.1\nmode = \"implicit\""),
+            "time.mode",
+            "semi_implicit",
+        ),
+        (
+            fluid_edit(
+                "[fluid]",
+                "[fluid.pressure]\nsolver = \"gauss_seidel\"\n\n[fluid]",
+            ),
+            "fluid.pressure.solver",
+            "pcg_multigrid",
+        ),
+        (
+            fluid_edit(
+                "[fluid]",
+                "[fluid.pressure]\nlinear_tolerance = 0.0\n\n[fluid]",
+            ),
+            "fluid.pressure.linear_tolerance",
+            "(0, 1)",
+        ),
+        (
+            fluid_edit(
+                "[fluid]",
+                "[fluid.pressure]\nouter_tolerance = -1.0\n\n[fluid]",
+            ),
+            "fluid.pressure.outer_tolerance",
+            "> 0",
+        ),
+        (
+            fluid_edit(
+                "[fluid]",
+                "[fluid.pressure]\nmax_outer_iterations = 0\n\n[fluid]",
+            ),
+            "fluid.pressure.max_outer_iterations",
+            "≥ 1",
         ),
     ];
     let mut wrong = Vec::new();

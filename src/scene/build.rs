@@ -2,9 +2,13 @@
 
 use nalgebra::SVector;
 
-use super::schema::{EosKind, FluidVariant, LimiterKind, MaterialKind, MaterialSpec, Scene};
+use super::schema::{
+    EosKind, FluidVariant, Geometry, LimiterKind, MaterialKind, MaterialSpec, Mode,
+    NewtonSolverKind, PressureSolverKind, Scene,
+};
 use crate::error::SceneError;
 use crate::grid::{Boundary, Grid};
+use crate::ice::implicit::{LinearSolver as PressureSolver, SemiImplicit};
 use crate::ice::{
     Advection, CellLayout, ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState,
     Limiter, MaterialInit,
@@ -12,6 +16,9 @@ use crate::ice::{
 use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
 use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
 use crate::mpm::explicit::Uniform;
+use crate::mpm::implicit::{
+    ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, SurfaceLoad,
+};
 use crate::mpm::{ExplicitParams, Particles};
 use crate::stepper::{SolidRun, TimeControl};
 
@@ -61,6 +68,16 @@ pub fn fill_particles<const D: usize>(
     grid: &Grid<D>,
     materials: &[SolidMaterial],
 ) -> Result<Particles<D>, SceneError> {
+    fill_objects(scene, grid, materials).map(|(p, _)| p)
+}
+
+/// [`fill_particles`] plus the range of particle indices of each object.
+fn fill_objects<const D: usize>(
+    scene: &Scene,
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+) -> Result<(Particles<D>, Vec<std::ops::Range<usize>>), SceneError> {
+    let mut ranges = Vec::with_capacity(scene.objects.len());
     let mut particles = Particles::<D>::default();
     for (oi, obj) in scene.objects.iter().enumerate() {
         let mat_index = materials
@@ -117,8 +134,111 @@ pub fn fill_particles<const D: usize>(
                  than a particle spacing, or refine the grid)",
             ));
         }
+        ranges.push(before..particles.len());
     }
-    Ok(particles)
+    Ok((particles, ranges))
+}
+
+/// Builds the implicit (Newmark + Newton, or quasistatic) solid run of a
+/// validated scene with `D == dim` and `time.mode = "implicit"`.
+pub fn build_implicit_run<const D: usize>(
+    scene: &Scene,
+) -> Result<ImplicitRun<D>, crate::error::Error> {
+    let grid = grid_of::<D>(scene);
+    let materials: Vec<SolidMaterial> = scene
+        .materials
+        .iter()
+        .filter(|m| m.kind == MaterialKind::Solid)
+        .map(solid_material)
+        .collect();
+    let (particles, ranges) = fill_objects(scene, &grid, &materials)?;
+    let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
+    let im = &scene.implicit;
+    let mut params = ImplicitParams::new(scene.mpm.shape, im.dynamic, 1e-12 * min_mass);
+    params.tol_displacement = im.tolerance_displacement;
+    params.tol_energy = im.tolerance_energy;
+    params.max_newton = im.max_newton_iterations;
+    params.linear = match im.linear_solver {
+        NewtonSolverKind::Cholesky => ImplicitLinear::Cholesky,
+        NewtonSolverKind::PcgJacobi => ImplicitLinear::PcgJacobi {
+            rel_tol: 1e-12,
+            max_iter: 10_000,
+        },
+    };
+    if let Some(d) = im.dt_max {
+        params.dt_max = d;
+    }
+    let dt = scene.time.dt.unwrap_or(scene.time.end);
+    let mut run = ImplicitRun::new(grid, materials, particles, params, scene.time.end, dt)?;
+    run.load_ramp = im.load_ramp;
+    if let Some(g) = &scene.gravity {
+        let g = to_vec::<D>(g);
+        if g.norm() > 0.0 {
+            run.body = Some(Box::new(Uniform(g)));
+        }
+    }
+    // Inner-surface pressure of annulus objects: the particles whose centres
+    // lie within one particle spacing s of the inner radius carry it, each a
+    // share of the total force P·A proportional to its volume, pushed
+    // radially out. A is the part of the inner surface inside the grid (the
+    // circle sampled at 2^16 angles; times the z extent in 3D), so a clipped
+    // annulus (quarter cylinder on symmetry planes) gets its exact total load.
+    let mut loaded = Vec::new();
+    let mut forces = Vec::new();
+    for (oi, obj) in scene.objects.iter().enumerate() {
+        let (
+            Some(pressure),
+            Geometry::Annulus {
+                center,
+                inner_radius,
+                ..
+            },
+        ) = (obj.inner_pressure, &obj.geometry)
+        else {
+            continue;
+        };
+        let ppc = obj
+            .particles_per_cell
+            .unwrap_or(scene.mpm.particles_per_cell);
+        let s = run.grid.h[0] / ppc as f64;
+        let ri = *inner_radius;
+        let samples = 1 << 16;
+        let inside = (0..samples)
+            .filter(|k| {
+                let a = std::f64::consts::TAU * (*k as f64 + 0.5) / samples as f64;
+                let xy = [center[0] + ri * a.cos(), center[1] + ri * a.sin()];
+                (0..2).all(|d| xy[d] >= run.grid.lower[d] && xy[d] <= run.grid.upper[d])
+            })
+            .count();
+        let mut area = std::f64::consts::TAU * ri * inside as f64 / samples as f64;
+        if D == 3 {
+            area *= run.grid.upper[2] - run.grid.lower[2];
+        }
+        let band: Vec<usize> = ranges[oi]
+            .clone()
+            .filter(|&p| {
+                let x0 = run.particles.x0[p];
+                let r = ((x0[0] - center[0]).powi(2) + (x0[1] - center[1]).powi(2)).sqrt();
+                r < ri + s
+            })
+            .collect();
+        let band_volume: f64 = band.iter().map(|&p| run.particles.vol0[p]).sum();
+        for p in band {
+            let x0 = run.particles.x0[p];
+            let mut radial = SVector::<f64, D>::zeros();
+            for d in 0..2 {
+                radial[d] = x0[d] - center[d];
+            }
+            loaded.push(p);
+            forces
+                .push(radial.normalize() * (pressure * area * run.particles.vol0[p] / band_volume));
+        }
+    }
+    run.surface = SurfaceLoad {
+        particle: loaded,
+        force: forces,
+    };
+    Ok(run)
 }
 
 /// Builds the solid-only explicit run of a validated scene with `D == dim`.
@@ -322,6 +442,22 @@ pub fn build_fluid_run<const D: usize>(
     }
     if let Some(g) = &scene.gravity {
         params.gravity = to_vec::<D>(g);
+    }
+    if scene.time.mode == Mode::SemiImplicit {
+        let ps = &scene.fluid.pressure;
+        params.implicit = Some(SemiImplicit {
+            linear_solver: match ps.solver {
+                PressureSolverKind::Direct => PressureSolver::Direct,
+                PressureSolverKind::PcgMultigrid => PressureSolver::PcgMultigrid,
+                PressureSolverKind::PcgJacobi => PressureSolver::PcgJacobi,
+            },
+            linear_tolerance: ps.linear_tolerance,
+            outer_tolerance: ps.outer_tolerance,
+            max_outer_iterations: ps.max_outer_iterations,
+            max_linear_iterations: ps.max_linear_iterations,
+            sound_speed_factor: ps.sound_speed_factor,
+            max_dt_growth: ps.max_dt_growth,
+        });
     }
     params
         .validate(&state)

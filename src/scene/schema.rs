@@ -30,6 +30,9 @@ pub struct Scene {
     /// Fluid discretisation choices.
     #[serde(default)]
     pub fluid: FluidSpec,
+    /// Implicit MPM settings (`time.mode = "implicit"`).
+    #[serde(default)]
+    pub implicit: ImplicitSpec,
     /// Initial fluid states by region, applied in order (a later region
     /// overrides an earlier one where both contain a cell centre).
     #[serde(default)]
@@ -353,6 +356,9 @@ pub struct ObjectSpec {
     pub particles_per_cell: Option<usize>,
     /// Initial velocity (length `dim`; default zero).
     pub velocity: Option<Vec<f64>>,
+    /// Pressure on the inner surface of an annulus object (implicit mode),
+    /// ramped with `implicit.load_ramp`.
+    pub inner_pressure: Option<f64>,
     /// Keep only the part inside the grid instead of rejecting a region that
     /// extends beyond it (e.g. a quarter of an annulus on symmetry planes).
     #[serde(default)]
@@ -420,6 +426,147 @@ pub struct FluidSpec {
     pub limiter: Option<LimiterKind>,
     /// Exchange among fluid materials (default: none).
     pub exchange: Option<ExchangeSpec>,
+    /// Implicit pressure solve (used when `time.mode = "semi_implicit"`).
+    #[serde(default)]
+    pub pressure: PressureSolveSpec,
+}
+
+/// Linear solver of the implicit pressure equation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PressureSolverKind {
+    /// Sparse Cholesky with reused symbolic factorisation.
+    Direct,
+    /// CG preconditioned by a geometric multigrid V-cycle.
+    PcgMultigrid,
+    /// CG preconditioned by the diagonal.
+    PcgJacobi,
+}
+
+/// Implicit pressure solve of semi-implicit ICE.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureSolveSpec {
+    /// Linear solver (default `direct`).
+    #[serde(default = "default_pressure_solver")]
+    pub solver: PressureSolverKind,
+    /// Relative residual of an iterative linear solve, in (0, 1).
+    #[serde(default = "default_linear_tol")]
+    pub linear_tolerance: f64,
+    /// Outer tolerance on max |residual| / V (> 0).
+    #[serde(default = "default_outer_tol")]
+    pub outer_tolerance: f64,
+    /// Outer iterations per step (≥ 1).
+    #[serde(default = "default_max_outer")]
+    pub max_outer_iterations: usize,
+    /// Krylov iterations per linear solve (≥ 1).
+    #[serde(default = "default_max_linear")]
+    pub max_linear_iterations: usize,
+    /// Factor on the sound speed in the timestep (0: advection only).
+    #[serde(default)]
+    pub sound_speed_factor: f64,
+    /// Largest growth of the timestep from one step to the next (≥ 1).
+    #[serde(default = "default_dt_growth")]
+    pub max_dt_growth: f64,
+}
+
+fn default_pressure_solver() -> PressureSolverKind {
+    PressureSolverKind::Direct
+}
+fn default_linear_tol() -> f64 {
+    1e-10
+}
+fn default_outer_tol() -> f64 {
+    1e-9
+}
+fn default_max_outer() -> usize {
+    20
+}
+fn default_max_linear() -> usize {
+    500
+}
+fn default_dt_growth() -> f64 {
+    1.2
+}
+
+impl Default for PressureSolveSpec {
+    fn default() -> Self {
+        Self {
+            solver: default_pressure_solver(),
+            linear_tolerance: default_linear_tol(),
+            outer_tolerance: default_outer_tol(),
+            max_outer_iterations: default_max_outer(),
+            max_linear_iterations: default_max_linear(),
+            sound_speed_factor: 0.0,
+            max_dt_growth: default_dt_growth(),
+        }
+    }
+}
+
+/// Linear solver of the implicit MPM Newton systems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NewtonSolverKind {
+    /// Sparse Cholesky (LU when the tangent is not SPD).
+    Cholesky,
+    /// CG preconditioned by the diagonal.
+    PcgJacobi,
+}
+
+/// Implicit MPM (used when `time.mode = "implicit"`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImplicitSpec {
+    /// Newmark dynamics (true) or quasistatic load steps (false).
+    #[serde(default = "default_true")]
+    pub dynamic: bool,
+    /// Linear solver (default `cholesky`).
+    #[serde(default = "default_newton_solver")]
+    pub linear_solver: NewtonSolverKind,
+    /// Newton tolerance on ‖δu‖/‖u‖ (> 0).
+    #[serde(default = "default_tol_disp")]
+    pub tolerance_displacement: f64,
+    /// Newton tolerance on the energy norm (> 0).
+    #[serde(default = "default_tol_energy")]
+    pub tolerance_energy: f64,
+    /// Newton iterations per attempt (≥ 1).
+    #[serde(default = "default_max_newton")]
+    pub max_newton_iterations: usize,
+    /// Loads (gravity, pressures) ramp linearly to full over this time
+    /// (default: applied at once).
+    pub load_ramp: Option<f64>,
+    /// Largest timestep (default: `time.end`).
+    pub dt_max: Option<f64>,
+}
+
+fn default_true() -> bool {
+    true
+}
+fn default_newton_solver() -> NewtonSolverKind {
+    NewtonSolverKind::Cholesky
+}
+fn default_tol_disp() -> f64 {
+    1e-9
+}
+fn default_tol_energy() -> f64 {
+    1e-16
+}
+fn default_max_newton() -> usize {
+    25
+}
+
+impl Default for ImplicitSpec {
+    fn default() -> Self {
+        Self {
+            dynamic: true,
+            linear_solver: default_newton_solver(),
+            tolerance_displacement: default_tol_disp(),
+            tolerance_energy: default_tol_energy(),
+            max_newton_iterations: default_max_newton(),
+            load_ramp: None,
+            dt_max: None,
+        }
+    }
 }
 
 /// The initial state of one fluid material in a region.
@@ -597,6 +744,67 @@ fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneEr
 }
 
 impl Scene {
+    fn validate_solvers(&self) -> Result<(), SceneError> {
+        let ps = &self.fluid.pressure;
+        let lt = ps.linear_tolerance;
+        if !(lt.is_finite() && lt > 0.0 && lt < 1.0) {
+            return Err(err(
+                "fluid.pressure.linear_tolerance",
+                format!("must be in (0, 1) (got {lt})"),
+            ));
+        }
+        positive("fluid.pressure.outer_tolerance", ps.outer_tolerance)?;
+        for (v, k) in [
+            (ps.max_outer_iterations, "max_outer_iterations"),
+            (ps.max_linear_iterations, "max_linear_iterations"),
+        ] {
+            if v == 0 {
+                return Err(err(format!("fluid.pressure.{k}"), "must be ≥ 1 (got 0)"));
+            }
+        }
+        if !(ps.sound_speed_factor.is_finite() && ps.sound_speed_factor >= 0.0) {
+            return Err(err("fluid.pressure.sound_speed_factor", "must be ≥ 0"));
+        }
+        if !(ps.max_dt_growth.is_finite() && ps.max_dt_growth >= 1.0) {
+            return Err(err("fluid.pressure.max_dt_growth", "must be ≥ 1"));
+        }
+        let im = &self.implicit;
+        positive("implicit.tolerance_displacement", im.tolerance_displacement)?;
+        positive("implicit.tolerance_energy", im.tolerance_energy)?;
+        if im.max_newton_iterations == 0 {
+            return Err(err("implicit.max_newton_iterations", "must be ≥ 1 (got 0)"));
+        }
+        if let Some(r) = im.load_ramp {
+            positive("implicit.load_ramp", r)?;
+        }
+        if let Some(d) = im.dt_max {
+            positive("implicit.dt_max", d)?;
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            if let Some(p) = o.inner_pressure {
+                if !p.is_finite() {
+                    return Err(err(
+                        format!("objects[{i}].inner_pressure"),
+                        "must be finite",
+                    ));
+                }
+                if !matches!(o.geometry, Geometry::Annulus { .. }) {
+                    return Err(err(
+                        format!("objects[{i}].inner_pressure"),
+                        "only for annulus objects",
+                    ));
+                }
+                if self.time.mode != Mode::Implicit {
+                    return Err(err(
+                        format!("objects[{i}].inner_pressure"),
+                        "surface pressure loads are applied in implicit mode only (for now)",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn validate_fluid_regions(&self) -> Result<(), SceneError> {
         let dim = self.grid.dim;
         if self.regions.is_empty() {
@@ -794,15 +1002,7 @@ impl Scene {
         if t.max_steps == Some(0) {
             return Err(err("time.max_steps", "must be ≥ 1 (got 0)"));
         }
-        if t.mode != Mode::Explicit {
-            return Err(err(
-                "time.mode",
-                format!(
-                    "`{}` is not available yet in this build; allowed: explicit",
-                    t.mode.name()
-                ),
-            ));
-        }
+
         if !(1..=16).contains(&self.mpm.particles_per_cell) {
             return Err(err(
                 "mpm.particles_per_cell",
@@ -840,6 +1040,30 @@ impl Scene {
                  not available yet; allowed: only solids, or only fluids",
             ));
         }
+        match (t.mode, has_solid) {
+            (Mode::SemiImplicit, true) => {
+                return Err(err(
+                    "time.mode",
+                    "semi_implicit (implicit pressure) is for fluid scenes until the MPM-ICE \
+                     coupling lands; allowed for solids: explicit, implicit",
+                ))
+            }
+            (Mode::Implicit, false) => {
+                return Err(err(
+                    "time.mode",
+                    "implicit (implicit MPM) is for solid scenes; allowed for fluids: explicit, \
+                     semi_implicit",
+                ))
+            }
+            (Mode::Implicit, true) if t.dt.is_none() => {
+                return Err(err(
+                    "time.dt",
+                    "missing; implicit mode needs the first timestep (> 0)",
+                ))
+            }
+            _ => {}
+        }
+        self.validate_solvers()?;
         for faces in g.boundary.faces().iter().take(dim) {
             let periodic = faces.map(|(bc, _)| bc == Some(Boundary::Periodic));
             if periodic[0] != periodic[1] {
