@@ -128,6 +128,17 @@ pub struct SemiImplicit {
     pub sound_speed_factor: f64,
     /// Largest ratio of a time step to the previous one, `≥ 1`.
     pub max_dt_growth: f64,
+    /// Convective predictor `β ∈ [0, 1]`: the cell velocities entering the
+    /// face velocities of Guilkey Eq. 28 are `u + β Δt a`, `a` the previous
+    /// step's advective acceleration (advected minus Lagrangian velocity
+    /// over `Δt`). Eq. 28 has no convection, so without it (`β = 0`) the
+    /// pressure solve corrects the previous step's convection and the
+    /// pressure lags one step: an `O(Δt)` error that is negligible at the
+    /// acoustic time step. Measured on the low-Mach vortex (N = 32): RMS
+    /// velocity error at acoustic CFL 10 3.37e-3 → 3.26e-3 with `β = 1`, at
+    /// CFL 50 unchanged (9.5e-3), so the lag is not the dominant time error
+    /// there; default `0` (Guilkey Eq. 28 as written).
+    pub convective_predictor: f64,
 }
 
 impl Default for SemiImplicit {
@@ -143,6 +154,7 @@ impl Default for SemiImplicit {
             max_linear_iterations: 500,
             sound_speed_factor: 0.0,
             max_dt_growth: 1.2,
+            convective_predictor: 0.0,
         }
     }
 }
@@ -193,6 +205,13 @@ impl SemiImplicit {
             return Err(invalid(
                 "implicit.max_dt_growth",
                 format!("must be finite and >= 1, got {g}"),
+            ));
+        }
+        let b = self.convective_predictor;
+        if !(b.is_finite() && (0.0..=1.0).contains(&b)) {
+            return Err(invalid(
+                "implicit.convective_predictor",
+                format!("must be in [0, 1], got {b}"),
             ));
         }
         if periodic && self.linear_solver == LinearSolver::PcgMultigrid {

@@ -272,6 +272,8 @@ pub struct IceWorkspace<const D: usize> {
     pub(super) saved: Vec<super::state::MaterialCells<D>>,
     pub(super) implicit: super::implicit::ImplicitSlot<D>,
     pub(super) last_dt: Option<f64>,
+    pub(super) accel: Vec<Vec<SVector<f64, D>>>,
+    pub(super) vel_pred: Vec<Vec<SVector<f64, D>>>,
 }
 
 impl<const D: usize> IceWorkspace<D> {
@@ -305,6 +307,8 @@ impl<const D: usize> IceWorkspace<D> {
             saved: state.cells.clone(),
             implicit: Default::default(),
             last_dt: None,
+            accel: Vec::new(),
+            vel_pred: Vec::new(),
         }
     }
 }
@@ -699,15 +703,33 @@ fn stage<const D: usize>(
 
     // Step 3: face velocities (Guilkey Eq. 28), then the face exchange.
     let fdt = params.face_dt_factor * dt;
+    // Semi-implicit convective predictor: the cell velocities seen by
+    // Eq. 28 are advanced by the previous step's advective acceleration.
+    let predictor = implicit.map_or(0.0, |sp| sp.convective_predictor);
+    let use_pred = predictor > 0.0 && ws.accel.len() == nm;
+    if use_pred {
+        for r in 0..nm {
+            let (vp, acc, u) = (&mut ws.vel_pred[r], &ws.accel[r], &state.cells[r].velocity);
+            for &c in &layout.interior {
+                vp[c] = u[c] + acc[c] * (predictor * dt);
+            }
+            fill_vector(layout, bcs, vp, |s| s[r].velocity);
+        }
+    }
     for r in 0..nm {
         let mc = &state.cells[r];
+        let vel_in = if use_pred {
+            &ws.vel_pred[r]
+        } else {
+            &mc.velocity
+        };
         for d in 0..D {
             let out = &mut ws.ustar[r][d];
             face_velocities(
                 layout,
                 d,
                 &mc.mass,
-                &mc.velocity,
+                vel_in,
                 &mc.sp_vol,
                 &state.p_eq,
                 fdt,
@@ -1051,6 +1073,22 @@ fn stage<const D: usize>(
         std::mem::swap(&mut mc.velocity, &mut ws.new_vel[r]);
         std::mem::swap(&mut mc.temperature, &mut ws.new_temp[r]);
         std::mem::swap(&mut mc.sp_vol, &mut ws.new_spvol[r]);
+    }
+    if predictor > 0.0 {
+        if ws.accel.len() != nm {
+            // Allocated once, on the first semi-implicit step.
+            let n = layout.len();
+            ws.accel = (0..nm).map(|_| vec![SVector::zeros(); n]).collect();
+            ws.vel_pred = (0..nm).map(|_| vec![SVector::zeros(); n]).collect();
+        }
+        // Advective acceleration of this step (advected minus Lagrangian
+        // velocity, per unit time).
+        for r in 0..nm {
+            let (acc, u, ul) = (&mut ws.accel[r], &state.cells[r].velocity, &ws.vel_l[r]);
+            for &c in &layout.interior {
+                acc[c] = (u[c] - ul[c]) / dt;
+            }
+        }
     }
     std::mem::swap(&mut state.pressure, &mut ws.press);
     // Keep the old p_eq as the next equilibration's guess (already there).

@@ -329,6 +329,10 @@ fn bad_semi_implicit_input_is_rejected() {
         "implicit.sound_speed_factor",
     );
     check(&|s| s.max_dt_growth = 0.9, "implicit.max_dt_growth");
+    check(
+        &|s| s.convective_predictor = 1.5,
+        "implicit.convective_predictor",
+    );
     // Multigrid has no periodic support.
     let mut p = semi(periodic2(), LinearSolver::PcgMultigrid, 1.0);
     let st2 = periodic_vortex(gas(1.4), 8, 0.5, 100.0).unwrap();
