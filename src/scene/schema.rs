@@ -768,6 +768,20 @@ impl Scene {
         if !(ps.max_dt_growth.is_finite() && ps.max_dt_growth >= 1.0) {
             return Err(err("fluid.pressure.max_dt_growth", "must be ≥ 1"));
         }
+        let periodic = self
+            .grid
+            .boundary
+            .faces()
+            .iter()
+            .flatten()
+            .any(|(bc, _)| *bc == Some(Boundary::Periodic));
+        if periodic && ps.solver == PressureSolverKind::PcgMultigrid {
+            return Err(err(
+                "fluid.pressure.solver",
+                "pcg_multigrid does not support periodic faces yet; allowed here: direct, \
+                 pcg_jacobi",
+            ));
+        }
         let im = &self.implicit;
         positive("implicit.tolerance_displacement", im.tolerance_displacement)?;
         positive("implicit.tolerance_energy", im.tolerance_energy)?;
