@@ -286,7 +286,13 @@ impl Cylinder {
         dx: f64,
         load_steps: usize,
     ) -> Result<ImpmMeasured> {
-        let mut run = self.build_implicit(shape, dx, load_steps)?;
+        let run = self.build_implicit(shape, dx, load_steps)?;
+        self.measure_implicit(run, dx)
+    }
+
+    /// Runs a cylinder built by [`Self::build_implicit`] (possibly with
+    /// changed parameters) and measures it as [`Self::run_implicit`].
+    pub fn measure_implicit(&self, mut run: ImplicitRun<2>, dx: f64) -> Result<ImpmMeasured> {
         let start = Instant::now();
         run.run()?;
         let wall_s = start.elapsed().as_secs_f64();
