@@ -117,7 +117,7 @@ pub fn impm_cylinder(quick: bool) -> anyhow::Result<StudyResult> {
             "Guilkey Sec. 4.1 without fluid: quarter annulus ri = 0.5, ro = 1, K = 117 GPa, \
              G = 43.8 GPa, rho = 8900, plane strain, symmetry planes x = 0 and y = 0; P = 19.4 MPa \
              applied in one quasistatic load step as a traction on the particles within one \
-             particle spacing of ri (force P x volume-weighted share of the arc, radial)."
+             particle spacing of ri (force P x the particle's share of the arc, r_i times its angular extent between the midpoints to its angular neighbours, radial)."
                 .into(),
             "Linear hat, 2x2 particles per cell, neo-Hookean. GIMP gives identical numbers here: \
              particles stay at their initial offsets (+-h/4), where uGIMP with lp = h/4 equals \
