@@ -154,7 +154,8 @@ impl Column {
 /// plane strain, symmetry planes x = 0 and y = 0), solid only: the internal
 /// pressure acts as a traction on the particles whose centres lie within one
 /// particle spacing of the inner radius, each receiving P × (its share of the
-/// inner arc, proportional to its volume) along the outward radial direction.
+/// inner arc: rᵢ times its angular extent between the midpoints to its
+/// neighbours in angle) along the outward radial direction.
 #[derive(Debug, Clone, Copy)]
 pub struct Cylinder {
     /// Inner radius rᵢ.
@@ -232,12 +233,28 @@ impl Cylinder {
         let band: Vec<usize> = (0..particles.len())
             .filter(|&p| particles.x0[p].norm() < ri + spacing)
             .collect();
-        let vband: f64 = band.iter().map(|&p| particles.vol0[p]).sum();
-        let arc = 0.5 * std::f64::consts::PI * ri;
-        let area = band
-            .iter()
-            .map(|&p| particles.vol0[p] * arc / vband)
-            .collect();
+        // Each band particle's share of the inner arc: rᵢ times the angular
+        // extent from the midpoint to its neighbours in angle (shares sum to
+        // the whole arc rᵢ π/2, and the load per unit arc is uniform even
+        // where the square particle lattice meets the circle unevenly).
+        let angle = |p: usize| particles.x0[p][1].atan2(particles.x0[p][0]);
+        let mut order: Vec<usize> = (0..band.len()).collect();
+        order.sort_by(|&a, &b| angle(band[a]).total_cmp(&angle(band[b])).then(a.cmp(&b)));
+        let mut area = vec![0.0; band.len()];
+        let half_pi = 0.5 * std::f64::consts::PI;
+        for (k, &i) in order.iter().enumerate() {
+            let lo = if k == 0 {
+                0.0
+            } else {
+                0.5 * (angle(band[order[k - 1]]) + angle(band[i]))
+            };
+            let hi = if k + 1 == order.len() {
+                half_pi
+            } else {
+                0.5 * (angle(band[i]) + angle(band[order[k + 1]]))
+            };
+            area[i] = ri * (hi - lo);
+        }
         (grid, mat, particles, band, area)
     }
 
@@ -286,7 +303,13 @@ impl Cylinder {
         dx: f64,
         load_steps: usize,
     ) -> Result<ImpmMeasured> {
-        let mut run = self.build_implicit(shape, dx, load_steps)?;
+        let run = self.build_implicit(shape, dx, load_steps)?;
+        self.measure_implicit(run, dx)
+    }
+
+    /// Runs a cylinder built by [`Self::build_implicit`] (possibly with
+    /// changed parameters) and measures it as [`Self::run_implicit`].
+    pub fn measure_implicit(&self, mut run: ImplicitRun<2>, dx: f64) -> Result<ImpmMeasured> {
         let start = Instant::now();
         run.run()?;
         let wall_s = start.elapsed().as_secs_f64();
@@ -320,9 +343,17 @@ impl Cylinder {
         for (k, &p) in band.iter().enumerate() {
             accel[p] = particles.x0[p].normalize() * (self.pressure * area[k] / particles.mass[p]);
         }
+        let mut table: Vec<([u64; 2], SVector<f64, 2>)> = band
+            .iter()
+            .map(|&p| {
+                let x = particles.x0[p];
+                ([x[0].to_bits(), x[1].to_bits()], accel[p])
+            })
+            .collect();
+        table.sort_by_key(|a| a.0);
         let band_load = BandLoad {
             r_band: self.r_inner + dx / 2.0,
-            accel_mag: accel.iter().map(|a| a.norm()).fold(0.0, f64::max),
+            table,
             ramp,
         };
         let params = ExplicitParams {
@@ -359,27 +390,30 @@ impl Cylinder {
 }
 
 /// The cylinder's inner-surface traction as a body force on the band
-/// particles (identified by their reference radius; every band particle has
-/// the same volume, so the same acceleration magnitude).
-#[derive(Debug, Clone, Copy)]
+/// particles, identified by their reference position (bit-exact lookup).
+#[derive(Debug, Clone)]
 struct BandLoad {
     r_band: f64,
-    accel_mag: f64,
+    table: Vec<([u64; 2], SVector<f64, 2>)>,
     ramp: f64,
 }
 
 impl BodyForce<2> for BandLoad {
     fn accel(&self, x0: &SVector<f64, 2>, _x: &SVector<f64, 2>, t: f64) -> SVector<f64, 2> {
-        let r = x0.norm();
-        if r < self.r_band {
-            let f = if self.ramp > 0.0 {
-                (t / self.ramp).min(1.0)
-            } else {
-                1.0
-            };
-            x0 / r * (self.accel_mag * f)
-        } else {
-            SVector::zeros()
+        if x0.norm() >= self.r_band {
+            return SVector::zeros();
+        }
+        let key = [x0[0].to_bits(), x0[1].to_bits()];
+        match self.table.binary_search_by(|e| e.0.cmp(&key)) {
+            Ok(i) => {
+                let f = if self.ramp > 0.0 {
+                    (t / self.ramp).min(1.0)
+                } else {
+                    1.0
+                };
+                self.table[i].1 * f
+            }
+            Err(_) => SVector::zeros(),
         }
     }
 }
