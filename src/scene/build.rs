@@ -178,11 +178,12 @@ pub fn build_implicit_run<const D: usize>(
         }
     }
     // Inner-surface pressure of annulus objects: the particles whose centres
-    // lie within one particle spacing s of the inner radius carry it, each a
-    // share of the total force P·A proportional to its volume, pushed
-    // radially out. A is the part of the inner surface inside the grid (the
-    // circle sampled at 2^16 angles; times the z extent in 3D), so a clipped
-    // annulus (quarter cylinder on symmetry planes) gets its exact total load.
+    // lie within one particle spacing s of the inner radius carry it, pushed
+    // radially out, with the total force P·A exact: A is the part of the
+    // inner surface inside the grid (the circle sampled at 2^16 angles; times
+    // the z extent in 3D), so a clipped annulus (a quarter cylinder on
+    // symmetry planes) gets its exact total load. In 2D the shares follow the
+    // particles' angular spacing, in 3D their volumes.
     let mut loaded = Vec::new();
     let mut forces = Vec::new();
     for (oi, obj) in scene.objects.iter().enumerate() {
@@ -222,16 +223,64 @@ pub fn build_implicit_run<const D: usize>(
                 r < ri + s
             })
             .collect();
-        let band_volume: f64 = band.iter().map(|&p| run.particles.vol0[p]).sum();
-        for p in band {
+        let radial = |p: usize| {
             let x0 = run.particles.x0[p];
-            let mut radial = SVector::<f64, D>::zeros();
+            let mut r = SVector::<f64, D>::zeros();
             for d in 0..2 {
-                radial[d] = x0[d] - center[d];
+                r[d] = x0[d] - center[d];
             }
+            r.normalize()
+        };
+        let shares: Vec<f64> = if D == 2 {
+            // Each particle carries rᵢ times the part inside the grid of its
+            // angular interval between the midpoints to its angular
+            // neighbours: the load per unit arc stays uniform where the
+            // particle lattice meets the circle unevenly (a volume-share
+            // split does not converge in the displacement).
+            let angle = |p: usize| {
+                let x0 = run.particles.x0[p];
+                (x0[1] - center[1]).atan2(x0[0] - center[0])
+            };
+            let inside = |a: f64| {
+                let xy = [center[0] + ri * a.cos(), center[1] + ri * a.sin()];
+                (0..2).all(|d| xy[d] >= run.grid.lower[d] && xy[d] <= run.grid.upper[d])
+            };
+            let mut order: Vec<usize> = (0..band.len()).collect();
+            order.sort_by(|&a, &b| angle(band[a]).total_cmp(&angle(band[b])).then(a.cmp(&b)));
+            let n = order.len();
+            let tau = std::f64::consts::TAU;
+            let mut share = vec![0.0; n];
+            for (k, &i) in order.iter().enumerate() {
+                let a = angle(band[i]);
+                let prev = angle(band[order[(k + n - 1) % n]]) - if k == 0 { tau } else { 0.0 };
+                let next = angle(band[order[(k + 1) % n]]) + if k + 1 == n { tau } else { 0.0 };
+                let (lo, hi) = if n == 1 {
+                    (a - 0.5 * tau, a + 0.5 * tau)
+                } else {
+                    (0.5 * (prev + a), 0.5 * (a + next))
+                };
+                let m = 256;
+                let frac = (0..m)
+                    .filter(|j| inside(lo + (hi - lo) * (*j as f64 + 0.5) / m as f64))
+                    .count() as f64
+                    / m as f64;
+                share[i] = ri * (hi - lo) * frac;
+            }
+            // Normalise to the measured inside arc (sampling round-off).
+            let total: f64 = share.iter().sum();
+            share
+                .iter()
+                .map(|v| v * area / total.max(f64::MIN_POSITIVE))
+                .collect()
+        } else {
+            let band_volume: f64 = band.iter().map(|&p| run.particles.vol0[p]).sum();
+            band.iter()
+                .map(|&p| area * run.particles.vol0[p] / band_volume)
+                .collect()
+        };
+        for (k, &p) in band.iter().enumerate() {
             loaded.push(p);
-            forces
-                .push(radial.normalize() * (pressure * area * run.particles.vol0[p] / band_volume));
+            forces.push(radial(p) * (pressure * shares[k]));
         }
     }
     run.surface = SurfaceLoad {
