@@ -177,18 +177,16 @@ struct Writer {
 
 impl Writer {
     fn new(dir: &Path, formats: &[Format], dim: usize) -> Result<Self> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        let u = per_depth(dim);
-        let header = [
-            "time [s]".to_string(),
-            format!("kinetic [J{u}]"),
-            format!("strain [J{u}]"),
-            format!("potential [J{u}]"),
-            format!("total [J{u}]"),
-        ];
-        let header: Vec<&str> = header.iter().map(String::as_str).collect();
-        let hp = dir.join("history.csv");
-        let history = CsvAppender::create(&hp, &header).map_err(|e| Error::io(&hp, e))?;
+        let history = open_history(
+            dir,
+            dim,
+            &[
+                ("kinetic", "J"),
+                ("strain", "J"),
+                ("potential", "J"),
+                ("total", "J"),
+            ],
+        )?;
         Ok(Self {
             dir: dir.to_path_buf(),
             formats: formats.to_vec(),
@@ -377,18 +375,7 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
     let hist_iv = scene.output.history_interval.or(interval.map(|i| i / 20.0));
     let mut next_out = interval.unwrap_or(f64::INFINITY);
     let mut next_hist = hist_iv.unwrap_or(0.0);
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new(1000);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {percent:>3}% t = {msg} [{elapsed_precise} < {eta_precise}]",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = progress_bar(opts.progress);
     let start = Instant::now();
     let mut step_s = 0.0;
     let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
@@ -468,6 +455,37 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         Some(e) => Err(e),
         None => Ok(summary),
     }
+}
+
+/// A progress bar over simulation time (0–1000 ‰), hidden unless `show`.
+pub(crate) fn progress_bar(show: bool) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::new(1000);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {percent:>3}% t = {msg} [{elapsed_precise} < {eta_precise}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    b
+}
+
+/// Creates `dir` and its `history.csv` with a time column and one column per
+/// `(quantity, unit)`, the units made per depth in 2D and per area in 1D.
+pub(crate) fn open_history(
+    dir: &Path,
+    dim: usize,
+    columns: &[(&str, &str)],
+) -> Result<CsvAppender> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let u = per_depth(dim);
+    let mut header = vec!["time [s]".to_string()];
+    header.extend(columns.iter().map(|(q, unit)| format!("{q} [{unit}{u}]")));
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    let path = dir.join("history.csv");
+    CsvAppender::create(&path, &header).map_err(|e| Error::io(&path, e))
 }
 
 /// Writes `summary.json` atomically.

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::driver::{pad3, per_depth, write_summary, RunOptions, Summary};
+use crate::driver::{open_history, pad3, progress_bar, write_summary, RunOptions, Summary};
 use crate::error::{Error, Result};
 use crate::ice::{equilibrate, step, IceError, IceParams, IceState, IceWorkspace, StepInfo};
 use crate::material::eos::EquationOfState;
@@ -45,18 +45,16 @@ struct FluidWriter {
 
 impl FluidWriter {
     fn new(dir: &Path, formats: &[Format], dim: usize) -> Result<Self> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        let u = per_depth(dim);
-        let header = [
-            "time [s]".to_string(),
-            format!("mass [kg{u}]"),
-            format!("kinetic [J{u}]"),
-            format!("internal [J{u}]"),
-            format!("total [J{u}]"),
-        ];
-        let header: Vec<&str> = header.iter().map(String::as_str).collect();
-        let hp = dir.join("history.csv");
-        let history = CsvAppender::create(&hp, &header).map_err(|e| Error::io(&hp, e))?;
+        let history = open_history(
+            dir,
+            dim,
+            &[
+                ("mass", "kg"),
+                ("kinetic", "J"),
+                ("internal", "J"),
+                ("total", "J"),
+            ],
+        )?;
         Ok(Self {
             dir: dir.to_path_buf(),
             formats: formats.to_vec(),
@@ -272,18 +270,7 @@ pub(crate) fn run_fluid_dim<const D: usize>(
     let mut next_out = interval.unwrap_or(f64::INFINITY);
     let mut next_hist = hist_iv.unwrap_or(0.0);
     let max_steps = scene.time.max_steps.unwrap_or(u64::MAX);
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new(1000);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {percent:>3}% t = {msg} [{elapsed_precise} < {eta_precise}]",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = progress_bar(opts.progress);
     let start = Instant::now();
     let mut step_s = 0.0;
     let (mut dt_min, mut dt_max_seen) = (f64::INFINITY, 0.0f64);
