@@ -527,31 +527,8 @@ pub fn run_bar_implicit(
     n: usize,
     courant: f64,
 ) -> Result<ImpmMeasured> {
-    let h = bar.length / n as f64;
-    let extra = (n / 4).max(3);
-    let grid = Grid::<1>::new(
-        SVector::from([0.0]),
-        SVector::from([bar.length + extra as f64 * h]),
-        [n + extra],
-        [[Boundary::Fixed, Boundary::Free]],
-    );
-    let mat = SolidMaterial {
-        name: "bar".into(),
-        density: bar.rho,
-        model: SolidModel::LinearElastic,
-        elastic: ElasticConstants::from_young_poisson(bar.youngs, 0.0),
-    };
-    let mut particles = fill_box(
-        &grid,
-        &SVector::from([0.0]),
-        &SVector::from([bar.length]),
-        2,
-        bar.rho,
-        |_| true,
-    );
-    for p in 0..particles.len() {
-        particles.v[p] = SVector::from([bar.velocity(particles.x0[p][0], 0.0)]);
-    }
+    let (grid, mat, particles) = bar.setup(n);
+    let h = grid.h[0];
     let end = 4.0 * bar.length / bar.c();
     let steps = (end / (courant * h / bar.c())).ceil();
     let dt = end / steps;
@@ -566,14 +543,10 @@ pub fn run_bar_implicit(
     while !run.finished() {
         run.step()?;
         let t = run.t;
-        let p = &run.particles;
-        let (mut num, mut den) = (0.0, 0.0);
-        for i in 0..p.len() {
-            let e = p.x[i][0] - p.x0[i][0] - bar.displacement(p.x0[i][0], t);
-            num += p.vol0[i] * e * e;
-            den += p.vol0[i];
-        }
-        err = err.max((num / den).sqrt());
+        let (rms, _) = crate::diagnostics::mms::displacement_error(&run.particles, |x0| {
+            SVector::from([bar.displacement(x0[0], t)])
+        });
+        err = err.max(rms);
     }
     Ok(ImpmMeasured {
         h,

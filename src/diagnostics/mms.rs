@@ -151,7 +151,7 @@ fn fill_box<const D: usize>(
 }
 
 /// Volume-weighted RMS and max of the particle displacement error.
-fn displacement_error<const D: usize>(
+pub fn displacement_error<const D: usize>(
     p: &Particles<D>,
     exact: impl Fn(&SVector<f64, D>) -> SVector<f64, D>,
 ) -> (f64, f64) {
@@ -263,6 +263,35 @@ impl BarMode1 {
         std::f64::consts::PI * self.c() / (2.0 * self.length)
     }
 
+    /// The discretised bar: `n` cells along it (the grid 25 %, at least 3
+    /// cells, longer and free beyond it; fixed at x = 0), 2 particles per
+    /// cell in the mode-1 initial velocity, hypo-elastic with ν = 0.
+    pub fn setup(&self, n: usize) -> (Grid<1>, SolidMaterial, Particles<1>) {
+        let h = self.length / n as f64;
+        let extra = (n / 4).max(3);
+        let grid = Grid::<1>::new(
+            SVector::from([0.0]),
+            SVector::from([self.length + extra as f64 * h]),
+            [n + extra],
+            [[Boundary::Fixed, Boundary::Free]],
+        );
+        let mat = SolidMaterial {
+            name: "bar".into(),
+            density: self.rho,
+            model: SolidModel::LinearElastic,
+            elastic: ElasticConstants::from_young_poisson(self.youngs, 0.0),
+        };
+        let particles = fill_box(
+            &grid,
+            &SVector::from([0.0]),
+            &SVector::from([self.length]),
+            2,
+            self.rho,
+            |x| SVector::from([self.velocity(x[0], 0.0)]),
+        );
+        (grid, mat, particles)
+    }
+
     /// Damped angular frequency ω_d = √(ω² − α²/4) (under-damped only).
     pub fn omega_d(&self) -> f64 {
         (self.omega().powi(2) - 0.25 * self.damping * self.damping).sqrt()
@@ -300,28 +329,8 @@ pub fn run_bar(
     n: usize,
     cfl: f64,
 ) -> Result<Measured> {
-    let h = bar.length / n as f64;
-    let extra = (n / 4).max(3);
-    let grid = Grid::<1>::new(
-        SVector::from([0.0]),
-        SVector::from([bar.length + extra as f64 * h]),
-        [n + extra],
-        [[Boundary::Fixed, Boundary::Free]],
-    );
-    let mat = SolidMaterial {
-        name: "bar".into(),
-        density: bar.rho,
-        model: SolidModel::LinearElastic,
-        elastic: ElasticConstants::from_young_poisson(bar.youngs, 0.0),
-    };
-    let particles = fill_box(
-        &grid,
-        &SVector::from([0.0]),
-        &SVector::from([bar.length]),
-        2,
-        bar.rho,
-        |x| SVector::from([bar.velocity(x[0], 0.0)]),
-    );
+    let (grid, mat, particles) = bar.setup(n);
+    let h = grid.h[0];
     let end = 4.0 * bar.length / bar.c();
     let dt = cfl * h / bar.c();
     let steps = (end / dt).ceil();
