@@ -758,10 +758,18 @@ pub fn write_results_md(results_dir: &Path, md_path: &Path) -> Result<()> {
         let e = old[b..].find(MD_END)? + b + MD_END.len();
         Some(format!("{}{block}{}", &old[..b], &old[e..]))
     });
+    // Name the results folder relative to the Markdown file, so the
+    // committed text does not depend on the machine it was made on.
+    let shown = md_path
+        .parent()
+        .and_then(|base| results_dir.strip_prefix(base).ok())
+        .unwrap_or(results_dir);
     let out = spliced.unwrap_or_else(|| {
         format!(
-            "# Verification results\n\nGenerated from `{}` by the verification harness.\n\n{block}\n",
-            results_dir.display()
+            "# Verification results\n\nGenerated from `{}` by the verification harness \
+             (`cargo run --release -p verification -- report` rebuilds this table from the \
+             stored results; a full study run refreshes them).\n\n{block}\n",
+            shown.display()
         )
     });
     atomic_write_bytes(md_path, out.as_bytes())

@@ -11,7 +11,8 @@ use verification::STUDIES;
 #[derive(Parser)]
 #[command(about = "mpmice convergence and work-precision studies")]
 struct Args {
-    /// Study name, `list`, or `all`.
+    /// Study name, `list`, `all`, or `report` (rebuild RESULTS.md from the
+    /// stored results only).
     study: String,
     /// Coarse resolutions only (what the test suite runs).
     #[arg(long)]
@@ -30,6 +31,11 @@ fn main() -> anyhow::Result<()> {
         return Ok(());
     }
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if args.study == "report" {
+        write_results_md(&root.join("results"), &root.join("RESULTS.md"))?;
+        println!("wrote {}", root.join("RESULTS.md").display());
+        return Ok(());
+    }
     let out = args.out.clone().unwrap_or_else(|| {
         if args.quick {
             root.join("results/quick")
