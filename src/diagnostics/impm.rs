@@ -23,6 +23,9 @@ use crate::mpm::{
 use crate::shape::ShapeKind;
 use crate::stepper::{SolidRun, TimeControl};
 
+/// The uniform box fill shared with the explicit references.
+pub use super::mms::fill_box;
+
 /// Outcome of one benchmark run.
 #[derive(Debug, Clone)]
 pub struct ImpmMeasured {
@@ -418,36 +421,6 @@ impl BodyForce<2> for BandLoad {
     }
 }
 
-/// Uniform particle fill (`ppc` per cell per direction) of the box, keeping
-/// the particles whose centre satisfies `keep`.
-pub fn fill_box<const D: usize>(
-    grid: &Grid<D>,
-    lower: &SVector<f64, D>,
-    upper: &SVector<f64, D>,
-    ppc: usize,
-    rho0: f64,
-    keep: impl Fn(&SVector<f64, D>) -> bool,
-) -> Particles<D> {
-    let mut p = Particles::default();
-    let vol = grid.cell_volume() / (ppc as f64).powi(D as i32);
-    let half = grid.h / (2.0 * ppc as f64);
-    let counts: [usize; D] =
-        std::array::from_fn(|d| ((upper[d] - lower[d]) / grid.h[d]).round() as usize * ppc);
-    let total: usize = counts.iter().product();
-    for k in 0..total {
-        let mut r = k;
-        let x = SVector::<f64, D>::from_fn(|d, _| {
-            let i = r % counts[d];
-            r /= counts[d];
-            lower[d] + (i as f64 + 0.5) * grid.h[d] / ppc as f64
-        });
-        if keep(&x) {
-            p.push(x, SVector::zeros(), rho0 * vol, vol, half, 0);
-        }
-    }
-    p
-}
-
 /// The axis-aligned manufactured solution of `diagnostics::mms` run with the
 /// dynamic implicit step (Newmark β = 1/4, γ = 1/2) on the unit domain with
 /// `n` cells per direction, 2 particles per cell per direction, symmetry
@@ -464,22 +437,7 @@ pub fn run_mms_implicit<const D: usize>(
     courant: f64,
     periods: f64,
 ) -> Result<ImpmMeasured> {
-    let grid = Grid::<D>::new(
-        SVector::zeros(),
-        SVector::repeat(1.0),
-        [n; D],
-        [[Boundary::Symmetry; 2]; D],
-    );
-    let mat = SolidMaterial {
-        name: "mms".into(),
-        density: mms.rho0,
-        model: SolidModel::NeoHookean,
-        elastic: mms.elastic,
-    };
-    let mut particles = fill_box(&grid, &grid.lower, &grid.upper, 2, mms.rho0, |_| true);
-    for p in 0..particles.len() {
-        particles.v[p] = mms.velocity(&particles.x0[p], 0.0);
-    }
+    let (grid, mat, particles) = mms.setup::<D>(n);
     let h = grid.h[0];
     let end = 2.0 * periods / mms.c;
     let steps = (end / (courant * h / mat.wave_speed(mms.rho0))).ceil();

@@ -53,6 +53,29 @@ impl AxisAlignedMms {
         }
     }
 
+    /// The discretised problem: the unit domain with `n` cells per
+    /// direction and symmetry (roller) faces, 2 particles per cell per
+    /// direction in the exact initial velocity, neo-Hookean.
+    pub fn setup<const D: usize>(&self, n: usize) -> (Grid<D>, SolidMaterial, Particles<D>) {
+        let grid = Grid::<D>::new(
+            SVector::zeros(),
+            SVector::repeat(1.0),
+            [n; D],
+            [[Boundary::Symmetry; 2]; D],
+        );
+        let mat = SolidMaterial {
+            name: "mms".into(),
+            density: self.rho0,
+            model: SolidModel::NeoHookean,
+            elastic: self.elastic,
+        };
+        let mut particles = fill_box(&grid, &grid.lower, &grid.upper, 2, self.rho0, |_| true);
+        for p in 0..particles.len() {
+            particles.v[p] = self.velocity(&particles.x0[p], 0.0);
+        }
+        (grid, mat, particles)
+    }
+
     fn s(&self, i: usize, t: f64) -> f64 {
         (self.c * std::f64::consts::PI * t + self.phase[i]).sin()
     }
@@ -123,14 +146,15 @@ impl Measured {
     }
 }
 
-/// Uniform particle fill of a box (`ppc` per cell per direction).
-fn fill_box<const D: usize>(
+/// Uniform particle fill of a box (`ppc` per cell per direction), at rest,
+/// keeping the positions where `keep` holds.
+pub fn fill_box<const D: usize>(
     grid: &Grid<D>,
     lower: &SVector<f64, D>,
     upper: &SVector<f64, D>,
     ppc: usize,
     rho0: f64,
-    v0: impl Fn(&SVector<f64, D>) -> SVector<f64, D>,
+    keep: impl Fn(&SVector<f64, D>) -> bool,
 ) -> Particles<D> {
     let mut p = Particles::default();
     let vol = grid.cell_volume() / (ppc as f64).powi(D as i32);
@@ -145,7 +169,9 @@ fn fill_box<const D: usize>(
             r /= counts[d];
             lower[d] + (i as f64 + 0.5) * grid.h[d] / ppc as f64
         });
-        p.push(x, v0(&x), rho0 * vol, vol, half, 0);
+        if keep(&x) {
+            p.push(x, SVector::zeros(), rho0 * vol, vol, half, 0);
+        }
     }
     p
 }
@@ -179,21 +205,7 @@ pub fn run_mms<const D: usize>(
     n: usize,
     cfl: f64,
 ) -> Result<Measured> {
-    let grid = Grid::<D>::new(
-        SVector::zeros(),
-        SVector::repeat(1.0),
-        [n; D],
-        [[Boundary::Symmetry; 2]; D],
-    );
-    let mat = SolidMaterial {
-        name: "mms".into(),
-        density: mms.rho0,
-        model: SolidModel::NeoHookean,
-        elastic: mms.elastic,
-    };
-    let particles = fill_box(&grid, &grid.lower, &grid.upper, 2, mms.rho0, |x| {
-        mms.velocity(x, 0.0)
-    });
+    let (grid, mat, particles) = mms.setup::<D>(n);
     let h = grid.h[0];
     let dt = cfl * h / mat.wave_speed(mms.rho0);
     let end = 2.0 / mms.c;
@@ -281,14 +293,17 @@ impl BarMode1 {
             model: SolidModel::LinearElastic,
             elastic: ElasticConstants::from_young_poisson(self.youngs, 0.0),
         };
-        let particles = fill_box(
+        let mut particles = fill_box(
             &grid,
             &SVector::from([0.0]),
             &SVector::from([self.length]),
             2,
             self.rho,
-            |x| SVector::from([self.velocity(x[0], 0.0)]),
+            |_| true,
         );
+        for p in 0..particles.len() {
+            particles.v[p] = SVector::from([self.velocity(particles.x0[p][0], 0.0)]);
+        }
         (grid, mat, particles)
     }
 

@@ -291,6 +291,23 @@ struct LinearCache {
     krylov: KrylovWorkspace,
 }
 
+impl LinearCache {
+    /// Solves with the stored factorisation (LU when `lu`, else Cholesky);
+    /// a missing factorisation is an error, not a panic.
+    fn solve_factored(&mut self, lu: bool, rhs: &mut [f64]) -> Result<(), SolverError> {
+        let missing = || SolverError::Factorisation("no stored factorisation to reuse".into());
+        if lu {
+            self.lu.as_mut().ok_or_else(missing)?.solve_in_place(rhs)?;
+        } else {
+            self.chol
+                .as_mut()
+                .ok_or_else(missing)?
+                .solve_in_place(rhs)?;
+        }
+        Ok(())
+    }
+}
+
 /// A solid-only implicit MPM run.
 pub struct ImplicitRun<const D: usize> {
     /// Background grid.
@@ -1021,21 +1038,7 @@ impl<const D: usize> ImplicitRun<D> {
             // Modified Newton: reuse the factorisation of the last tangent.
             let t1 = Instant::now();
             let used_lu = self.cache.chol.is_none();
-            if used_lu {
-                self.cache
-                    .lu
-                    .as_mut()
-                    .unwrap()
-                    .solve_in_place(rhs)
-                    .map_err(lin)?;
-            } else {
-                self.cache
-                    .chol
-                    .as_mut()
-                    .unwrap()
-                    .solve_in_place(rhs)
-                    .map_err(lin)?;
-            }
+            self.cache.solve_factored(used_lu, rhs).map_err(lin)?;
             return Ok((0, used_lu, 0.0, t1.elapsed().as_secs_f64()));
         }
         let a = if refactor {
@@ -1066,21 +1069,7 @@ impl<const D: usize> ImplicitRun<D> {
                 }
                 let tf = t0.elapsed().as_secs_f64();
                 let t1 = Instant::now();
-                if used_lu {
-                    self.cache
-                        .lu
-                        .as_mut()
-                        .unwrap()
-                        .solve_in_place(rhs)
-                        .map_err(lin)?;
-                } else {
-                    self.cache
-                        .chol
-                        .as_mut()
-                        .unwrap()
-                        .solve_in_place(rhs)
-                        .map_err(lin)?;
-                }
+                self.cache.solve_factored(used_lu, rhs).map_err(lin)?;
                 Ok((0, used_lu, tf, t1.elapsed().as_secs_f64()))
             }
             LinearSolver::PcgJacobi { rel_tol, max_iter } => {
