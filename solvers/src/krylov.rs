@@ -139,14 +139,9 @@ where
         setup_s: 0.0,
         solve_s: t0.elapsed().as_secs_f64(),
     };
-    let bnorm = norm(b);
-    if !bnorm.is_finite() {
-        return Err(SolverError::invalid("right-hand side is not finite"));
-    }
-    if bnorm == 0.0 {
-        x.fill(0.0);
+    let Some(bnorm) = rhs_norm(b, x)? else {
         return Ok(report(0, 0.0));
-    }
+    };
     let tol = opts.rel_tol * bnorm;
     let mut rnorm = residual(a, b, x, r);
     if !rnorm.is_finite() {
@@ -252,14 +247,9 @@ where
         setup_s: 0.0,
         solve_s: t0.elapsed().as_secs_f64(),
     };
-    let bnorm = norm(b);
-    if !bnorm.is_finite() {
-        return Err(SolverError::invalid("right-hand side is not finite"));
-    }
-    if bnorm == 0.0 {
-        x.fill(0.0);
+    let Some(bnorm) = rhs_norm(b, x)? else {
         return Ok(report(0, 0.0));
-    }
+    };
     let tol = opts.rel_tol * bnorm;
     let rnorm0 = residual(a, b, x, r);
     if !rnorm0.is_finite() {
@@ -360,4 +350,18 @@ where
         iterations: opts.max_iter,
         rel_residual: rel,
     })
+}
+
+/// ‖b‖ for a Krylov solve: an error for a non-finite right-hand side, and
+/// `None` (with `x = 0`, the exact solution) for b = 0.
+fn rhs_norm(b: &[f64], x: &mut [f64]) -> Result<Option<f64>> {
+    let bnorm = norm(b);
+    if !bnorm.is_finite() {
+        return Err(SolverError::invalid("right-hand side is not finite"));
+    }
+    if bnorm == 0.0 {
+        x.fill(0.0);
+        return Ok(None);
+    }
+    Ok(Some(bnorm))
 }
