@@ -1,6 +1,7 @@
 //! Diagnostics: conservation, error norms and exact reference solutions.
 
 pub mod bench_cases;
+pub mod coupled;
 pub mod impm;
 pub mod mms;
 pub mod riemann;

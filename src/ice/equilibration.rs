@@ -50,6 +50,8 @@ pub fn min_pressure(eos: &FluidEos) -> f64 {
     match eos {
         FluidEos::IdealGas(_) => 0.0,
         FluidEos::StiffenedGas(s) => -s.p_inf(),
+        // Guilkey Fig. 1: the threshold law is defined for p > 0 only.
+        FluidEos::Solid(_) => 0.0,
     }
 }
 

@@ -186,11 +186,37 @@ pub fn exchange_momentum<const D: usize>(
     weight: &[f64],
     vel: &mut [SVector<f64, D>],
 ) {
+    exchange_momentum_fixed(k, dt, theta, sp_vol, weight, &[], vel);
+}
+
+/// [`exchange_momentum`] with some materials' velocities held fixed
+/// (`fixed[r]`, a rigid material with a prescribed velocity; empty: none):
+/// their rows become `u_r^L = u_r^{L−}`, so the others exchange with the
+/// prescribed velocity (with `K = 1e15` they take it). Momentum is then not
+/// conserved among the materials (the prescribed motion is an external
+/// agent), so the conserved-mean projection is skipped.
+pub fn exchange_momentum_fixed<const D: usize>(
+    k: &[f64],
+    dt: f64,
+    theta: &[f64],
+    sp_vol: &[f64],
+    weight: &[f64],
+    fixed: &[bool],
+    vel: &mut [SVector<f64, D>],
+) {
     let n = theta.len();
     if n < 2 {
         return;
     }
-    let mut a = system(n, |r, s| dt * k[r * n + s] * theta[s] * sp_vol[r]);
+    let is_fixed = |r: usize| fixed.get(r).copied().unwrap_or(false);
+    let mut a = system(n, |r, s| {
+        if is_fixed(r) {
+            0.0
+        } else {
+            dt * k[r * n + s] * theta[s] * sp_vol[r]
+        }
+    });
+    let any_fixed = (0..n).any(is_fixed);
     let perm = lu(n, &mut a);
     let mut b = [0.0; MAX_MATERIALS];
     let mut x = [0.0; MAX_MATERIALS];
@@ -199,7 +225,9 @@ pub fn exchange_momentum<const D: usize>(
             b[r] = vel[r][comp];
         }
         lu_solve(n, &a, &perm, &b, &mut x);
-        restore_mean(n, weight, &b, &mut x);
+        if !any_fixed {
+            restore_mean(n, weight, &b, &mut x);
+        }
         for r in 0..n {
             vel[r][comp] = x[r];
         }

@@ -4,7 +4,7 @@
 use nalgebra::SVector;
 
 use super::advection::{limited_slope, Limiter};
-use super::exchange::exchange_momentum;
+use super::exchange::exchange_momentum_fixed;
 use super::par::{par_face_rows, Out};
 use super::state::{CellLayout, MaterialCells};
 use super::MAX_MATERIALS;
@@ -82,15 +82,23 @@ pub fn face_velocities<const D: usize>(
 /// manner as step 10"): at each face `θ_f = (θ_L + θ_R)/2`,
 /// `v_f = 2 v_L v_R/(v_L + v_R)` and the conserved weights `θ_f / v_f`.
 ///
-/// `ustar[r][d]` holds material `r`'s face velocities normal to `d`.
+/// `ustar[r][d]` holds material `r`'s face velocities normal to `d`;
+/// `fixed[r]` marks a rigid material whose face velocity is held (its first
+/// `n` entries are read; an empty slice marks none).
 pub fn face_exchange<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
     k: &[f64],
     dt: f64,
     cells: &[MaterialCells<D>],
+    fixed: &[bool],
     ustar: &mut [[Vec<f64>; D]],
 ) {
+    let fixed = if fixed.iter().take(cells.len()).any(|&f| f) {
+        &fixed[..cells.len()]
+    } else {
+        &[]
+    };
     let n = cells.len();
     let s = layout.strides[d];
     let mut outs = [Out::empty(); MAX_MATERIALS];
@@ -113,7 +121,7 @@ pub fn face_exchange<const D: usize>(
                 // SAFETY: face f is read and written by this task only.
                 u[m][0] = unsafe { outs[m].get(f) };
             }
-            exchange_momentum(k, dt, &theta[..n], &v[..n], &w[..n], &mut u[..n]);
+            exchange_momentum_fixed(k, dt, &theta[..n], &v[..n], &w[..n], fixed, &mut u[..n]);
             for m in 0..n {
                 // SAFETY: as above.
                 unsafe { outs[m].set(f, u[m][0]) };

@@ -970,7 +970,15 @@ fn outer_iteration<const D: usize>(
         }
         if let Some(k) = k_mom {
             for d in 0..D {
-                face_exchange(layout, d, k, dt, &state.cells, &mut ws.ustar);
+                face_exchange(
+                    layout,
+                    d,
+                    k,
+                    dt,
+                    &state.cells,
+                    &params.rigid_mask(),
+                    &mut ws.ustar,
+                );
             }
         }
     }

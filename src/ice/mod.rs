@@ -57,8 +57,9 @@ pub use implicit::{LinearSolver, SemiImplicit};
 pub use setups::{periodic_vortex, periodic_vortex_exact, shock_tube};
 pub use state::{CellLayout, IceState, MaterialCells, MaterialInit, NGHOST};
 pub use step::{
-    equilibrate, run_fluid, step, step_with_dt, timestep, timestep_with, EnergyForm, FluidRun,
-    IceParams, IceWorkspace, StepInfo, TimeIntegration,
+    equilibrate, run_fluid, stage_advect, stage_lagrangian, stage_pressure, step, step_with_dt,
+    timestep, timestep_with, EnergyForm, FluidRun, Frame, HeatSource, IceParams, IceWorkspace,
+    StepInfo, TimeIntegration,
 };
 
 /// Largest number of fluid materials in one scene (per-cell kernels use

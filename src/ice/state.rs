@@ -397,6 +397,14 @@ impl<const D: usize> IceState<D> {
         })
     }
 
+    /// Appends a material with empty cells (zero mass, velocity,
+    /// temperature, specific volume and volume fraction) for a caller that
+    /// fills them itself (the solid field of a coupled scene).
+    pub fn push_material(&mut self, material: IceMaterial) {
+        self.materials.push(material);
+        self.cells.push(MaterialCells::zeros(self.layout.len()));
+    }
+
     /// Number of materials.
     pub fn num_materials(&self) -> usize {
         self.materials.len()

@@ -13,7 +13,7 @@ use super::advection::{
 };
 use super::boundary::{fill_scalar, fill_vector, zero_wall_faces, Boundaries, IceBoundary};
 use super::equilibration::{equilibrate_cell, min_pressure, EquilibrationSettings};
-use super::exchange::{exchange_heat, exchange_momentum, ExchangeCoefficients};
+use super::exchange::{exchange_heat, exchange_momentum_fixed, ExchangeCoefficients};
 use super::faces::{face_exchange, face_pressure, face_velocities};
 use super::implicit::SemiImplicit;
 use super::par::{max_rows, par_face_rows, par_rows, try_rows, Out};
@@ -68,6 +68,50 @@ pub struct IceParams<const D: usize> {
     /// iteration ([`super::implicit`]); the sound speed then no longer
     /// limits the time step. `None` is the explicit step.
     pub implicit: Option<SemiImplicit>,
+    /// Frame of each material (empty: all Eulerian, a fluid-only scene).
+    /// Materials carried by particles take part in the cell equations
+    /// (equilibration, face velocities, Eq. 29, exchange) but are not
+    /// advected, and their Lagrangian velocities come from the nodes
+    /// (Guilkey Sec. 3.3).
+    pub frames: Vec<Frame>,
+    /// Internal-energy sources of fluid materials.
+    pub heat_sources: Vec<HeatSource>,
+    /// Equilibrate on the total material volume `Σ_r M_r v_r` of a cell
+    /// instead of the cell volume (Guilkey Sec. 3.3 step 2: "the volume
+    /// fraction θ_r is then computed as the volume of r-material per total
+    /// material volume"), with `v_r` the evolved specific volume of a fluid
+    /// (Eqs. 40–41) and the solid EOS value at the previous pressure for a
+    /// particle material. Needed when solid mass reaches the cells by
+    /// interpolation; `false` for fluid-only scenes.
+    pub normalise_volume: bool,
+}
+
+/// How a material moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Frame {
+    /// A fluid in the cells: advected (Guilkey Sec. 3.3 step 12).
+    Eulerian,
+    /// A deformable solid on material points (step 13).
+    Particles,
+    /// A rigid solid on material points with a prescribed velocity: it
+    /// takes part in the exchange with that velocity held fixed.
+    Rigid,
+}
+
+/// An internal-energy source: `power` W/m³ per cell (flat cell index, zero
+/// outside the region) added to material `material` while
+/// `start ≤ t < end` (the part of a step inside the window counts).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatSource {
+    /// Index of the fluid material heated.
+    pub material: usize,
+    /// Power per unit volume in every cell (length: the layout's cells).
+    pub power: Vec<f64>,
+    /// Start of the window.
+    pub start: f64,
+    /// End of the window.
+    pub end: f64,
 }
 
 /// Time integration of the step sequence.
@@ -125,7 +169,25 @@ impl<const D: usize> IceParams<D> {
             face_smooth_factor: 0.0,
             pressure_weight: 1.0,
             implicit: None,
+            frames: Vec::new(),
+            heat_sources: Vec::new(),
+            normalise_volume: false,
         }
+    }
+
+    /// The frame of material `r` (Eulerian unless set in `frames`).
+    #[inline]
+    pub fn frame(&self, r: usize) -> Frame {
+        self.frames.get(r).copied().unwrap_or(Frame::Eulerian)
+    }
+
+    /// `true` per material with a prescribed (rigid) velocity.
+    pub fn rigid_mask(&self) -> [bool; MAX_MATERIALS] {
+        let mut m = [false; MAX_MATERIALS];
+        for (r, f) in self.frames.iter().enumerate().take(MAX_MATERIALS) {
+            m[r] = *f == Frame::Rigid;
+        }
+        m
     }
 
     /// The high-resolution variant of the same ICE step (an improvement of
@@ -201,6 +263,36 @@ impl<const D: usize> IceParams<D> {
             ));
         }
         let nm = state.num_materials();
+        if !self.frames.is_empty() && self.frames.len() != nm {
+            return Err(invalid(
+                "frames",
+                format!("needs {nm} entries, got {}", self.frames.len()),
+            ));
+        }
+        let coupled = self.frames.iter().any(|f| *f != Frame::Eulerian);
+        if coupled && self.time != TimeIntegration::ForwardEuler {
+            return Err(invalid(
+                "time",
+                "particle-borne materials need forward_euler time integration",
+            ));
+        }
+        for (i, h) in self.heat_sources.iter().enumerate() {
+            if h.material >= nm || self.frame(h.material) != Frame::Eulerian {
+                return Err(invalid(
+                    format!("heat_sources[{i}].material"),
+                    "must be a fluid material",
+                ));
+            }
+            if h.power.len() != state.layout.len()
+                || !h.power.iter().all(|q| q.is_finite())
+                || !(h.start.is_finite() && h.end.is_finite() && h.end >= h.start)
+            {
+                return Err(invalid(
+                    format!("heat_sources[{i}]"),
+                    "needs a finite power per cell and a window start <= end",
+                ));
+            }
+        }
         if let Some(mu) = &self.viscosity {
             if mu.len() != nm || !mu.iter().all(|m| m.is_finite() && *m >= 0.0) {
                 return Err(invalid(
@@ -313,6 +405,32 @@ impl<const D: usize> IceWorkspace<D> {
     }
 }
 
+impl<const D: usize> IceWorkspace<D> {
+    /// The pressure of the current step (`p_eq + w Δp`, Guilkey Eq. 30),
+    /// ghosts filled, after [`stage_pressure`].
+    pub fn pressure(&self) -> &[f64] {
+        &self.press
+    }
+
+    /// The face pressures normal to each direction (Guilkey Eq. 31), after
+    /// [`stage_pressure`].
+    pub fn face_pressure(&self) -> &[Vec<f64>; D] {
+        &self.pstar
+    }
+
+    /// The Lagrangian velocities after the exchange (Guilkey Eq. 38) of
+    /// material `r`, after [`stage_lagrangian`].
+    pub fn lagrangian_velocity(&self, r: usize) -> &[SVector<f64, D>] {
+        &self.vel_l[r]
+    }
+
+    /// Per material and direction, the face velocities `u*` after the face
+    /// exchange (Guilkey Eq. 28), after [`stage_pressure`].
+    pub fn face_velocities(&self) -> &[[Vec<f64>; D]] {
+        &self.ustar
+    }
+}
+
 /// What a step did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepInfo {
@@ -399,8 +517,20 @@ pub fn equilibrate<const D: usize>(
         let mut th = [0.0; MAX_MATERIALS];
         let mut local_max = 0;
         for c in row {
+            // Guilkey Sec. 3.3 step 2: θ_r per total material volume.
+            let mut vt = vol;
+            if params.normalise_volume {
+                let mut sum = 0.0;
+                for r in 0..nm {
+                    // SAFETY: cell c is read and written by this task only.
+                    sum += mass_in[r][c] * unsafe { sv_out[r].get(c) };
+                }
+                if sum.is_finite() && sum > 0.0 {
+                    vt = sum;
+                }
+            }
             for r in 0..nm {
-                rb[r] = mass_in[r][c] / vol;
+                rb[r] = mass_in[r][c] / vt;
                 t[r] = temp_in[r][c];
             }
             // SAFETY: cell c is read and written by this task only.
@@ -655,6 +785,28 @@ fn stage<const D: usize>(
     dt_max: f64,
     fixed: bool,
 ) -> Result<StepInfo, IceError> {
+    let info = stage_pressure(state, params, ws, dt_max, fixed)?;
+    stage_lagrangian(state, params, ws, info.dt, &[])?;
+    stage_advect(state, params, ws, info)
+}
+
+/// Steps 2–6 of the sequence (Guilkey Sec. 3.3): equilibration pressure
+/// (Eq. 13), the time step, face velocities (Eq. 28) and their exchange,
+/// the pressure `p = p_eq + Δp` (Eqs. 29–30, explicit or semi-implicit) and
+/// the face pressure (Eq. 31). Leaves the pressure in
+/// [`IceWorkspace::pressure`] and the face pressures in
+/// [`IceWorkspace::face_pressure`]; the state is not changed except for the
+/// equilibrated `p_eq`, `sp_vol` and `vol_frac`.
+///
+/// # Errors
+/// As [`step`].
+pub fn stage_pressure<const D: usize>(
+    state: &mut IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    dt_max: f64,
+    fixed: bool,
+) -> Result<StepInfo, IceError> {
     let nm = state.num_materials();
     let bcs = &params.boundaries;
     let scheme = params.advection;
@@ -691,15 +843,8 @@ fn stage<const D: usize>(
         ));
     }
     let layout = &state.layout;
-    let vol = layout.cell_volume();
     let exchange = params.exchange.as_ref().filter(|_| nm > 1);
     let k_on = exchange.filter(|e| e.momentum.iter().any(|&k| k > 0.0));
-    let h_on = exchange.filter(|e| !e.heat_off());
-    let conservative = params.energy == EnergyForm::Conservative;
-    let mut cv = [0.0; MAX_MATERIALS];
-    for r in 0..nm {
-        cv[r] = state.materials[r].eos.specific_heat_cv();
-    }
 
     // Step 3: face velocities (Guilkey Eq. 28), then the face exchange.
     let fdt = params.face_dt_factor * dt;
@@ -723,6 +868,9 @@ fn stage<const D: usize>(
         } else {
             &mc.velocity
         };
+        // A rigid material's face velocity is the average of its prescribed
+        // cell velocities (no pressure acceleration).
+        let rigid = params.frame(r) == Frame::Rigid;
         for d in 0..D {
             let out = &mut ws.ustar[r][d];
             face_velocities(
@@ -732,10 +880,10 @@ fn stage<const D: usize>(
                 vel_in,
                 &mc.sp_vol,
                 &state.p_eq,
-                fdt,
-                params.gravity[d] * dt / fdt,
+                if rigid { 0.0 } else { fdt },
+                if rigid { 0.0 } else { params.gravity[d] * dt / fdt },
                 params.face_reconstruction,
-                params.face_smooth_factor * dt,
+                if rigid { 0.0 } else { params.face_smooth_factor * dt },
                 out,
             );
             zero_wall_faces(layout, bcs, d, out);
@@ -747,7 +895,15 @@ fn stage<const D: usize>(
     }
     if let Some(ex) = k_on {
         for d in 0..D {
-            face_exchange(layout, d, &ex.momentum, dt, &state.cells, &mut ws.ustar);
+            face_exchange(
+                layout,
+                d,
+                &ex.momentum,
+                dt,
+                &state.cells,
+                &params.rigid_mask(),
+                &mut ws.ustar,
+            );
         }
     }
     let (outer_iterations, linear_iterations) = if let Some(sp) = implicit {
@@ -804,8 +960,60 @@ fn stage<const D: usize>(
     for d in 0..D {
         face_pressure(layout, d, &ws.press, &ws.mix_mass, &mut ws.pstar[d]);
     }
+    Ok(StepInfo {
+        dt,
+        max_equilibration_iterations: max_it,
+        outer_iterations,
+        linear_iterations,
+    })
+}
 
-    // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
+/// Steps 8–11 (Guilkey Sec. 3.3): momentum and energy sources (Eqs. 33–34),
+/// heat sources, Lagrangian values (Eqs. 35–37), the pointwise-implicit
+/// exchange (Eqs. 38–39) and the specific-volume evolution (Eqs. 40–41),
+/// after [`stage_pressure`]. The Lagrangian values are left in the
+/// workspace ([`IceWorkspace::lagrangian_velocity`]).
+///
+/// `particle_velocity[r]`, for a material carried by particles
+/// ([`Frame::Particles`] or [`Frame::Rigid`]), is its Lagrangian cell
+/// velocity computed on the nodes (Guilkey Sec. 3.3: "the time advanced
+/// solid material momentum is then aggregated at the cell centers for
+/// momentum exchange"); its momentum source is not recomputed here. Empty
+/// for fluid-only scenes.
+///
+/// # Errors
+/// [`IceError::NonPhysical`] naming the cell.
+pub fn stage_lagrangian<const D: usize>(
+    state: &IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    dt: f64,
+    particle_velocity: &[Vec<SVector<f64, D>>],
+) -> Result<(), IceError> {
+    let nm = state.num_materials();
+    let layout = &state.layout;
+    let vol = layout.cell_volume();
+    let mu = params
+        .viscosity
+        .as_deref()
+        .filter(|m| m.iter().any(|&x| x > 0.0));
+    let exchange = params.exchange.as_ref().filter(|_| nm > 1);
+    let k_on = exchange.filter(|e| e.momentum.iter().any(|&k| k > 0.0));
+    let h_on = exchange.filter(|e| !e.heat_off());
+    let conservative = params.energy == EnergyForm::Conservative;
+    let mut cv = [0.0; MAX_MATERIALS];
+    let mut lagr = [false; MAX_MATERIALS];
+    let mut fixed = [false; MAX_MATERIALS];
+    for r in 0..nm {
+        cv[r] = state.materials[r].eos.specific_heat_cv();
+        lagr[r] = params.frame(r) != Frame::Eulerian && !particle_velocity.is_empty();
+        fixed[r] = params.frame(r) == Frame::Rigid;
+    }
+    let any_fixed = fixed[..nm].iter().any(|&f| f);
+    let (t0, t1) = (state.time, state.time + dt);
+    let sources = &params.heat_sources;
+
+        // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
     // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
     // Appendix Eq. 53), per cell and all materials at once.
     {
@@ -873,6 +1081,14 @@ fn stage<const D: usize>(
                     v[r] = mc.sp_vol[c];
                     let m = mc.mass[c];
                     mass[r] = m;
+                    if lagr[r] {
+                        // Particle-borne: the sources were applied on the
+                        // nodes (Guilkey Sec. 3.3 step 8).
+                        u[r] = particle_velocity[r][c];
+                        t[r] = mc.temperature[c];
+                        heat[r] = 0.0;
+                        continue;
+                    }
                     // Guilkey Eq. 33: Δ(mu) = −Δt V θ ∇p* + Δt M g
                     // (+ Δt V ∇·(θ τ) with viscosity).
                     let mut mom = mc.velocity[c] * m - grad * (dt * vol * theta[r])
@@ -896,6 +1112,14 @@ fn stage<const D: usize>(
                     } else {
                         me / (m * cv[r])
                     };
+                    // Heat sources: internal energy added at a rate per unit
+                    // volume over a time window.
+                    for src in sources.iter().filter(|s| s.material == r) {
+                        let overlap = (t1.min(src.end) - t0.max(src.start)).max(0.0);
+                        if overlap > 0.0 {
+                            t[r] += src.power[c] * vol * overlap / (m * cv[r]);
+                        }
+                    }
                 }
                 if conservative {
                     // Conservative Eq. 34: Δ(mE) = −Δt Σ_f A p*_f Σ_s θ_s,f u*_s,f
@@ -908,18 +1132,22 @@ fn stage<const D: usize>(
                     de *= vol;
                     let de_int = de - dke_src;
                     for r in 0..nm {
+                        if lagr[r] {
+                            continue;
+                        }
                         let f_theta = theta[r] * kappa[r][c] / stk[c];
                         t[r] += (f_theta * de_int + heat[r]) / (mass[r] * cv[r]);
                     }
                 }
                 if let Some(ex) = k_on {
                     let ke0: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
-                    exchange_momentum(
+                    exchange_momentum_fixed(
                         &ex.momentum,
                         dt,
                         &theta[..nm],
                         &v[..nm],
                         &mass[..nm],
+                        if any_fixed { &fixed[..nm] } else { &[] },
                         &mut u[..nm],
                     );
                     if conservative {
@@ -927,6 +1155,9 @@ fn stage<const D: usize>(
                         // becomes heat.
                         let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
                         for r in 0..nm {
+                            if lagr[r] {
+                                continue;
+                            }
                             let f_theta = theta[r] * kappa[r][c] / stk[c];
                             t[r] += f_theta * (ke0 - ke1) / (mass[r] * cv[r]);
                         }
@@ -951,6 +1182,19 @@ fn stage<const D: usize>(
                     }
                 }
                 for r in 0..nm {
+                    if lagr[r] {
+                        // The cell values of a particle-borne material are
+                        // rebuilt from the particles next step.
+                        // SAFETY: cell c is written by this task only.
+                        unsafe {
+                            o_vel[r].set(c, u[r]);
+                            o_temp[r].set(c, t[r]);
+                            o_e[r].set(c, cv[r] * t[r]);
+                            o_ke[r].set(c, 0.5 * u[r].norm_squared());
+                            o_v[r].set(c, v[r]);
+                        }
+                        continue;
+                    }
                     if !(t[r].is_finite() && t[r] > 0.0) {
                         return Err(IceError::NonPhysical {
                             site: site(st, c, Some(r)),
@@ -988,9 +1232,41 @@ fn stage<const D: usize>(
             Ok(())
         })?;
     }
+    Ok(())
+}
 
+/// Step 12 (Guilkey Sec. 3.3): advection of the Eulerian materials with
+/// compatible fluxes, then the commit of the new state (time and step
+/// count advance by `info.dt`). Materials carried by particles are not
+/// advected (their cell values are rebuilt from the particles).
+///
+/// # Errors
+/// [`IceError::NonPhysical`] naming the cell.
+pub fn stage_advect<const D: usize>(
+    state: &mut IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    info: StepInfo,
+) -> Result<StepInfo, IceError> {
+    let nm = state.num_materials();
+    let bcs = &params.boundaries;
+    let scheme = params.advection;
+    let layout = &state.layout;
+    let dt = info.dt;
+    let conservative = params.energy == EnergyForm::Conservative;
+    let predictor = params
+        .implicit
+        .as_ref()
+        .map_or(0.0, |sp| sp.convective_predictor);
+    let mut cv = [0.0; MAX_MATERIALS];
+    for r in 0..nm {
+        cv[r] = state.materials[r].eos.specific_heat_cv();
+    }
     // Step 12: advection with compatible fluxes.
     for r in 0..nm {
+        if params.frame(r) != Frame::Eulerian {
+            continue;
+        }
         let inflow_v = |s: &[super::InflowState<D>]| s[r].velocity;
         fill_vector(layout, bcs, &mut ws.vel_l[r], inflow_v);
         let cvr = cv[r];
@@ -1068,6 +1344,9 @@ fn stage<const D: usize>(
     }
     // Commit.
     for r in 0..nm {
+        if params.frame(r) != Frame::Eulerian {
+            continue;
+        }
         let mc = &mut state.cells[r];
         std::mem::swap(&mut mc.mass, &mut ws.new_mass[r]);
         std::mem::swap(&mut mc.velocity, &mut ws.new_vel[r]);
@@ -1094,12 +1373,7 @@ fn stage<const D: usize>(
     // Keep the old p_eq as the next equilibration's guess (already there).
     state.time += dt;
     state.steps += 1;
-    Ok(StepInfo {
-        dt,
-        max_equilibration_iterations: max_it,
-        outer_iterations,
-        linear_iterations,
-    })
+    Ok(info)
 }
 
 /// Viscous momentum source `∇·(θ τ)` per unit volume of material `r` in

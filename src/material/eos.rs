@@ -70,6 +70,8 @@
 
 use std::fmt;
 
+pub use super::solid_eos::SolidEos;
+
 /// Errors from constructing or inverting an equation of state.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum EosError {
@@ -502,6 +504,9 @@ pub enum FluidEos {
     IdealGas(IdealGas),
     /// [`StiffenedGas`]: `p = (γ − 1) ρ c_v T − γ p_∞`.
     StiffenedGas(StiffenedGas),
+    /// [`SolidEos`]: the bulk response of a solid material in the cells of
+    /// a coupled MPM-ICE scene (Guilkey Fig. 1).
+    Solid(SolidEos),
 }
 
 impl FluidEos {
@@ -511,6 +516,7 @@ impl FluidEos {
         match self {
             Self::IdealGas(_) => "ideal_gas",
             Self::StiffenedGas(_) => "stiffened_gas",
+            Self::Solid(_) => "solid",
         }
     }
 }
@@ -518,6 +524,12 @@ impl FluidEos {
 impl From<IdealGas> for FluidEos {
     fn from(eos: IdealGas) -> Self {
         Self::IdealGas(eos)
+    }
+}
+
+impl From<SolidEos> for FluidEos {
+    fn from(eos: SolidEos) -> Self {
+        Self::Solid(eos)
     }
 }
 
@@ -533,6 +545,7 @@ macro_rules! dispatch {
         match $self {
             FluidEos::IdealGas($eos) => $call,
             FluidEos::StiffenedGas($eos) => $call,
+            FluidEos::Solid($eos) => $call,
         }
     };
 }
@@ -612,6 +625,7 @@ mod tests {
         match eos {
             FluidEos::IdealGas(_) => (0.0, 0.0),
             FluidEos::StiffenedGas(sg) => (sg.gamma() * sg.p_inf(), sg.p_inf()),
+            FluidEos::Solid(_) => unreachable!("no solid in these tests"),
         }
     }
 

@@ -3,5 +3,6 @@
 
 pub mod eos;
 pub mod solid;
+pub mod solid_eos;
 
 pub use solid::{ElasticConstants, SolidMaterial, SolidModel};

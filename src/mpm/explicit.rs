@@ -179,6 +179,7 @@ pub fn explicit_step<const D: usize>(
         t,
         dt,
         step,
+        pressure: None,
     };
     match params.shape {
         ShapeKind::Linear => step_with::<D, 2, _>(&ctx, LinearHat, particles, gs, scratch),
@@ -198,6 +199,9 @@ struct Ctx<'a, const D: usize> {
     t: f64,
     dt: f64,
     step: u64,
+    /// Coupled MPM-ICE: the nodal pressure and `p_ref`; the internal force
+    /// then uses `σ + (p − p_ref) I` (Guilkey Sec. 3.3 step 7).
+    pressure: Option<(&'a [f64], f64)>,
 }
 
 impl<const D: usize> Ctx<'_, D> {
@@ -320,6 +324,192 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
     Ok(())
 }
 
+/// The explicit MPM step split into the three phases that the coupled
+/// MPM-ICE step interleaves with the cell equations (Guilkey Sec. 3.3):
+/// [`CoupledMpm::p2g`] (step 1), [`CoupledMpm::solve`] (steps 7–9 on the
+/// nodes, with the cell pressure) and [`CoupledMpm::g2p`] (step 13). USF
+/// updates the stress at the start of `solve` from the P2G velocity; USL in
+/// `g2p` from the final grid velocity. MUSL is not offered here.
+pub struct CoupledMpm<'a, const D: usize> {
+    /// Background grid.
+    pub grid: &'a Grid<D>,
+    /// Solid materials.
+    pub materials: &'a [SolidMaterial],
+    /// Discretisation choices.
+    pub params: &'a ExplicitParams,
+    /// Body force per unit mass.
+    pub body: Option<&'a dyn BodyForce<D>>,
+    /// Time at the start of the step.
+    pub t: f64,
+    /// Time step.
+    pub dt: f64,
+    /// Step number (for errors).
+    pub step: u64,
+}
+
+macro_rules! with_kernel {
+    ($shape:expr, $f:ident, $($arg:expr),*) => {
+        match $shape {
+            ShapeKind::Linear => $f::<D, 2, _>(LinearHat, $($arg),*),
+            ShapeKind::Gimp => $f::<D, 3, _>(Gimp, $($arg),*),
+            ShapeKind::QuadraticBspline => $f::<D, 3, _>(QuadraticBspline, $($arg),*),
+            ShapeKind::CubicBspline => $f::<D, 4, _>(CubicBspline, $($arg),*),
+        }
+    };
+}
+
+impl<const D: usize> CoupledMpm<'_, D> {
+    fn ctx<'b>(&'b self, pressure: Option<(&'b [f64], f64)>) -> Ctx<'b, D> {
+        Ctx {
+            grid: self.grid,
+            materials: self.materials,
+            params: self.params,
+            body: self.body,
+            t: self.t,
+            dt: self.dt,
+            step: self.step,
+            pressure,
+        }
+    }
+
+    /// Step 1: bins the particles, freezes the GIMP domains and maps mass
+    /// and momentum to the nodes (Guilkey Eq. 22, mirror folding at walls);
+    /// sets the nodal velocity `v = p/m`. Does not change the particles.
+    ///
+    /// # Errors
+    /// A particle off the grid or not finite.
+    pub fn p2g(
+        &self,
+        particles: &Particles<D>,
+        gs: &mut GridState<D>,
+        scratch: &mut StepScratch<D>,
+    ) -> Result<()> {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            gs: &mut GridState<D>,
+            scratch: &mut StepScratch<D>,
+        ) -> Result<()> {
+            let start = Instant::now();
+            if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
+                return Err(ctx.fail(
+                    Some(p),
+                    None,
+                    "particle position is not finite or has left the grid",
+                ));
+            }
+            if ctx.params.shape == ShapeKind::Gimp {
+                let inv_h = ctx.grid.inv_h;
+                scratch.lp.resize(particles.len(), SVector::zeros());
+                scratch
+                    .lp
+                    .par_iter_mut()
+                    .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
+                    .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
+            } else {
+                scratch.lp.clear();
+            }
+            clear(gs);
+            p2g::<D, S, K, true, true, false>(ctx, kernel, &scratch.bins, &scratch.lp, particles, gs);
+            grid_velocity(ctx, gs);
+            scratch.times.p2g_s += start.elapsed().as_secs_f64();
+            Ok(())
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+    }
+
+    /// Steps 7–9 on the nodes: (USF) the stress update from the P2G
+    /// velocity, the internal force with `σ + (p − p_ref) I` and the body
+    /// force (Guilkey Eq. 24), plus `extra_force` (the pressure force
+    /// `−θ_s V ∇p*` carried from the cells, already folded at walls), and
+    /// the grid momentum equation (Eqs. 21, 25) giving `vᴸ` and `a`.
+    ///
+    /// # Errors
+    /// An inverted particle (USF).
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &self,
+        particles: &mut Particles<D>,
+        gs: &mut GridState<D>,
+        scratch: &mut StepScratch<D>,
+        node_pressure: &[f64],
+        p_ref: f64,
+        extra_force: &[SVector<f64, D>],
+    ) -> Result<()> {
+        #[allow(clippy::too_many_arguments)]
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &mut Particles<D>,
+            gs: &mut GridState<D>,
+            scratch: &mut StepScratch<D>,
+            extra_force: &[SVector<f64, D>],
+        ) -> Result<()> {
+            let start = Instant::now();
+            if ctx.params.scheme == UpdateScheme::Usf {
+                g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(
+                    ctx,
+                    kernel,
+                    &scratch.lp,
+                    particles,
+                    gs,
+                    &mut scratch.dx,
+                )?;
+            }
+            let mid = Instant::now();
+            scratch.times.g2p_s += (mid - start).as_secs_f64();
+            p2g::<D, S, K, false, false, true>(ctx, kernel, &scratch.bins, &scratch.lp, particles, gs);
+            gs.force
+                .par_iter_mut()
+                .zip(extra_force.par_iter())
+                .for_each(|(f, e)| *f += e);
+            let mid2 = Instant::now();
+            scratch.times.p2g_s += (mid2 - mid).as_secs_f64();
+            grid_solve(ctx, gs);
+            scratch.times.grid_s += mid2.elapsed().as_secs_f64();
+            Ok(())
+        }
+        let ctx = self.ctx(Some((node_pressure, p_ref)));
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch, extra_force)
+    }
+
+    /// Step 13: particle velocity (FLIP, Guilkey Eq. 26) and position
+    /// (Eq. 27) from the grid, after the caller has added the exchange's
+    /// velocity change to `gs.velocity_new` and `gs.accel`; (USL) the stress
+    /// update from the final grid velocity.
+    ///
+    /// # Errors
+    /// An inverted particle.
+    pub fn g2p(
+        &self,
+        particles: &mut Particles<D>,
+        gs: &GridState<D>,
+        scratch: &mut StepScratch<D>,
+    ) -> Result<()> {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &mut Particles<D>,
+            gs: &GridState<D>,
+            scratch: &mut StepScratch<D>,
+        ) -> Result<()> {
+            let start = Instant::now();
+            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
+            if ctx.params.scheme == UpdateScheme::Usf {
+                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
+            } else {
+                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, lp, particles, gs, dx)?;
+            }
+            scratch.times.g2p_s += start.elapsed().as_secs_f64();
+            Ok(())
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+    }
+}
+
 fn clear<const D: usize>(gs: &mut GridState<D>) {
     gs.mass.par_iter_mut().for_each(|m| *m = 0.0);
     gs.momentum
@@ -415,7 +605,18 @@ fn p2g<
             if let Some(b) = body {
                 fb = b.accel(&particles.x0[p], &particles.x[p], t) * mp;
             }
-            vs = block::<D>(&particles.stress[p]) * particles.vol[p];
+            let mut sigma = particles.stress[p];
+            if let Some((pn, p_ref)) = ctx.pressure {
+                // Guilkey Sec. 3.3 step 7: ICE applies −θ∇p to the solid, so
+                // the particle stress carries σ + (p − p_ref) I (the
+                // pressure is not counted twice).
+                let mut pp = 0.0;
+                pw.for_each(|m, w, _| pp += w * pn[base + offset(m, &strides)]);
+                for d in 0..3 {
+                    sigma[(d, d)] += pp - p_ref;
+                }
+            }
+            vs = block::<D>(&sigma) * particles.vol[p];
         }
         pw.for_each(|m, w, g| {
             let idx = base + offset(m, &strides);

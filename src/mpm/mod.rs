@@ -8,7 +8,7 @@ pub mod particles;
 mod scatter;
 
 pub use explicit::{
-    explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, PhaseTimes, StepScratch,
+    explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes, StepScratch,
     UpdateScheme,
 };
 pub use implicit::{ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad};
