@@ -142,6 +142,17 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
         .iter()
         .any(|m| m.kind == crate::scene::MaterialKind::Fluid);
     let implicit = scene.time.mode == crate::scene::Mode::Implicit;
+    let solid = scene
+        .materials
+        .iter()
+        .any(|m| m.kind == crate::scene::MaterialKind::Solid);
+    if solid && fluid {
+        return pool.install(|| match scene.grid.dim {
+            1 => crate::driver_coupled::run_coupled_dim::<1>(scene, opts, threads),
+            2 => crate::driver_coupled::run_coupled_dim::<2>(scene, opts, threads),
+            _ => crate::driver_coupled::run_coupled_dim::<3>(scene, opts, threads),
+        });
+    }
     pool.install(|| match (scene.grid.dim, fluid) {
         (1, false) if implicit => run_implicit_dim::<1>(scene, opts, threads),
         (2, false) if implicit => run_implicit_dim::<2>(scene, opts, threads),
@@ -250,7 +261,7 @@ pub(crate) fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
     std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
 }
 
-fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+pub(crate) fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
     let pts: Vec<[f64; 3]> = p.x.iter().map(pad3).collect();
     let vel: Vec<[f64; 3]> = p.v.iter().map(pad3).collect();
     let disp: Vec<[f64; 3]> =
@@ -285,7 +296,7 @@ fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io
     )
 }
 
-fn write_particles_csv<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+pub(crate) fn write_particles_csv<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
     let axes = ["x", "y", "z"];
     let u = per_depth(D);
     let mut header: Vec<String> = Vec::new();

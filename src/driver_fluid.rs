@@ -18,7 +18,7 @@ const MAX_RETRIES: u32 = 20;
 
 /// Kinetic and internal energy of the fluid (internal reported as `strain`
 /// in [`Energies`], which the solid run uses for stored elastic energy).
-fn energies<const D: usize>(state: &IceState<D>) -> Energies {
+pub(crate) fn energies<const D: usize>(state: &IceState<D>) -> Energies {
     let (mut kinetic, mut internal) = (0.0, 0.0);
     for (mat, mc) in state.materials.iter().zip(&state.cells) {
         let cv = mat.eos.specific_heat_cv();
@@ -34,17 +34,17 @@ fn energies<const D: usize>(state: &IceState<D>) -> Energies {
     }
 }
 
-struct FluidWriter {
+pub(crate) struct FluidWriter {
     dir: PathBuf,
     formats: Vec<Format>,
     pvd: PvdSeries,
     history: CsvAppender,
     snapshots: usize,
-    output_s: f64,
+    pub(crate) output_s: f64,
 }
 
 impl FluidWriter {
-    fn new(dir: &Path, formats: &[Format], dim: usize) -> Result<Self> {
+    pub(crate) fn new(dir: &Path, formats: &[Format], dim: usize) -> Result<Self> {
         let history = open_history(
             dir,
             dim,
@@ -65,7 +65,7 @@ impl FluidWriter {
         })
     }
 
-    fn history_row<const D: usize>(&mut self, state: &IceState<D>) -> Result<()> {
+    pub(crate) fn history_row<const D: usize>(&mut self, state: &IceState<D>) -> Result<()> {
         let start = Instant::now();
         let e = energies(state);
         let (mass, _, _) = state.totals();
@@ -76,7 +76,7 @@ impl FluidWriter {
         Ok(())
     }
 
-    fn snapshot<const D: usize>(&mut self, state: &IceState<D>) -> Result<()> {
+    pub(crate) fn snapshot<const D: usize>(&mut self, state: &IceState<D>) -> Result<()> {
         let start = Instant::now();
         let k = self.snapshots;
         let fields = CellFields::of(state);

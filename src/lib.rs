@@ -10,6 +10,7 @@
 pub mod coupling;
 pub mod diagnostics;
 pub mod driver;
+mod driver_coupled;
 mod driver_fluid;
 pub mod error;
 pub mod grid;

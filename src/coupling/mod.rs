@@ -54,8 +54,13 @@ pub struct CouplingParams {
     /// for solids).
     pub solid_temperature: f64,
     /// Volume-fraction floor: empty cells hold this fraction of solid (at
-    /// the solid's density), fully solid cells this fraction of fluid.
+    /// the solid's density), fully solid cells this fraction of fluid. It
+    /// must make `Δt K θ_floor v` negligible (`1e-15` with `K = 1e15`).
     pub floor_fraction: f64,
+    /// Momentum exchange coefficient `K` between the solid field and every
+    /// fluid (Guilkey Eq. 38; `1e15` drives them to one velocity where they
+    /// share a cell: no slip, no interpenetration, Sec. 4.2).
+    pub momentum_exchange: f64,
 }
 
 impl Default for CouplingParams {
@@ -63,7 +68,8 @@ impl Default for CouplingParams {
         Self {
             p_ref: 101_325.0,
             solid_temperature: 300.0,
-            floor_fraction: 1e-10,
+            floor_fraction: 1e-15,
+            momentum_exchange: 1e15,
         }
     }
 }
@@ -175,11 +181,14 @@ impl<const D: usize> CoupledRun<D> {
             Frame::Particles
         };
         ice.normalise_volume = true;
-        if let Some(ex) = &mut ice.exchange {
+        {
             // Grow the coefficient matrices by the solid's row and column
-            // (the same momentum coefficient as the first pair; no heat
-            // exchange with the isothermal solid).
-            let k = ex.momentum.iter().copied().fold(0.0, f64::max);
+            // (`coupling.momentum_exchange`; no heat exchange with the
+            // isothermal solid).
+            let ex = ice
+                .exchange
+                .get_or_insert_with(|| ice::ExchangeCoefficients::uniform(solid, 0.0, 0.0));
+            let k = coupling.momentum_exchange;
             let mut momentum = vec![0.0; nm * nm];
             let mut heat = vec![0.0; nm * nm];
             for r in 0..solid {
@@ -283,10 +292,12 @@ impl<const D: usize> CoupledRun<D> {
         let rigid = self.rigid_velocity;
         for (k, &c) in self.fluid.layout.interior.iter().enumerate() {
             let m = self.cell_mass[k];
+            // An empty cell's floor moves with the fluid (even for a rigid
+            // field): its exchange then changes nothing.
             let (mass, u) = if m > floor {
                 (m, rigid.unwrap_or(self.solid_l[k]))
             } else {
-                (floor, rigid.unwrap_or_else(|| self.fluid_velocity(c)))
+                (floor, self.fluid_velocity(c))
             };
             let p = self.fluid.pressure[c];
             let p = if p > 0.0 { p } else { self.coupling.p_ref };

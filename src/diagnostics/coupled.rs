@@ -108,3 +108,60 @@ pub fn block_in_air(
         0.5,
     )
 }
+
+/// The adiabatic piston of Guilkey Sec. 4.2 in 1D: air at
+/// `(ρ, p) = (1.1768, 101325)` in `[0, 1.2]` (`n` cells, walls at both
+/// ends), a rigid steel piston filling `[1.0, 1.1]` (2 particles per cell)
+/// moving towards the closed end `x = 0` at `speed`; exchange `K = 1e15`.
+/// The gas below the piston is compressed from length 1 to `1 − speed t`.
+///
+/// # Errors
+/// As [`CoupledRun::new`].
+pub fn piston(n: usize, speed: f64) -> Result<CoupledRun<1>> {
+    let grid = Grid::<1>::new(
+        SVector::zeros(),
+        SVector::repeat(1.2),
+        [n],
+        [[Boundary::Symmetry; 2]],
+    );
+    let layout = CellLayout::from_grid(&grid)?;
+    let fluid = IceState::new(layout, vec![air()], |_| {
+        vec![MaterialInit::new(1.0, 1.1768, 101_325.0, SVector::zeros())]
+    })?;
+    let mut params = IceParams::new([[IceBoundary::Wall, IceBoundary::Wall]]);
+    params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
+    let m = steel();
+    let v = SVector::<f64, 1>::new(-speed);
+    let mut particles = fill_box(
+        &grid,
+        &SVector::<f64, 1>::new(1.0),
+        &SVector::<f64, 1>::new(1.1),
+        2,
+        m.density,
+        |_| true,
+    );
+    for u in &mut particles.v {
+        *u = v;
+    }
+    let min_mass = particles.mass.iter().copied().fold(f64::INFINITY, f64::min);
+    let mpm = ExplicitParams {
+        shape: ShapeKind::Linear,
+        scheme: UpdateScheme::Usf,
+        mass_floor: 1e-12 * min_mass,
+        damping: 0.0,
+    };
+    let eos = solid_eos(&m, 101_325.0);
+    CoupledRun::new(
+        grid,
+        vec![m],
+        particles,
+        mpm,
+        fluid,
+        params,
+        "piston",
+        eos,
+        Some(v),
+        CouplingParams::default(),
+        0.5,
+    )
+}

@@ -827,7 +827,7 @@ fn outer_iteration<const D: usize>(
     };
     for outer in 0..=sp.max_outer_iterations {
         // Guilkey Eq. 29 residual with the current face velocities.
-        volume_fluxes(state, params.advection, ws, dt);
+        volume_fluxes(state, params, ws, dt);
         let res = residual_max(layout, ws, &iw.dp, dt);
         if res <= sp.outer_tolerance {
             return Ok((outer, linear, res));

@@ -270,6 +270,14 @@ impl<const D: usize> IceParams<D> {
             ));
         }
         let coupled = self.frames.iter().any(|f| *f != Frame::Eulerian);
+        if let Some(first) = self.frames.iter().position(|f| *f != Frame::Eulerian) {
+            if self.frames[first..].contains(&Frame::Eulerian) {
+                return Err(invalid(
+                    "frames",
+                    "particle-borne materials must come after the Eulerian ones",
+                ));
+            }
+        }
         if coupled && self.time != TimeIntegration::ForwardEuler {
             return Err(invalid(
                 "time",
@@ -809,7 +817,6 @@ pub fn stage_pressure<const D: usize>(
 ) -> Result<StepInfo, IceError> {
     let nm = state.num_materials();
     let bcs = &params.boundaries;
-    let scheme = params.advection;
     // Step 2: equilibration pressure (Guilkey Eq. 13).
     let max_it = equilibrate(state, params)?;
     let mu = params
@@ -916,7 +923,7 @@ pub fn stage_pressure<const D: usize>(
     } else {
         courant_check(state, &ws.ustar, dt)?;
         // Step 5: Δp (Guilkey Eq. 29) and p = p_eq + Δp (Eq. 30).
-        volume_fluxes(state, scheme, ws, dt);
+        volume_fluxes(state, params, ws, dt);
         let p_min = min_pressure_all(state);
         let (div_sum, stk) = (&ws.div_sum, &ws.sum_theta_kappa);
         let press = Out::new(&mut ws.press);
@@ -1075,6 +1082,13 @@ pub fn stage_lagrangian<const D: usize>(
                     grad[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
                 }
                 let mut dke_src = 0.0;
+                // Cells a solid occupies use Guilkey Eq. 34 as written: the
+                // total-energy form would hand the fluid the work done on
+                // the solid's volume change (which a fluid floor cannot
+                // absorb); Eq. 34 gives each material the work of its own
+                // compression, `p κ_r θ_r Δp`.
+                let solid_here = (0..nm).any(|r| lagr[r] && st.cells[r].vol_frac[c] > 1e-9);
+                let cons = conservative && !solid_here;
                 for r in 0..nm {
                     let mc = &st.cells[r];
                     theta[r] = mc.vol_frac[c];
@@ -1105,7 +1119,7 @@ pub fn stage_lagrangian<const D: usize>(
                     }
                     u[r] = mom / m;
                     let me = m * cv[r] * mc.temperature[c];
-                    t[r] = if params.energy == EnergyForm::FlowWork {
+                    t[r] = if !cons {
                         // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
                         let f_theta = theta[r] * kappa[r][c] / stk[c];
                         (me - dt * vol * f_theta * press[c] * div_sum[c] + heat[r]) / (m * cv[r])
@@ -1121,7 +1135,7 @@ pub fn stage_lagrangian<const D: usize>(
                         }
                     }
                 }
-                if conservative {
+                if cons {
                     // Conservative Eq. 34: Δ(mE) = −Δt Σ_f A p*_f Σ_s θ_s,f u*_s,f
                     // (the stored fluxes carry Δt A / V).
                     let mut de = 0.0;
@@ -1131,11 +1145,18 @@ pub fn stage_lagrangian<const D: usize>(
                     }
                     de *= vol;
                     let de_int = de - dke_src;
+                    // f_θ among the materials that receive the work.
+                    let mut stk_e = 0.0;
+                    for r in 0..nm {
+                        if !lagr[r] {
+                            stk_e += theta[r] * kappa[r][c];
+                        }
+                    }
                     for r in 0..nm {
                         if lagr[r] {
                             continue;
                         }
-                        let f_theta = theta[r] * kappa[r][c] / stk[c];
+                        let f_theta = theta[r] * kappa[r][c] / stk_e;
                         t[r] += (f_theta * de_int + heat[r]) / (mass[r] * cv[r]);
                     }
                 }
@@ -1150,15 +1171,21 @@ pub fn stage_lagrangian<const D: usize>(
                         if any_fixed { &fixed[..nm] } else { &[] },
                         &mut u[..nm],
                     );
-                    if conservative {
+                    if cons {
                         // The kinetic energy dissipated by the exchange
                         // becomes heat.
                         let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
+                        let mut stk_e = 0.0;
+                        for r in 0..nm {
+                            if !lagr[r] {
+                                stk_e += theta[r] * kappa[r][c];
+                            }
+                        }
                         for r in 0..nm {
                             if lagr[r] {
                                 continue;
                             }
-                            let f_theta = theta[r] * kappa[r][c] / stk[c];
+                            let f_theta = theta[r] * kappa[r][c] / stk_e;
                             t[r] += f_theta * (ke0 - ke1) / (mass[r] * cv[r]);
                         }
                     }
@@ -1591,12 +1618,14 @@ pub(super) fn courant_check<const D: usize>(
 /// `Σ_r θ_r κ_r` (`ws.sum_theta_kappa`).
 pub(super) fn volume_fluxes<const D: usize>(
     state: &IceState<D>,
-    scheme: Advection,
+    params: &IceParams<D>,
     ws: &mut IceWorkspace<D>,
     dt: f64,
 ) {
+    let scheme = params.advection;
     let layout = &state.layout;
     let nm = state.num_materials();
+
     for r in 0..nm {
         let mc = &state.cells[r];
         let eos = &state.materials[r].eos;

@@ -514,3 +514,100 @@ pub fn build_fluid_run<const D: usize>(
         .map_err(|e| SceneError::new("fluid", e.to_string()))?;
     Ok((state, params))
 }
+
+/// Builds the coupled MPM-ICE run of a validated scene with solid and fluid
+/// materials (`D == dim`): the particles of the one solid material, the
+/// fluid state from `[[regions]]`, the heat sources and `[coupling]`.
+pub fn build_coupled_run<const D: usize>(
+    scene: &Scene,
+) -> Result<crate::coupling::CoupledRun<D>, SceneError> {
+    let solid_run = build_solid_run::<D>(scene)?;
+    let (state, mut params) = build_fluid_run::<D>(scene)?;
+    let spec_index = scene
+        .materials
+        .iter()
+        .position(|m| m.kind == MaterialKind::Solid)
+        .ok_or_else(|| SceneError::new("materials", "a coupled scene needs a solid material"))?;
+    let spec = &scene.materials[spec_index];
+    let solid = solid_material(spec);
+    let cs = &scene.coupling;
+    let eos = crate::material::eos::SolidEos::new(
+        solid.density,
+        solid.elastic.bulk(),
+        cs.reference_pressure,
+        cs.reference_pressure,
+        450.0,
+    )
+    .map_err(|e| SceneError::new(format!("materials[{spec_index}]"), e.to_string()))?;
+    let rigid_velocity = if spec.rigid {
+        let v = scene
+            .objects
+            .iter()
+            .find(|o| o.material == spec.name)
+            .and_then(|o| o.velocity.as_deref())
+            .map(to_vec::<D>)
+            .unwrap_or_else(SVector::zeros);
+        Some(v)
+    } else {
+        None
+    };
+    // Heat sources: the power on the cells whose centre lies in the region.
+    let fluid_names: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| m.kind == MaterialKind::Fluid)
+        .map(|m| m.name.as_str())
+        .collect();
+    for (i, h) in scene.heat_sources.iter().enumerate() {
+        let material = fluid_names
+            .iter()
+            .position(|n| *n == h.material)
+            .ok_or_else(|| {
+                SceneError::new(format!("heat_sources[{i}].material"), "not a fluid material")
+            })?;
+        let layout = &state.layout;
+        let mut power = vec![0.0; layout.len()];
+        for &c in &layout.interior {
+            let x: Vec<f64> = layout.centre(c).iter().copied().collect();
+            if h.geometry.contains(&x) {
+                power[c] = h.power;
+            }
+        }
+        params.heat_sources.push(crate::ice::HeatSource {
+            material,
+            power,
+            start: h.start,
+            end: h.end,
+        });
+    }
+    let coupling = crate::coupling::CouplingParams {
+        p_ref: cs.reference_pressure,
+        solid_temperature: cs.solid_temperature,
+        momentum_exchange: cs.momentum_exchange,
+        ..Default::default()
+    };
+    let SolidRun {
+        grid,
+        materials,
+        particles,
+        params: mpm,
+        body,
+        ..
+    } = solid_run;
+    let mut run = crate::coupling::CoupledRun::new(
+        grid,
+        materials,
+        particles,
+        mpm,
+        state,
+        params,
+        &spec.name,
+        eos,
+        rigid_velocity,
+        coupling,
+        scene.time.cfl.min(0.9),
+    )
+    .map_err(|e| SceneError::new("materials", e.to_string()))?;
+    run.body = body;
+    Ok(run)
+}

@@ -8,7 +8,10 @@
 mod build;
 mod schema;
 
-pub use build::{build_fluid_run, build_implicit_run, build_solid_run, fill_particles, grid_of};
+pub use build::{
+    build_coupled_run, build_fluid_run, build_implicit_run, build_solid_run, fill_particles,
+    grid_of,
+};
 pub use schema::*;
 
 use crate::error::SceneError;

@@ -40,6 +40,12 @@ pub struct Scene {
     /// Uniform body force per unit mass (length `dim`), e.g. `[0, -9.81]`.
     #[serde(default)]
     pub gravity: Option<Vec<f64>>,
+    /// MPM-ICE coupling settings (scenes with solid and fluid materials).
+    #[serde(default)]
+    pub coupling: CouplingSpec,
+    /// Internal-energy sources of fluid materials.
+    #[serde(default)]
+    pub heat_sources: Vec<HeatSourceSpec>,
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
@@ -230,6 +236,66 @@ pub struct MaterialSpec {
     pub p_inf: Option<f64>,
     /// Dynamic viscosity μ ≥ 0 (fluids; default 0 = inviscid).
     pub viscosity: Option<f64>,
+    /// A rigid solid (coupled scenes): its particles move with their
+    /// object's `velocity`, prescribed; the elastic constants give its bulk
+    /// EOS in the cells.
+    #[serde(default)]
+    pub rigid: bool,
+}
+
+/// MPM-ICE coupling settings (Guilkey Sec. 3.3).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingSpec {
+    /// Pressure at which the solid is stress-free (> 0).
+    #[serde(default = "default_p_ref")]
+    pub reference_pressure: f64,
+    /// Momentum exchange coefficient between the solid and each fluid
+    /// (≥ 0; Guilkey uses 1e15).
+    #[serde(default = "default_k_solid")]
+    pub momentum_exchange: f64,
+    /// Temperature of the (isothermal) solid in the cells (> 0).
+    #[serde(default = "default_solid_t")]
+    pub solid_temperature: f64,
+}
+
+fn default_p_ref() -> f64 {
+    101_325.0
+}
+fn default_k_solid() -> f64 {
+    1e15
+}
+fn default_solid_t() -> f64 {
+    300.0
+}
+
+impl Default for CouplingSpec {
+    fn default() -> Self {
+        Self {
+            reference_pressure: default_p_ref(),
+            momentum_exchange: default_k_solid(),
+            solid_temperature: default_solid_t(),
+        }
+    }
+}
+
+/// Internal energy added to a fluid material in a region at a constant
+/// power per unit volume over a time window (Guilkey Sec. 4.1 pressurises
+/// the cylinder this way).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeatSourceSpec {
+    /// Name of a fluid material.
+    pub material: String,
+    /// Cells whose centre lies in this region are heated.
+    pub geometry: Geometry,
+    /// Power per unit volume [W/m³] (finite).
+    pub power: f64,
+    /// Start of the window (≥ 0).
+    #[serde(default)]
+    pub start: f64,
+    /// End of the window (> start).
+    pub end: f64,
 }
 
 /// Region filled by an object.
@@ -263,6 +329,12 @@ pub enum Geometry {
         point: Vec<f64>,
         /// Normal pointing into the region.
         normal: Vec<f64>,
+    },
+    /// Polygon in the x–y plane (2D; in 3D a prism along z): the points
+    /// inside the closed polyline through `vertices` (even–odd rule).
+    Polygon {
+        /// Vertices `[[x, y], …]` (at least 3).
+        vertices: Vec<[f64; 2]>,
     },
     /// Annulus (2D) or cylindrical shell along z (3D): distance from the
     /// centre (in the x–y plane) between the radii.
@@ -300,6 +372,23 @@ impl Geometry {
                 let r2 = dist2(x, center, x.len().min(2));
                 r2 >= inner_radius * inner_radius && r2 <= outer_radius * outer_radius
             }
+            Geometry::Polygon { vertices } => {
+                if x.len() < 2 {
+                    return false;
+                }
+                // Even–odd rule: count crossings of the ray to +x.
+                let (px, py) = (x[0], x[1]);
+                let n = vertices.len();
+                let mut inside = false;
+                for i in 0..n {
+                    let [xi, yi] = vertices[i];
+                    let [xj, yj] = vertices[(i + n - 1) % n];
+                    if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
+                        inside = !inside;
+                    }
+                }
+                inside
+            }
         }
     }
 
@@ -307,6 +396,15 @@ impl Geometry {
     pub fn bounds(&self, dim: usize) -> (Vec<f64>, Vec<f64>) {
         match self {
             Geometry::HalfSpace { .. } => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
+            Geometry::Polygon { vertices } => {
+                let mut lo = vec![f64::NEG_INFINITY; dim];
+                let mut hi = vec![f64::INFINITY; dim];
+                for d in 0..dim.min(2) {
+                    lo[d] = vertices.iter().map(|v| v[d]).fold(f64::INFINITY, f64::min);
+                    hi[d] = vertices.iter().map(|v| v[d]).fold(f64::NEG_INFINITY, f64::max);
+                }
+                (lo, hi)
+            }
             Geometry::Box { lower, upper } => (lower.clone(), upper.clone()),
             Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => (
                 center.iter().map(|c| c - radius).collect(),
@@ -732,7 +830,36 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     Ok(())
 }
 
+/// Shape checks of a region's geometry (fluid regions, heat sources).
+fn validate_region_shape(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneError> {
+    validate_geometry(g, path, dim)?;
+    match g {
+        Geometry::Box { lower, upper } => {
+            vec_len(&format!("{path}.lower"), lower, dim)?;
+            vec_len(&format!("{path}.upper"), upper, dim)?;
+        }
+        Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
+            vec_len(&format!("{path}.center"), center, dim)?;
+            positive(&format!("{path}.radius"), *radius)?;
+        }
+        Geometry::Annulus { center, .. } => vec_len(&format!("{path}.center"), center, dim)?,
+        Geometry::HalfSpace { .. } | Geometry::Polygon { .. } => {}
+    }
+    Ok(())
+}
+
 fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneError> {
+    if let Geometry::Polygon { vertices } = g {
+        if dim < 2 {
+            return Err(err(path, "a polygon needs dim = 2 or 3"));
+        }
+        if vertices.len() < 3 || !vertices.iter().flatten().all(|v| v.is_finite()) {
+            return Err(err(
+                format!("{path}.vertices"),
+                "needs at least 3 finite [x, y] vertices",
+            ));
+        }
+    }
     if let Geometry::HalfSpace { point, normal } = g {
         vec_len(&format!("{path}.point"), point, dim)?;
         vec_len(&format!("{path}.normal"), normal, dim)?;
@@ -837,21 +964,7 @@ impl Scene {
         for (i, r) in self.regions.iter().enumerate() {
             let p = |k: &str| format!("regions[{i}].{k}");
             if let Some(g) = &r.geometry {
-                validate_geometry(g, &p("geometry"), dim)?;
-                match g {
-                    Geometry::Box { lower, upper } => {
-                        vec_len(&p("geometry.lower"), lower, dim)?;
-                        vec_len(&p("geometry.upper"), upper, dim)?;
-                    }
-                    Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => {
-                        vec_len(&p("geometry.center"), center, dim)?;
-                        positive(&p("geometry.radius"), *radius)?;
-                    }
-                    Geometry::Annulus { center, .. } => {
-                        vec_len(&p("geometry.center"), center, dim)?
-                    }
-                    Geometry::HalfSpace { .. } => {}
-                }
+                validate_region_shape(g, &p("geometry"), dim)?;
             }
             if !r.pressure.is_finite() {
                 return Err(err(p("pressure"), "must be finite"));
@@ -926,6 +1039,103 @@ impl Scene {
                 return Err(err(
                     p("states"),
                     format!("volume fractions must sum to 1 (got {sum})"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// Checks of a scene with solid and fluid materials (MPM-ICE).
+    fn validate_coupled(&self) -> Result<(), SceneError> {
+        let solids: Vec<usize> = (0..self.materials.len())
+            .filter(|&i| self.materials[i].kind == MaterialKind::Solid)
+            .collect();
+        if solids.len() != 1 {
+            return Err(err(
+                "materials",
+                format!(
+                    "a coupled scene has exactly one solid material (one solid field), got {}",
+                    solids.len()
+                ),
+            ));
+        }
+        if self.mpm.update == UpdateScheme::Musl {
+            return Err(err(
+                "mpm.update",
+                "musl is not offered in coupled scenes; allowed: usf, usl",
+            ));
+        }
+        for faces in self.grid.boundary.faces().iter() {
+            for (bc, name) in faces {
+                if *bc == Some(Boundary::Periodic) {
+                    return Err(err(
+                        format!("grid.boundary.{name}"),
+                        "periodic faces are not offered in coupled scenes; allowed: fixed, \
+                         symmetry, free",
+                    ));
+                }
+            }
+        }
+        let c = &self.coupling;
+        positive("coupling.reference_pressure", c.reference_pressure)?;
+        positive("coupling.solid_temperature", c.solid_temperature)?;
+        if !(c.momentum_exchange.is_finite() && c.momentum_exchange >= 0.0) {
+            return Err(err(
+                "coupling.momentum_exchange",
+                format!("must be finite and >= 0, got {}", c.momentum_exchange),
+            ));
+        }
+        let s = solids[0];
+        if self.materials[s].rigid {
+            let name = &self.materials[s].name;
+            let mut vel: Option<&Option<Vec<f64>>> = None;
+            for (i, o) in self.objects.iter().enumerate() {
+                if &o.material == name {
+                    match vel {
+                        None => vel = Some(&o.velocity),
+                        Some(v) if *v != o.velocity => {
+                            return Err(err(
+                                format!("objects[{i}].velocity"),
+                                "all objects of a rigid material move with one prescribed \
+                                 velocity",
+                            ))
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+        let (lo, hi) = (&self.grid.lower, &self.grid.upper);
+        let dim = self.grid.dim;
+        for (i, h) in self.heat_sources.iter().enumerate() {
+            let p = |k: &str| format!("heat_sources[{i}].{k}");
+            match self.materials.iter().find(|m| m.name == h.material) {
+                Some(m) if m.kind == MaterialKind::Fluid => {}
+                _ => {
+                    return Err(err(
+                        p("material"),
+                        format!("`{}` is not a fluid material of this scene", h.material),
+                    ))
+                }
+            }
+            if !h.power.is_finite() {
+                return Err(err(p("power"), "must be finite"));
+            }
+            if !(h.start.is_finite() && h.start >= 0.0) {
+                return Err(err(p("start"), "must be finite and >= 0"));
+            }
+            if !(h.end.is_finite() && h.end > h.start) {
+                return Err(err(p("end"), "must be finite and > start"));
+            }
+            validate_region_shape(&h.geometry, &p("geometry"), dim)?;
+            let (glo, ghi) = h.geometry.bounds(dim);
+            let outside = (0..dim).any(|d| ghi[d] <= lo[d] || glo[d] >= hi[d]);
+            if outside {
+                return Err(err(
+                    p("geometry"),
+                    "lies outside the domain (it must overlap the grid)",
                 ));
             }
         }
@@ -1048,18 +1258,36 @@ impl Scene {
         let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);
         let has_fluid = self.materials.iter().any(|m| m.kind == MaterialKind::Fluid);
         if has_solid && has_fluid {
-            return Err(err(
-                "materials",
-                "solid and fluid materials in one scene need the MPM-ICE coupling, which is \
-                 not available yet; allowed: only solids, or only fluids",
-            ));
+            self.validate_coupled()?;
+        } else {
+            for (i, m) in self.materials.iter().enumerate() {
+                if m.rigid {
+                    return Err(err(
+                        format!("materials[{i}].rigid"),
+                        "rigid solids need a fluid to move through (a coupled scene)",
+                    ));
+                }
+            }
+            if !self.heat_sources.is_empty() {
+                return Err(err(
+                    "heat_sources",
+                    "heat sources heat fluid materials; this scene has none",
+                ));
+            }
         }
         match (t.mode, has_solid) {
-            (Mode::SemiImplicit, true) => {
+            (Mode::SemiImplicit, true) if !has_fluid => {
                 return Err(err(
                     "time.mode",
-                    "semi_implicit (implicit pressure) is for fluid scenes until the MPM-ICE \
-                     coupling lands; allowed for solids: explicit, implicit",
+                    "semi_implicit (implicit pressure) needs fluid materials; allowed for \
+                     solids alone: explicit, implicit",
+                ))
+            }
+            (Mode::Implicit, true) if has_fluid => {
+                return Err(err(
+                    "time.mode",
+                    "implicit MPM is for solid-only scenes; allowed for coupled scenes: \
+                     explicit, semi_implicit",
                 ))
             }
             (Mode::Implicit, false) => {
@@ -1136,6 +1364,7 @@ impl Scene {
             }
             match &o.geometry {
                 Geometry::HalfSpace { .. } => {}
+                Geometry::Polygon { .. } => validate_geometry(&o.geometry, &p("geometry"), dim)?,
                 Geometry::Box { lower, upper } => {
                     vec_len(&p("geometry.lower"), lower, dim)?;
                     vec_len(&p("geometry.upper"), upper, dim)?;
