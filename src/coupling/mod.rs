@@ -119,6 +119,9 @@ pub struct CoupledRun<const D: usize> {
     pub solid: usize,
     /// Prescribed velocity of a rigid solid field (`None`: deformable).
     pub rigid_velocity: Option<SVector<f64, D>>,
+    /// Time over which a rigid field's velocity rises smoothly from zero,
+    /// `v(t) = V (1 − cos(π t/T))/2` for `t < T` (0: impulsive start).
+    pub rigid_ramp: f64,
     /// The solid field's bulk EOS in the cells.
     pub solid_eos: SolidEos,
     /// Coupling settings.
@@ -127,6 +130,8 @@ pub struct CoupledRun<const D: usize> {
     pub cfl: f64,
     /// Completed steps.
     pub steps: u64,
+    /// The rigid velocity of the current step (mid-step value).
+    rigid_now: Option<SVector<f64, D>>,
     ws: IceWorkspace<D>,
     gs: GridState<D>,
     scratch: StepScratch<D>,
@@ -235,6 +240,8 @@ impl<const D: usize> CoupledRun<D> {
             ice,
             solid,
             rigid_velocity,
+            rigid_ramp: 0.0,
+            rigid_now: rigid_velocity,
             solid_eos,
             coupling,
             cfl,
@@ -267,6 +274,34 @@ impl<const D: usize> CoupledRun<D> {
         Ok(())
     }
 
+    /// The rigid field's velocity at time `t` (with the ramp).
+    pub fn rigid_velocity_at(&self, t: f64) -> Option<SVector<f64, D>> {
+        let ramp = self.rigid_ramp;
+        self.rigid_velocity.map(|v| {
+            if ramp > 0.0 && t < ramp {
+                v * (0.5 * (1.0 - (std::f64::consts::PI * t / ramp).cos()))
+            } else {
+                v
+            }
+        })
+    }
+
+    /// Displacement of the rigid field from time 0 to `t` (the integral of
+    /// [`Self::rigid_velocity_at`]).
+    pub fn rigid_displacement(&self, t: f64) -> Option<SVector<f64, D>> {
+        let ramp = self.rigid_ramp;
+        self.rigid_velocity.map(|v| {
+            if ramp > 0.0 {
+                let tr = t.min(ramp);
+                let pi = std::f64::consts::PI;
+                let during = 0.5 * (tr - ramp / pi * (pi * tr / ramp).sin());
+                v * (during + (t - ramp).max(0.0))
+            } else {
+                v * t
+            }
+        })
+    }
+
     /// Mixture velocity of the fluids in interior cell `c` (the velocity an
     /// empty solid cell takes).
     fn fluid_velocity(&self, c: usize) -> SVector<f64, D> {
@@ -289,7 +324,7 @@ impl<const D: usize> CoupledRun<D> {
         let vol = self.fluid.layout.cell_volume();
         let floor = self.coupling.floor_fraction * self.solid_eos.reference_density() * vol;
         let t_s = self.coupling.solid_temperature;
-        let rigid = self.rigid_velocity;
+        let rigid = self.rigid_now;
         for (k, &c) in self.fluid.layout.interior.iter().enumerate() {
             let m = self.cell_mass[k];
             // An empty cell's floor moves with the fluid (even for a rigid
@@ -410,6 +445,7 @@ impl<const D: usize> CoupledRun<D> {
         let mut dt = dt_try;
         // Step 1: P2G and node → cell (does not change the particles).
         self.p2g_to_cells(dt)?;
+        self.rigid_now = self.rigid_velocity_at(self.fluid.time + 0.5 * dt);
         self.set_solid_cells();
         // Steps 2–6.
         let mut tries = 0;
@@ -419,6 +455,8 @@ impl<const D: usize> CoupledRun<D> {
                 Err(e) if tries < 20 && e.retry_dt().is_some() => {
                     dt *= 0.5;
                     tries += 1;
+                    self.rigid_now = self.rigid_velocity_at(self.fluid.time + 0.5 * dt);
+                    self.set_solid_cells();
                 }
                 Err(e) => return Err(e.into()),
             }
@@ -465,7 +503,7 @@ impl<const D: usize> CoupledRun<D> {
         }
         cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
         // Steps 7–9 on the nodes.
-        if let Some(v) = self.rigid_velocity {
+        if let Some(v) = self.rigid_now {
             let gs = &mut self.gs;
             for (i, &m) in gs.mass.iter().enumerate() {
                 let u = if m > self.mpm.mass_floor {
@@ -512,7 +550,7 @@ impl<const D: usize> CoupledRun<D> {
                 * layout.cell_volume();
             for (k, &c) in layout.interior.iter().enumerate() {
                 pv[c] = if self.cell_mass[k] > floor {
-                    self.rigid_velocity.unwrap_or(self.solid_l[k])
+                    self.rigid_now.unwrap_or(self.solid_l[k])
                 } else {
                     // Empty cell: the floor keeps the velocity it was given.
                     sc.velocity[c]
@@ -553,7 +591,7 @@ impl<const D: usize> CoupledRun<D> {
             self.grid.mirror_ghosts(&mut gs.accel);
         }
         // Step 13: G2P.
-        if let Some(v) = self.rigid_velocity {
+        if let Some(v) = self.rigid_now {
             self.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
             self.particles.v.par_iter_mut().for_each(|u| *u = v);
         } else {

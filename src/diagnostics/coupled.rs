@@ -112,12 +112,14 @@ pub fn block_in_air(
 /// The adiabatic piston of Guilkey Sec. 4.2 in 1D: air at
 /// `(ρ, p) = (1.1768, 101325)` in `[0, 1.2]` (`n` cells, walls at both
 /// ends), a rigid steel piston filling `[1.0, 1.1]` (2 particles per cell)
-/// moving towards the closed end `x = 0` at `speed`; exchange `K = 1e15`.
-/// The gas below the piston is compressed from length 1 to `1 − speed t`.
+/// moving towards the closed end `x = 0` at `speed`, reached smoothly over
+/// `ramp` seconds ([`CoupledRun::rigid_ramp`]); exchange `K = 1e15`. The gas
+/// below the piston is compressed from length 1 to
+/// `1 + run.rigid_displacement(t)`.
 ///
 /// # Errors
 /// As [`CoupledRun::new`].
-pub fn piston(n: usize, speed: f64) -> Result<CoupledRun<1>> {
+pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
     let grid = Grid::<1>::new(
         SVector::zeros(),
         SVector::repeat(1.2),
@@ -151,7 +153,7 @@ pub fn piston(n: usize, speed: f64) -> Result<CoupledRun<1>> {
         damping: 0.0,
     };
     let eos = solid_eos(&m, 101_325.0);
-    CoupledRun::new(
+    let mut run = CoupledRun::new(
         grid,
         vec![m],
         particles,
@@ -163,5 +165,90 @@ pub fn piston(n: usize, speed: f64) -> Result<CoupledRun<1>> {
         Some(v),
         CouplingParams::default(),
         0.5,
-    )
+    )?;
+    run.rigid_ramp = ramp;
+    Ok(run)
+}
+
+/// The piston run of [`piston`] until the compression ratio reaches
+/// `ratio_end`; returns `(ratio, p_bottom, p_exact)` samples at the ratios
+/// `2, 2.5, 3, …` (the cell pressure at the closed end against Guilkey
+/// Eq. 44, `P₁ (V₁/V₂)^γ`) and the number of steps.
+///
+/// # Errors
+/// As [`CoupledRun::step`].
+pub fn piston_history(
+    n: usize,
+    speed: f64,
+    ramp: f64,
+    ratio_end: f64,
+) -> Result<(Vec<(f64, f64, f64)>, u64)> {
+    let mut run = piston(n, speed, ramp)?;
+    let p1 = 101_325.0;
+    let mut out = Vec::new();
+    let mut next = 1.5;
+    let ratio = |run: &CoupledRun<1>| {
+        1.0 / (1.0 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]))
+    };
+    while ratio(&run) < ratio_end {
+        run.step(f64::INFINITY)?;
+        let r = ratio(&run);
+        if r >= next {
+            let c0 = run.fluid.layout.interior[0];
+            out.push((r, run.fluid.pressure[c0], p1 * r.powf(1.4)));
+            next += 0.5;
+        }
+    }
+    Ok((out, run.steps))
+}
+
+/// What [`measure_cylinder`] reports for the pressurised cylinder of
+/// Guilkey Sec. 4.1 run coupled.
+#[derive(Debug, Clone)]
+pub struct CylinderMeasured {
+    /// Guilkey Eq. 43: mean over particles of `||σ_r + σ_θ| − 2P/3| / (2P/3)`.
+    pub error43: f64,
+    /// Measured inner gauge pressure `P` (mean over the cells with centre
+    /// radius below `0.9 r_i`, minus `p_ref`).
+    pub pressure: f64,
+    /// `(r, σ_r, σ_θ)` of the particles of the row nearest the x-axis
+    /// (Guilkey Fig. 3a), sorted by radius.
+    pub row: Vec<(f64, f64, f64)>,
+}
+
+/// Guilkey Eq. 43 and the Fig. 3a row of a coupled cylinder run (inner
+/// radius `r_i`, reference pressure `p_ref`).
+pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> CylinderMeasured {
+    let layout = &run.fluid.layout;
+    let (mut sum, mut n) = (0.0, 0usize);
+    for &c in &layout.interior {
+        if layout.centre(c).norm() < 0.9 * r_inner {
+            sum += run.fluid.pressure[c];
+            n += 1;
+        }
+    }
+    let pressure = sum / n.max(1) as f64 - p_ref;
+    let target = 2.0 * pressure / 3.0;
+    let p = &run.particles;
+    let mut e43 = 0.0;
+    let y_min = p.x0.iter().map(|x| x[1]).fold(f64::INFINITY, f64::min);
+    let mut row = Vec::new();
+    for i in 0..p.len() {
+        let s = &p.stress[i];
+        e43 += (((s[(0, 0)] + s[(1, 1)]).abs() - target) / target).abs();
+        if p.x0[i][1] <= y_min * (1.0 + 1e-9) {
+            let x = p.x[i];
+            let r = x.norm();
+            let (c, sn) = (x[0] / r, x[1] / r);
+            let sr = c * c * s[(0, 0)] + 2.0 * c * sn * s[(0, 1)] + sn * sn * s[(1, 1)];
+            let st = sn * sn * s[(0, 0)] - 2.0 * c * sn * s[(0, 1)] + c * c * s[(1, 1)];
+            row.push((r, sr, st));
+        }
+    }
+    row.sort_by(|a, b| a.0.total_cmp(&b.0));
+    CylinderMeasured {
+        error43: e43 / p.len().max(1) as f64,
+        pressure,
+        row,
+    }
 }

@@ -99,8 +99,9 @@ pub enum Frame {
     Rigid,
 }
 
-/// An internal-energy source: `power` W/m³ per cell (flat cell index, zero
-/// outside the region) added to material `material` while
+/// An internal-energy source: `power` W per m³ of the material (flat cell
+/// index, zero outside the region; a cell receives `power θ_r V`) added to
+/// material `material` while
 /// `start ≤ t < end` (the part of a step inside the window counts).
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeatSource {
@@ -1131,7 +1132,10 @@ pub fn stage_lagrangian<const D: usize>(
                     for src in sources.iter().filter(|s| s.material == r) {
                         let overlap = (t1.min(src.end) - t0.max(src.start)).max(0.0);
                         if overlap > 0.0 {
-                            t[r] += src.power[c] * vol * overlap / (m * cv[r]);
+                            // Per unit volume of the material (θ_r V), so a
+                            // cell the material barely fills is not
+                            // overheated.
+                            t[r] += src.power[c] * theta[r] * vol * overlap / (m * cv[r]);
                         }
                     }
                 }

@@ -1,6 +1,7 @@
 //! Verification studies of mpmice: the harness (result format, order fits,
 //! plots) and the studies themselves.
 
+pub mod coupled_studies;
 pub mod harness;
 pub mod ice_studies;
 pub mod impm_studies;
@@ -15,6 +16,16 @@ pub type Study = (
 
 /// Every study the binary knows.
 pub const STUDIES: &[Study] = &[
+    (
+        "cylinder_order",
+        "Guilkey 4.1 pressurised cylinder, MPM-ICE, Eq. 43 vs dx and Fig. 3a",
+        coupled_studies::cylinder_order,
+    ),
+    (
+        "piston_adiabatic",
+        "Guilkey 4.2 adiabatic piston, MPM-ICE, closed-end pressure vs P1 (V1/V2)^gamma",
+        coupled_studies::piston_adiabatic,
+    ),
     (
         "mpm_bar_1d",
         "1D elastic bar, fixed-free, mode 1 vs exact; energy drift",
