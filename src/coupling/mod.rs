@@ -386,15 +386,10 @@ impl<const D: usize> CoupledRun<D> {
             .implicit
             .as_ref()
             .map_or(1.0, |sp| sp.sound_speed_factor);
-        let fluid_dt = if self.ice.implicit.is_some() {
-            // The solid field is still explicit: its sound speed limits.
-            let mut probe = self.fluid.clone();
-            probe.materials.truncate(self.solid);
-            probe.cells.truncate(self.solid);
-            ice::timestep_with(&probe, self.ice.cfl, factor)
-        } else {
-            ice::timestep_with(&self.fluid, self.ice.cfl, factor)
-        };
+        // Explicit: every material's sound speed (the solid's too: Eq. 29
+        // in cells it shares); semi-implicit: advection only (factor 0 by
+        // default) — the solid field stays explicit through `solid_dt`.
+        let fluid_dt = ice::timestep_with(&self.fluid, self.ice.cfl, factor);
         let solid_dt = if self.rigid_velocity.is_some() || self.particles.is_empty() {
             f64::INFINITY
         } else {

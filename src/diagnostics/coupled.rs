@@ -252,3 +252,83 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
         row,
     }
 }
+
+/// What [`measure_wedge`] reports for the Mach 3 wedge of Guilkey
+/// Sec. 4.3.
+#[derive(Debug, Clone)]
+pub struct WedgeMeasured {
+    /// Shock angle from a least-squares line through the shock positions.
+    pub angle_deg: f64,
+    /// Mean post-shock pressure ratio `p2/p1` between wedge and shock.
+    pub pressure_ratio: f64,
+    /// `(d, y_shock, p2/p1)` per cell column at distance `d` behind the tip.
+    pub columns: Vec<(f64, f64, f64)>,
+}
+
+/// Shock angle and post-shock pressure of a wedge run (half plane `y ≥ 0`,
+/// symmetry at `y = 0`): per column of cells at distance `d` behind the tip
+/// in `[d_min, d_max]`, the shock is where the pressure first drops below
+/// `(p1 + p2_exact)/2` going up from the wedge surface `y = d tan θ`, and
+/// `p2` is the mean cell pressure between the surface and the shock (two
+/// cells clear of each). `tip_x` is the tip's current position.
+pub fn measure_wedge(
+    state: &crate::ice::IceState<2>,
+    tip_x: f64,
+    half_angle_deg: f64,
+    p1: f64,
+    p2_exact: f64,
+    d_range: (f64, f64),
+) -> WedgeMeasured {
+    let layout = &state.layout;
+    let (nx, ny) = (layout.cells[0], layout.cells[1]);
+    let h = layout.h;
+    let ta = half_angle_deg.to_radians().tan();
+    let half = 0.5 * (p1 + p2_exact);
+    let mut columns = Vec::new();
+    for i in 0..nx {
+        let x = layout.lower[0] + (i as f64 + 0.5) * h[0];
+        let d = x - tip_x;
+        if d < d_range.0 || d > d_range.1 {
+            continue;
+        }
+        let ys = d * ta;
+        let p = |j: usize| state.pressure[layout.index([i as isize, j as isize])];
+        let yc = |j: usize| layout.lower[1] + (j as f64 + 0.5) * h[1];
+        let mut shock = None;
+        for j in 0..ny.saturating_sub(1) {
+            if yc(j) <= ys {
+                continue;
+            }
+            let (pa, pb) = (p(j), p(j + 1));
+            if pa >= half && pb < half {
+                shock = Some(yc(j) + h[1] * (pa - half) / (pa - pb));
+                break;
+            }
+        }
+        let Some(y_sh) = shock else { continue };
+        let (mut sum, mut n) = (0.0, 0usize);
+        for j in 0..ny {
+            let y = yc(j);
+            if y > ys + 2.0 * h[1] && y < y_sh - 2.0 * h[1] {
+                sum += p(j);
+                n += 1;
+            }
+        }
+        let ratio = if n > 0 { sum / n as f64 / p1 } else { f64::NAN };
+        columns.push((d, y_sh, ratio));
+    }
+    let n = columns.len() as f64;
+    let (sx, sy) = columns
+        .iter()
+        .fold((0.0, 0.0), |(a, b), c| (a + c.0, b + c.1));
+    let (sxx, sxy) = columns
+        .iter()
+        .fold((0.0, 0.0), |(a, b), c| (a + c.0 * c.0, b + c.0 * c.1));
+    let slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    let ratios: Vec<f64> = columns.iter().map(|c| c.2).filter(|r| r.is_finite()).collect();
+    WedgeMeasured {
+        angle_deg: slope.atan().to_degrees(),
+        pressure_ratio: ratios.iter().sum::<f64>() / ratios.len().max(1) as f64,
+        columns,
+    }
+}

@@ -933,8 +933,19 @@ pub fn stage_pressure<const D: usize>(
         try_rows(layout, |row| {
             for c in row {
                 // Guilkey Eq. 29.
-                let dp = -dt * div_sum[c] / stk[c];
-                let p = st.p_eq[c] + dp;
+                let mut dp = -dt * div_sum[c] / stk[c];
+                let mut p = st.p_eq[c] + dp;
+                if !(p > p_min) && dp.is_finite() {
+                    // The linearised Eq. 29 overshoots below the admissible
+                    // range (a strong expansion, or a solid in tension on
+                    // its threshold EOS, Guilkey Fig. 1, whose κ grows as p
+                    // falls): solve the volume balance it linearises
+                    // exactly instead.
+                    if let Some(q) = expanded_pressure(st, c, dt * div_sum[c], p_min) {
+                        p = q;
+                        dp = q - st.p_eq[c];
+                    }
+                }
                 if !(p.is_finite() && p > p_min) {
                     return Err(IceError::NonPhysical {
                         site: site(st, c, None),
@@ -1242,7 +1253,17 @@ pub fn stage_lagrangian<const D: usize>(
                         dmv += theta[r] * beta[r] * (t[r] - t_before[r]) / dt - f_theta * sum_tb;
                     }
                     // Guilkey Eq. 41.
-                    let mv = mass[r] * v[r] + dt * vol * dmv;
+                    let mut mv = mass[r] * v[r] + dt * vol * dmv;
+                    if !(mv.is_finite() && mv > 0.0) {
+                        // A material with a small share of the cell (a
+                        // fluid trace in a solid's cell) cannot absorb its
+                        // linearised share of the compression: take its EOS
+                        // volume at the new pressure instead.
+                        if let Ok(rho) = st.materials[r].eos.density(press[c], t[r]) {
+                            mv = mass[r] / rho;
+                        }
+                    }
+
                     if !(mv.is_finite() && mv > 0.0) {
                         return Err(IceError::NonPhysical {
                             site: site(st, c, Some(r)),
@@ -1346,7 +1367,17 @@ pub fn stage_advect<const D: usize>(
                         me = me_cons;
                     }
                 }
-                let mv = m0 * fields.sp_vol[c] + net_inflow(layout, &fx.volume, c);
+                let mut mv = m0 * fields.sp_vol[c] + net_inflow(layout, &fx.volume, c);
+                if !(mv.is_finite() && mv > 0.0) {
+                    // A trace material next to cells where its specific
+                    // volume is orders of magnitude larger (a fluid floor
+                    // inside a solid in tension) can be given more volume
+                    // flux than it holds: keep its own specific volume.
+                    let m_cell: f64 = st.cells.iter().map(|mc| mc.mass[c]).sum();
+                    if m0 < 1e-6 * m_cell {
+                        mv = m * fields.sp_vol[c];
+                    }
+                }
                 let temp = me / (m * cvr);
                 if !(temp.is_finite() && temp > 0.0) {
                     return Err(IceError::NonPhysical {
@@ -1573,6 +1604,53 @@ pub fn run_fluid<const D: usize>(
         max_outer_iterations: max_outer,
         max_linear_iterations: max_linear,
     })
+}
+
+/// The pressure `p ∈ (p_min, p_eq)` at which the materials of cell `c`,
+/// each following its EOS at its own temperature, fill the relative volume
+/// change `dv = Δt Σ ∇·(θu*)` (> 0: net volume outflow, an expansion):
+/// `Σ_r θ_r (v_r(p)/v_r(p_eq) − 1) = dv`, the balance that Guilkey Eq. 29
+/// linearises. Bisection in `ln(p − p_min)`; `None` when no admissible
+/// pressure satisfies it.
+fn expanded_pressure<const D: usize>(
+    st: &IceState<D>,
+    c: usize,
+    dv: f64,
+    p_min: f64,
+) -> Option<f64> {
+    let p_eq = st.p_eq[c];
+    if !(dv > 0.0 && p_eq > p_min) {
+        return None;
+    }
+    let excess = |p: f64| -> Option<f64> {
+        let mut sum = 0.0;
+        for (mat, mc) in st.materials.iter().zip(&st.cells) {
+            let t = mc.temperature[c];
+            let v0 = mc.sp_vol[c];
+            let v = 1.0 / mat.eos.density(p, t).ok()?;
+            sum += mc.vol_frac[c] * (v / v0 - 1.0);
+        }
+        Some(sum - dv)
+    };
+    // excess decreases with p; at p_eq it is −dv < 0.
+    let (mut lo, mut hi) = ((1e-300f64).ln(), (p_eq - p_min).ln());
+    let at = |s: f64| p_min + s.exp();
+    if excess(at(lo)).is_none_or(|e| e < 0.0) {
+        return None;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        match excess(at(mid)) {
+            Some(e) if e > 0.0 => lo = mid,
+            Some(_) => hi = mid,
+            None => lo = mid,
+        }
+        if hi - lo < 1e-12 {
+            break;
+        }
+    }
+    let p = at(hi);
+    (p > p_min).then_some(p)
 }
 
 /// Largest of the materials' lowest admissible pressures.

@@ -27,6 +27,11 @@ pub const STUDIES: &[Study] = &[
         coupled_studies::piston_adiabatic,
     ),
     (
+        "wedge_mach3",
+        "Guilkey 4.3 rigid wedge at Mach 3, MPM-ICE, shock angle and p2/p1 vs exact",
+        coupled_studies::wedge_mach3,
+    ),
+    (
         "mpm_bar_1d",
         "1D elastic bar, fixed-free, mode 1 vs exact; energy drift",
         mpm_studies::mpm_bar_1d,
