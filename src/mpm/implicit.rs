@@ -1057,8 +1057,9 @@ impl<const D: usize> ImplicitRun<D> {
             bcol.extend_from_slice(row);
             bptr.push(bcol.len());
         }
-        let mut rows = Vec::new();
-        let mut cols = Vec::new();
+        // At most D² triplets per block (fewer where walls eliminate dofs).
+        let mut rows = Vec::with_capacity(bcol.len() * D * D);
+        let mut cols = Vec::with_capacity(bcol.len() * D * D);
         let mut bslot = vec![[usize::MAX; 9]; bcol.len()];
         for ci in 0..na {
             let ni = sd.active[ci];
