@@ -200,3 +200,44 @@ fn three_dimensional_column_runs_and_matches_the_exact_stress() {
     let two_d = col.run(ShapeKind::Linear, 4, 2).unwrap().error;
     assert!((rms - two_d).abs() < 1e-6, "3D {rms} vs 2D {two_d}");
 }
+
+#[test]
+fn singular_tangent_falls_back_to_lu_and_stops_cleanly() {
+    // A block with no supports, quasistatic: the tangent has rigid-body
+    // null modes. The lower-triangle Cholesky fails, the attempt is redone
+    // with the full matrix and LU, which fails too; Δt is cut down to the
+    // smallest allowed and the run stops with an error, particles unmoved.
+    use mpmice::diagnostics::impm::fill_box;
+    use mpmice::grid::{Boundary, Grid};
+    use mpmice::material::{ElasticConstants, SolidMaterial, SolidModel};
+    use mpmice::mpm::explicit::Uniform;
+    use mpmice::mpm::ImplicitRun;
+    use nalgebra::SVector;
+    let grid = Grid::<2>::new(
+        SVector::zeros(),
+        SVector::from([4.0, 4.0]),
+        [4, 4],
+        [[Boundary::Free; 2]; 2],
+    );
+    let mat = SolidMaterial {
+        name: "b".into(),
+        density: 1.0,
+        model: SolidModel::NeoHookean,
+        elastic: ElasticConstants::from_young_poisson(100.0, 0.3),
+    };
+    let lo = SVector::from([1.0, 1.0]);
+    let hi = SVector::from([3.0, 3.0]);
+    let parts = fill_box(&grid, &lo, &hi, 2, 1.0, |_| true);
+    let mut params = ImplicitParams::new(ShapeKind::Linear, false, 0.0);
+    params.dt_min = 0.1;
+    let mut run = ImplicitRun::new(grid, vec![mat], parts, params, 1.0, 1.0).unwrap();
+    run.body = Some(Box::new(Uniform(SVector::from([0.0, -1.0]))));
+    let before = run.particles.x.clone();
+    match run.step() {
+        Err(Error::Numerical { what, .. }) => {
+            assert!(what.contains("smallest allowed"), "{what}")
+        }
+        other => panic!("expected a numerical failure, got {other:?}"),
+    }
+    assert_eq!(run.particles.x, before);
+}

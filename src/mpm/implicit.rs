@@ -39,8 +39,9 @@
 //! pattern (node blocks) is rebuilt each step from the particle stencils and
 //! compared with the last one; the symbolic factorisation is redone only when
 //! it changed. Linear solves go through the `solvers` crate: sparse Cholesky by
-//! default (LU fallback when the tangent is not positive definite), or
-//! Jacobi-preconditioned CG. The per-particle evaluation of stress, internal
+//! default, assembled as the lower triangle only (all it reads; once a
+//! factorisation fails the full matrix is assembled and the attempt redone
+//! with the LU fallback), or Jacobi-preconditioned CG on the full matrix. The per-particle evaluation of stress, internal
 //! force and tangent runs in parallel over slab-coloured particle bins (the
 //! explicit step's `Bins`): every residual entry and tangent slot receives its
 //! contributions in the same order for any thread count (bit-identical
@@ -335,6 +336,8 @@ struct Failure {
     /// Inconsistent input that a smaller Δt cannot mend: the key path to
     /// report in a scene error, and the run stops at once.
     fatal: Option<String>,
+    /// Redo the attempt with the same Δt (the linear-solver set-up changed).
+    redo: bool,
 }
 
 impl Failure {
@@ -343,6 +346,7 @@ impl Failure {
             what: what.into(),
             particle,
             fatal: None,
+            redo: false,
         }
     }
 }
@@ -366,6 +370,12 @@ struct LinearCache {
     chol: Option<Cholesky>,
     lu: Option<Lu>,
     krylov: KrylovWorkspace,
+    /// Whether the stored pattern holds only the lower triangle (Cholesky
+    /// reads nothing else).
+    stored_lower: bool,
+    /// Set once a Cholesky factorisation failed: from then on the full
+    /// matrix is assembled, for the LU fallback.
+    full_storage: bool,
 }
 
 impl LinearCache {
@@ -460,6 +470,8 @@ struct StepData<const D: usize> {
     bslot: Vec<[usize; 9]>,
     rows: Vec<usize>,
     cols: Vec<usize>,
+    /// Whether the triplets cover only the lower triangle (row ≥ column).
+    lower: bool,
     /// Prescribed increment per dof (NaN where free).
     presc: Vec<f64>,
     /// Fixed dofs: (dof, grip, component, diagonal slot).
@@ -591,6 +603,10 @@ impl<const D: usize> ImplicitRun<D> {
                 Err(f) => {
                     if let Some(path) = f.fatal {
                         return Err(SceneError::new(path, f.what).into());
+                    }
+                    if f.redo {
+                        retries += 1;
+                        continue;
                     }
                     if dt_try <= self.params.dt_min * (1.0 + 1e-12) {
                         return Err(Error::Numerical {
@@ -996,6 +1012,7 @@ impl<const D: usize> ImplicitRun<D> {
                                 ),
                                 particle: Some(p),
                                 fatal: Some(format!("implicit.prescribed[{gi}]")),
+                                redo: false,
                             });
                         }
                     }
@@ -1021,6 +1038,7 @@ impl<const D: usize> ImplicitRun<D> {
             bslot: Vec::new(),
             rows: Vec::new(),
             cols: Vec::new(),
+            lower: false,
             presc,
             presc_list,
             presc_off: Vec::new(),
@@ -1057,6 +1075,11 @@ impl<const D: usize> ImplicitRun<D> {
             bcol.extend_from_slice(row);
             bptr.push(bcol.len());
         }
+        // The Cholesky factorisation reads only the lower triangle: assemble
+        // just that (half the triplets, scatter work and matrix copies),
+        // unless a failed factorisation asked for the full matrix (LU).
+        let lower = self.params.linear == LinearSolver::Cholesky && !self.cache.full_storage;
+        sd.lower = lower;
         // At most D² triplets per block (fewer where walls eliminate dofs).
         let mut rows = Vec::with_capacity(bcol.len() * D * D);
         let mut cols = Vec::with_capacity(bcol.len() * D * D);
@@ -1072,7 +1095,7 @@ impl<const D: usize> ImplicitRun<D> {
                     }
                     for c in 0..D {
                         let dj = sd.dof[nj * D + c];
-                        if dj == usize::MAX {
+                        if dj == usize::MAX || (lower && di < dj) {
                             continue;
                         }
                         bslot[b][a * D + c] = rows.len();
@@ -1083,6 +1106,7 @@ impl<const D: usize> ImplicitRun<D> {
             }
         }
         let same = self.cache.assembler.is_some()
+            && self.cache.stored_lower == lower
             && self.cache.key.0 == sd.dof
             && self.cache.key.1 == bptr
             && self.cache.key.2 == bcol;
@@ -1093,6 +1117,7 @@ impl<const D: usize> ImplicitRun<D> {
             self.cache.assembler = Some(asm);
             self.cache.chol = None;
             self.cache.lu = None;
+            self.cache.stored_lower = lower;
             self.cache.key = (sd.dof.clone(), bptr.clone(), bcol.clone());
         }
         // Fixed dofs: their diagonal slots, the other slots of their rows
@@ -1105,10 +1130,13 @@ impl<const D: usize> ImplicitRun<D> {
                 match (fixed(i), fixed(j)) {
                     (true, true) if i == j => diag[i] = slot,
                     (false, false) => {}
-                    (fi, _) => {
+                    (fi, fj) => {
                         sd.presc_off.push(slot);
                         if !fi {
                             sd.presc_lift.push((slot, i, j));
+                        } else if lower && !fj {
+                            // Lower storage holds K_ij = K_ji once.
+                            sd.presc_lift.push((slot, j, i));
                         }
                     }
                 }
@@ -1224,7 +1252,9 @@ impl<const D: usize> ImplicitRun<D> {
                     let row = &sd.bcol[sd.bptr[ci[l]]..sd.bptr[ci[l] + 1]];
                     let sg_i = s * gx[l];
                     for (m, kk) in rng.clone().enumerate() {
-                        if ci[m] == usize::MAX {
+                        // Dofs are numbered node by node in compact order, so
+                        // a block right of the diagonal is all upper triangle.
+                        if ci[m] == usize::MAX || (sd.lower && ci[m] > ci[l]) {
                             continue;
                         }
                         let Ok(pos) = row.binary_search(&ci[m]) else {
@@ -1325,6 +1355,17 @@ impl<const D: usize> ImplicitRun<D> {
                     };
                     if res.is_err() {
                         self.cache.chol = None;
+                        if self.cache.stored_lower {
+                            // LU needs the full matrix: assemble it from
+                            // now on and redo the attempt.
+                            self.cache.full_storage = true;
+                            let mut f = Failure::new(
+                                "tangent not positive definite: full storage and LU from here",
+                                None,
+                            );
+                            f.redo = true;
+                            return Err(f);
+                        }
                         used_lu = true;
                     }
                 }
