@@ -39,8 +39,34 @@
 //! pattern (node blocks) is rebuilt each step from the particle stencils and
 //! compared with the last one; the symbolic factorisation is redone only when
 //! it changed. Linear solves go through the `solvers` crate: sparse Cholesky by
-//! default (LU fallback when the tangent is not positive definite), or
-//! Jacobi-preconditioned CG.
+//! default, assembled as the lower triangle only (all it reads; once a
+//! factorisation fails the full matrix is assembled and the attempt redone
+//! with the LU fallback), or Jacobi-preconditioned CG on the full matrix. The per-particle evaluation of stress, internal
+//! force and tangent runs in parallel over slab-coloured particle bins (the
+//! explicit step's `Bins`): every residual entry and tangent slot receives its
+//! contributions in the same order for any thread count (bit-identical
+//! results with 1 or N threads).
+//!
+//! **GIMP domains** follow the deformation as in the explicit step: the
+//! half-width of particle p along axis d is l = l⁰ |F_dd| (capped at half a
+//! cell), taken from Fⁿ and frozen over the step, so the particle domains
+//! tile the deformed body (uGIMP of Bardenhagen & Kober 2004 with the
+//! stretch-following domains of the explicit path).
+//!
+//! **Prescribed displacement** ([`PrescribedDisplacement`]): a set of
+//! particles held by a rigid grip that moves by a ramped displacement. Every
+//! reduced node in the support of a gripped particle (weight above
+//! [`GRIP_WEIGHT_FLOOR`]) has its prescribed components fixed at the step's
+//! increment Δū — the rigid-body convention of MPM (nodes touched by rigid
+//! material move with it), under which the gripped particles move by exactly
+//! Δū (partition of unity). The fixed DOFs stay in the Newton system with
+//! nonzero values, eliminated symmetrically: the first iteration solves
+//! K_ff δu_f = R_f − K_fp Δū_p (the increment enters through the tangent at
+//! the start of the step, so a large increment does not distort the cell
+//! next to the grip before the first solve), the prescribed rows and columns
+//! are replaced by their diagonal, and later iterations keep δu_p = 0. The
+//! residual at the fixed DOFs is the reaction: the force of the grip on the
+//! body is −R_p = f_int − f_ext + M a (reported per grip and component).
 
 use std::time::Instant;
 
@@ -50,6 +76,7 @@ use solvers::{Assembler, Cholesky, Jacobi, KrylovOptions, KrylovWorkspace, Lu, S
 
 use super::explicit::BodyForce;
 use super::particles::Particles;
+use super::scatter::{Bins, SharedMut};
 use crate::error::{Error, FailureSite, Result, SceneError};
 use crate::grid::{Boundary, Grid};
 use crate::material::SolidMaterial;
@@ -237,6 +264,25 @@ impl<const D: usize> SurfaceLoad<D> {
     }
 }
 
+/// Smallest weight with which a gripped particle makes a node a grip node
+/// (weights of one particle sum to 1; an exact-contact weight of round-off
+/// size does not count).
+pub const GRIP_WEIGHT_FLOOR: f64 = 1e-12;
+
+/// A prescribed displacement of a set of particles (a rigid grip): at load
+/// factor λ the gripped particles have moved by λ · `displacement` in the
+/// prescribed components (the load factor of [`ImplicitRun::load_ramp`]).
+/// See the module documentation for how it enters the Newton system.
+#[derive(Debug, Clone)]
+pub struct PrescribedDisplacement<const D: usize> {
+    /// Gripped particles.
+    pub particle: Vec<usize>,
+    /// Displacement at full load.
+    pub displacement: SVector<f64, D>,
+    /// Prescribed components (the others are free).
+    pub components: [bool; D],
+}
+
 /// Statistics of one accepted step.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct StepStats {
@@ -263,8 +309,17 @@ pub struct StepStats {
     pub dofs: usize,
     /// Seconds in P2G, pattern and tangent/residual assembly.
     pub assembly_s: f64,
+    /// Part of `assembly_s` in P2G and the sparsity pattern (the rest is the
+    /// stress, residual and tangent evaluation).
+    pub setup_s: f64,
     /// Seconds in numeric (and symbolic) factorisation / preconditioner setup.
     pub factor_s: f64,
+    /// Part of `factor_s` in the symbolic analysis (ordering; only when the
+    /// pattern changed).
+    pub symbolic_s: f64,
+    /// Force of each grip of [`ImplicitRun::prescribed`] on the body at the
+    /// end of the step (D components, the sum of −R over its fixed DOFs).
+    pub reactions: Vec<Vec<f64>>,
     /// Seconds in triangular solves / Krylov iterations.
     pub solve_s: f64,
     /// Seconds in the particle update (stress evaluation and G2P).
@@ -278,6 +333,32 @@ pub struct StepStats {
 struct Failure {
     what: String,
     particle: Option<usize>,
+    /// Inconsistent input that a smaller Δt cannot mend: the key path to
+    /// report in a scene error, and the run stops at once.
+    fatal: Option<String>,
+    /// Redo the attempt with the same Δt (the linear-solver set-up changed).
+    redo: bool,
+}
+
+impl Failure {
+    fn new(what: impl Into<String>, particle: Option<usize>) -> Self {
+        Self {
+            what: what.into(),
+            particle,
+            fatal: None,
+            redo: false,
+        }
+    }
+}
+
+/// What one linear solve did.
+#[derive(Debug, Default)]
+struct LinearReport {
+    iterations: usize,
+    used_lu: bool,
+    factor_s: f64,
+    symbolic_s: f64,
+    solve_s: f64,
 }
 
 /// The linear-solver state kept between steps.
@@ -289,6 +370,12 @@ struct LinearCache {
     chol: Option<Cholesky>,
     lu: Option<Lu>,
     krylov: KrylovWorkspace,
+    /// Whether the stored pattern holds only the lower triangle (Cholesky
+    /// reads nothing else).
+    stored_lower: bool,
+    /// Set once a Cholesky factorisation failed: from then on the full
+    /// matrix is assembled, for the LU fallback.
+    full_storage: bool,
 }
 
 impl LinearCache {
@@ -336,10 +423,16 @@ pub struct ImplicitRun<const D: usize> {
     pub stats: Vec<StepStats>,
     /// Particle accelerations aₚ (Newmark state).
     pub accel: Vec<SVector<f64, D>>,
+    /// Grips: particle sets with a prescribed (ramped) displacement.
+    pub prescribed: Vec<PrescribedDisplacement<D>>,
+    /// Load factor up to which the prescribed displacements are applied.
+    prescribed_applied: f64,
     map_target: Vec<usize>,
     map_sign: Vec<SVector<f64, D>>,
     node_fixed: Vec<[bool; D]>,
     cache: LinearCache,
+    bins: Bins,
+    eval: Eval,
     initialised: bool,
 }
 
@@ -377,9 +470,21 @@ struct StepData<const D: usize> {
     bslot: Vec<[usize; 9]>,
     rows: Vec<usize>,
     cols: Vec<usize>,
+    /// Whether the triplets cover only the lower triangle (row ≥ column).
+    lower: bool,
+    /// Prescribed increment per dof (NaN where free).
+    presc: Vec<f64>,
+    /// Fixed dofs: (dof, grip, component, diagonal slot).
+    presc_list: Vec<(usize, usize, usize, usize)>,
+    /// Off-diagonal slots in a prescribed row or column.
+    presc_off: Vec<usize>,
+    /// Slots of free rows in prescribed columns: (slot, row dof, column dof).
+    presc_lift: Vec<(usize, usize, usize)>,
 }
 
-/// Particle-level results of one Newton evaluation.
+/// Particle-level results of one Newton evaluation (buffers kept between
+/// steps).
+#[derive(Default)]
 struct Eval {
     df: Vec<Matrix3<f64>>,
     stress: Vec<Matrix3<f64>>,
@@ -416,10 +521,14 @@ impl<const D: usize> ImplicitRun<D> {
             steps: 0,
             stats: Vec::new(),
             accel: vec![SVector::zeros(); np],
+            prescribed: Vec::new(),
+            prescribed_applied: 0.0,
             map_target,
             map_sign,
             node_fixed,
             cache: LinearCache::default(),
+            bins: Bins::default(),
+            eval: Eval::default(),
             initialised: false,
         })
     }
@@ -487,10 +596,18 @@ impl<const D: usize> ImplicitRun<D> {
                         dt *= self.params.dt_grow;
                     }
                     self.dt = dt.min(self.params.dt_max);
+                    self.prescribed_applied = st.load;
                     self.stats.push(st.clone());
                     return Ok(st);
                 }
                 Err(f) => {
+                    if let Some(path) = f.fatal {
+                        return Err(SceneError::new(path, f.what).into());
+                    }
+                    if f.redo {
+                        retries += 1;
+                        continue;
+                    }
                     if dt_try <= self.params.dt_min * (1.0 + 1e-12) {
                         return Err(Error::Numerical {
                             site: FailureSite {
@@ -516,8 +633,16 @@ impl<const D: usize> ImplicitRun<D> {
     /// One attempt of a step of size `dt`; the particles change only when
     /// it succeeds.
     fn attempt(&mut self, dt: f64) -> std::result::Result<StepStats, Failure> {
+        let mut ev = std::mem::take(&mut self.eval);
+        let res = self.attempt_with(dt, &mut ev);
+        self.eval = ev;
+        res
+    }
+
+    fn attempt_with(&mut self, dt: f64, ev: &mut Eval) -> std::result::Result<StepStats, Failure> {
         let mut st = StepStats {
             dt,
+            reactions: vec![vec![0.0; D]; self.prescribed.len()],
             ..Default::default()
         };
         let mut clock = Instant::now();
@@ -530,23 +655,29 @@ impl<const D: usize> ImplicitRun<D> {
         let t1 = self.t + dt;
         let load = self.load_factor(t1);
         st.load = load;
+        self.bin_particles()?;
         let mut sd = self.p2g(t1, load)?;
         let ndof = sd.mass.len();
         st.dofs = ndof;
         let rebuilt = self.pattern(&mut sd)?;
         st.symbolic_rebuilt = rebuilt;
-        st.assembly_s += lap(&mut clock);
+        st.setup_s = lap(&mut clock);
+        st.assembly_s += st.setup_s;
         let dynamic = self.params.dynamic;
         let c_mass = 4.0 / (dt * dt);
         let mut u = vec![0.0; ndof];
         let mut r = vec![0.0; ndof];
+        let mut rhs = vec![0.0; ndof];
         let mut du = vec![0.0; ndof];
         let mut vals = vec![0.0; sd.rows.len()];
         let mut converged = false;
         let mut e0 = 0.0;
         let mut r0 = 0.0;
         let mut k = 0;
-        let eval = loop {
+        // The prescribed increments still to be imposed (first iteration).
+        let mut lift = sd.presc_list.iter().any(|e| sd.presc[e.0] != 0.0);
+        let mut fscale = norm(&sd.fext);
+        loop {
             // Residual R = f_ext − f_int − M a(u); the tangent when needed
             // (every iteration, or with modified Newton only at the first
             // iteration and whenever the last contraction was slower than 0.1).
@@ -556,7 +687,7 @@ impl<const D: usize> ImplicitRun<D> {
             if assemble {
                 vals.iter_mut().for_each(|v| *v = 0.0);
             }
-            let ev = self.evaluate(&sd, &u, &mut r, assemble.then_some(&mut vals[..]))?;
+            self.evaluate(&sd, &u, &mut r, assemble.then_some(&mut vals[..]), ev)?;
             if dynamic {
                 for d in 0..ndof {
                     let a = c_mass * (u[d] - dt * sd.v0[d]) - sd.a0[d];
@@ -577,72 +708,111 @@ impl<const D: usize> ImplicitRun<D> {
                     }
                 }
             }
-            let rn = norm(&r);
+            // Convergence is judged on the free dofs (the fixed ones carry
+            // the reactions).
+            let rn = free_norm(&r, &sd.presc);
             st.residuals.push(rn);
             st.assembly_s += lap(&mut clock);
             if !rn.is_finite() {
-                return Err(Failure {
-                    what: "residual is not finite".into(),
-                    particle: None,
-                });
+                return Err(Failure::new("residual is not finite", None));
             }
             if k == 0 {
                 r0 = rn;
             }
-            let fscale = norm(&sd.fext).max(r0);
-            if converged || rn <= 1e-14 * fscale || ndof == 0 {
-                break ev;
+            fscale = fscale.max(r0);
+            if converged || (!lift && rn <= 1e-14 * fscale) || ndof == 0 {
+                break;
             }
             if k >= self.params.max_newton {
-                return Err(Failure {
-                    what: format!(
-                        "Newton did not converge in {} iterations (residual {:e} → {:e})",
-                        k, r0, rn
-                    ),
-                    particle: worst_particle(&ev),
-                });
+                return Err(Failure::new(
+                    format!("Newton did not converge in {k} iterations (residual {r0:e} → {rn:e})"),
+                    worst_particle(ev),
+                ));
             }
             if k > 2 && rn > 1e6 * r0 {
-                return Err(Failure {
-                    what: format!("Newton diverged (residual {r0:e} → {rn:e})"),
-                    particle: worst_particle(&ev),
-                });
+                return Err(Failure::new(
+                    format!("Newton diverged (residual {r0:e} → {rn:e})"),
+                    worst_particle(ev),
+                ));
             }
-            du.copy_from_slice(&r);
-            let (lin_it, used_lu, tf, ts) = self.solve(&vals, &mut du, assemble)?;
-            st.linear_iterations += lin_it;
-            st.used_lu |= used_lu;
-            st.factor_s += tf;
-            st.solve_s += ts;
+            // Right-hand side. Fixed dofs: at the first iteration their
+            // increment enters as R_f − K_fp Δū_p, and their rows and
+            // columns are replaced by the diagonal (d δu_p = d Δū_p, then 0).
+            rhs.copy_from_slice(&r);
+            if assemble && !sd.presc_list.is_empty() {
+                if lift {
+                    for &(slot, i, j) in &sd.presc_lift {
+                        rhs[i] -= vals[slot] * sd.presc[j];
+                    }
+                }
+                for &slot in &sd.presc_off {
+                    vals[slot] = 0.0;
+                }
+                for &(_, _, _, slot) in &sd.presc_list {
+                    if !(vals[slot] > 0.0 && vals[slot].is_finite()) {
+                        vals[slot] = 1.0;
+                    }
+                }
+            }
+            for &(d, _, _, slot) in &sd.presc_list {
+                rhs[d] = if lift { vals[slot] * sd.presc[d] } else { 0.0 };
+            }
+            if lift {
+                fscale = fscale.max(free_norm(&rhs, &sd.presc));
+            }
+            du.copy_from_slice(&rhs);
+            let lin = self.solve(&vals, &mut du, assemble)?;
+            st.linear_iterations += lin.iterations;
+            st.used_lu |= lin.used_lu;
+            st.factor_s += lin.factor_s;
+            st.symbolic_s += lin.symbolic_s;
+            st.solve_s += lin.solve_s;
             clock = Instant::now();
-            let energy = dot(&du, &r).abs();
+            let energy = dot(&du, &rhs).abs();
             if k == 0 {
                 e0 = energy;
             }
             for (ui, di) in u.iter_mut().zip(&du) {
                 *ui += di;
             }
+            lift = false;
             k += 1;
             converged = norm(&du) <= self.params.tol_displacement * norm(&u).max(1e-300)
                 && energy <= self.params.tol_energy * e0;
-        };
+        }
         st.newton_iterations = k;
+        for &(d, grip, a, _) in &sd.presc_list {
+            st.reactions[grip][a] -= r[d];
+        }
         st.assembly_s += lap(&mut clock);
-        self.g2p(&sd, &u, &eval, dt)?;
+        self.g2p(&sd, &u, ev, dt)?;
         st.particles_s += lap(&mut clock);
         Ok(st)
+    }
+
+    /// Bins the particles into slabs for the coloured parallel evaluation.
+    fn bin_particles(&mut self) -> std::result::Result<(), Failure> {
+        self.bins.build(&self.grid, &self.particles.x).map_err(|p| {
+            Failure::new(
+                "particle position is not finite or has left the grid",
+                Some(p),
+            )
+        })
     }
 
     /// Consistent initial acceleration (Newmark needs aⁿ): M a⁰ = f_ext −
     /// f_int at t = 0 on the grid, interpolated to the particles.
     fn initial_acceleration(&mut self) -> Result<()> {
         let load = self.load_factor(self.t);
+        self.bin_particles().map_err(|f| self.fail(f))?;
         let sd = self.p2g(self.t, load).map_err(|f| self.fail(f))?;
         let ndof = sd.mass.len();
         let u = vec![0.0; ndof];
         let mut r = vec![0.0; ndof];
-        self.evaluate(&sd, &u, &mut r, None)
-            .map_err(|f| self.fail(f))?;
+        let mut ev = std::mem::take(&mut self.eval);
+        let res = self.evaluate(&sd, &u, &mut r, None, &mut ev);
+        self.eval = ev;
+        res.map_err(|f| self.fail(f))?;
         let a: Vec<f64> = r.iter().zip(&sd.mass).map(|(f, m)| f / m).collect();
         for p in 0..self.particles.len() {
             let mut ap = SVector::<f64, D>::zeros();
@@ -661,6 +831,9 @@ impl<const D: usize> ImplicitRun<D> {
     }
 
     fn fail(&self, f: Failure) -> Error {
+        if let Some(path) = f.fatal {
+            return SceneError::new(path, f.what).into();
+        }
         Error::Numerical {
             site: FailureSite {
                 step: self.steps,
@@ -682,6 +855,7 @@ impl<const D: usize> ImplicitRun<D> {
         let mut g = vec![SVector::<f64, D>::zeros(); np * nst];
         let grid = &self.grid;
         let parts = &self.particles;
+        let shape = self.params.shape;
         let off_grid = std::sync::atomic::AtomicUsize::new(usize::MAX);
         node.par_chunks_mut(nst)
             .zip(w.par_chunks_mut(nst))
@@ -693,8 +867,14 @@ impl<const D: usize> ImplicitRun<D> {
                     off_grid.fetch_min(p, std::sync::atomic::Ordering::Relaxed);
                     return;
                 }
-                let lp = parts.half_size[p].component_mul(&grid.inv_h);
-                match self.params.shape {
+                // uGIMP half-width in cell units from the domain stretched by
+                // Fⁿ, l = l⁰ |F_dd| ≤ h/2, frozen over the step (the explicit
+                // step's rule); ignored by the other kernels.
+                let f = &parts.f[p];
+                let lp = SVector::<f64, D>::from_fn(|d, _| {
+                    (parts.half_size[p][d] * f[(d, d)].abs() * grid.inv_h[d]).min(0.5)
+                });
+                match shape {
                     ShapeKind::Linear => stencil::<D, 2, _>(grid, LinearHat, &xi, &lp, nd, wd, gd),
                     ShapeKind::Gimp => stencil::<D, 3, _>(grid, Gimp, &xi, &lp, nd, wd, gd),
                     ShapeKind::QuadraticBspline => {
@@ -707,10 +887,10 @@ impl<const D: usize> ImplicitRun<D> {
             });
         let p = off_grid.load(std::sync::atomic::Ordering::Relaxed);
         if p != usize::MAX {
-            return Err(Failure {
-                what: "particle position is not finite or has left the grid".into(),
-                particle: Some(p),
-            });
+            return Err(Failure::new(
+                "particle position is not finite or has left the grid",
+                Some(p),
+            ));
         }
         // One representative particle per stencil base node (the node set
         // of a stencil depends on its base only): the pattern loops over these.
@@ -795,6 +975,50 @@ impl<const D: usize> ImplicitRun<D> {
             v0[d] /= mass[d];
             a0[d] /= mass[d];
         }
+        // Grips: every reduced node in the support of a gripped particle has
+        // its prescribed components fixed at the increment of the step (the
+        // value for a mirrored stencil node carries the mirror sign); walls
+        // keep the components they eliminate.
+        let mut presc = vec![f64::NAN; ndof];
+        let mut presc_list = Vec::new();
+        let mut owner = vec![usize::MAX; if self.prescribed.is_empty() { 0 } else { ndof }];
+        for (gi, grip) in self.prescribed.iter().enumerate() {
+            let inc = grip.displacement * (load - self.prescribed_applied);
+            for &p in &grip.particle {
+                for k in p * nst..(p + 1) * nst {
+                    if w[k] <= GRIP_WEIGHT_FLOOR {
+                        continue;
+                    }
+                    for a in (0..D).filter(|&a| grip.components[a]) {
+                        let d = dof[node[k] * D + a];
+                        if d == usize::MAX {
+                            continue;
+                        }
+                        let val = sign[k][a] * inc[a];
+                        if presc[d].is_nan() {
+                            presc[d] = val;
+                            owner[d] = gi;
+                            presc_list.push((d, gi, a, usize::MAX));
+                            continue;
+                        }
+                        let tol = 1e-12 * (presc[d].abs() + val.abs());
+                        if owner[d] != gi || (presc[d] - val).abs() > tol {
+                            return Err(Failure {
+                                what: format!(
+                                    "grips {} and {gi} prescribe different displacements \
+                                     of grid node {} (component {a}); keep grips at least \
+                                     two cells apart and consistent with mirror walls",
+                                    owner[d], node[k]
+                                ),
+                                particle: Some(p),
+                                fatal: Some(format!("implicit.prescribed[{gi}]")),
+                                redo: false,
+                            });
+                        }
+                    }
+                }
+            }
+        }
         Ok(StepData {
             nst,
             reps,
@@ -814,6 +1038,11 @@ impl<const D: usize> ImplicitRun<D> {
             bslot: Vec::new(),
             rows: Vec::new(),
             cols: Vec::new(),
+            lower: false,
+            presc,
+            presc_list,
+            presc_off: Vec::new(),
+            presc_lift: Vec::new(),
         })
     }
 
@@ -846,8 +1075,14 @@ impl<const D: usize> ImplicitRun<D> {
             bcol.extend_from_slice(row);
             bptr.push(bcol.len());
         }
-        let mut rows = Vec::new();
-        let mut cols = Vec::new();
+        // The Cholesky factorisation reads only the lower triangle: assemble
+        // just that (half the triplets, scatter work and matrix copies),
+        // unless a failed factorisation asked for the full matrix (LU).
+        let lower = self.params.linear == LinearSolver::Cholesky && !self.cache.full_storage;
+        sd.lower = lower;
+        // At most D² triplets per block (fewer where walls eliminate dofs).
+        let mut rows = Vec::with_capacity(bcol.len() * D * D);
+        let mut cols = Vec::with_capacity(bcol.len() * D * D);
         let mut bslot = vec![[usize::MAX; 9]; bcol.len()];
         for ci in 0..na {
             let ni = sd.active[ci];
@@ -860,7 +1095,7 @@ impl<const D: usize> ImplicitRun<D> {
                     }
                     for c in 0..D {
                         let dj = sd.dof[nj * D + c];
-                        if dj == usize::MAX {
+                        if dj == usize::MAX || (lower && di < dj) {
                             continue;
                         }
                         bslot[b][a * D + c] = rows.len();
@@ -871,19 +1106,47 @@ impl<const D: usize> ImplicitRun<D> {
             }
         }
         let same = self.cache.assembler.is_some()
+            && self.cache.stored_lower == lower
             && self.cache.key.0 == sd.dof
             && self.cache.key.1 == bptr
             && self.cache.key.2 == bcol;
         if !same {
             let ndof = sd.mass.len();
-            let asm = Assembler::new(ndof, ndof, &rows, &cols).map_err(|e| Failure {
-                what: format!("assembly: {e}"),
-                particle: None,
-            })?;
+            let asm = Assembler::new(ndof, ndof, &rows, &cols)
+                .map_err(|e| Failure::new(format!("assembly: {e}"), None))?;
             self.cache.assembler = Some(asm);
             self.cache.chol = None;
             self.cache.lu = None;
+            self.cache.stored_lower = lower;
             self.cache.key = (sd.dof.clone(), bptr.clone(), bcol.clone());
+        }
+        // Fixed dofs: their diagonal slots, the other slots of their rows
+        // and columns, and the coupling slots K_fp used by the first
+        // iteration's right-hand side.
+        if !sd.presc_list.is_empty() {
+            let fixed = |d: usize| !sd.presc[d].is_nan();
+            let mut diag = vec![usize::MAX; sd.mass.len()];
+            for (slot, (&i, &j)) in rows.iter().zip(&cols).enumerate() {
+                match (fixed(i), fixed(j)) {
+                    (true, true) if i == j => diag[i] = slot,
+                    (false, false) => {}
+                    (fi, fj) => {
+                        sd.presc_off.push(slot);
+                        if !fi {
+                            sd.presc_lift.push((slot, i, j));
+                        } else if lower && !fj {
+                            // Lower storage holds K_ij = K_ji once.
+                            sd.presc_lift.push((slot, j, i));
+                        }
+                    }
+                }
+            }
+            for e in sd.presc_list.iter_mut() {
+                e.3 = diag[e.0];
+            }
+            if sd.presc_list.iter().any(|e| e.3 == usize::MAX) {
+                return Err(Failure::new("fixed dof without a diagonal entry", None));
+            }
         }
         sd.bptr = bptr;
         sd.bcol = bcol;
@@ -893,31 +1156,48 @@ impl<const D: usize> ImplicitRun<D> {
         Ok(!same)
     }
 
-    /// Per-particle ΔF, σ and J at displacement `u`; the residual f_ext −
-    /// f_int into `r`, and the tangent triplet values into `vals` if given.
+    /// Per-particle ΔF, σ and J at displacement `u` into `ev`; the residual
+    /// f_ext − f_int into `r`, and the tangent triplet values added into
+    /// `vals` if given.
+    ///
+    /// Runs over the slab-coloured bins: particles of slabs of one colour in
+    /// parallel, each slab in index order, so concurrent tasks write disjoint
+    /// reduced nodes (rows of `r` and of the tangent) and every entry sums its
+    /// contributions in an order that does not depend on the thread count.
     fn evaluate(
         &self,
         sd: &StepData<D>,
         u: &[f64],
         r: &mut [f64],
-        mut vals: Option<&mut [f64]>,
-    ) -> std::result::Result<Eval, Failure> {
+        vals: Option<&mut [f64]>,
+        ev: &mut Eval,
+    ) -> std::result::Result<(), Failure> {
         let np = self.particles.len();
         let nst = sd.nst;
         r.copy_from_slice(&sd.fext);
-        let mut ev = Eval {
-            df: vec![Matrix3::identity(); np],
-            stress: vec![Matrix3::zeros(); np],
-            j: vec![1.0; np],
+        ev.df.resize(np, Matrix3::identity());
+        ev.stress.resize(np, Matrix3::zeros());
+        ev.j.resize(np, 1.0);
+        let parts = &self.particles;
+        let materials = &self.materials;
+        let r_out = SharedMut::new(r);
+        let vals_out = vals.map(SharedMut::new);
+        let df_out = SharedMut::new(&mut ev.df);
+        let stress_out = SharedMut::new(&mut ev.stress);
+        let j_out = SharedMut::new(&mut ev.j);
+        // The failing particle with the lowest index (deterministic) and why.
+        let failed = std::sync::Mutex::new(None::<(usize, &'static str)>);
+        let fail = |p: usize, what: &'static str| {
+            let mut f = failed.lock().unwrap_or_else(|e| e.into_inner());
+            if f.is_none_or(|(q, _)| p < q) {
+                *f = Some((p, what));
+            }
         };
-        let mut gx = vec![SVector::<f64, D>::zeros(); nst];
-        let mut ci = vec![usize::MAX; nst];
-        for p in 0..np {
+        self.bins.for_each_colored(|p| {
             let rng = p * nst..(p + 1) * nst;
             let mut grad = SMatrix::<f64, D, D>::zeros();
             for k in rng.clone() {
-                let ui = gather(sd, u, k);
-                grad += ui * sd.g[k].transpose();
+                grad += gather(sd, u, k) * sd.g[k].transpose();
             }
             // ΔF = diag(ΔF_D, I) in 3×3 (plane strain / uniaxial strain).
             let mut df = Matrix3::identity();
@@ -927,40 +1207,44 @@ impl<const D: usize> ImplicitRun<D> {
                 }
             }
             let jd = df.determinant();
-            let f_new: Matrix3<f64> = df * self.particles.f[p];
+            let f_new: Matrix3<f64> = df * parts.f[p];
             let j = f_new.determinant();
             if !(jd > 0.0 && j > 0.0 && j.is_finite()) {
-                return Err(Failure {
-                    what: "deformation gradient inverted or not finite (J ≤ 0)".into(),
-                    particle: Some(p),
-                });
+                fail(p, "deformation gradient inverted or not finite (J ≤ 0)");
+                return;
             }
-            let mat = &self.materials[self.particles.material[p] as usize];
-            let sigma = mat.implicit_stress(&df, &f_new, j, &self.particles.stress[p]);
-            let v = jd * self.particles.vol[p];
-            let inv3 = df.try_inverse().ok_or_else(|| Failure {
-                what: "singular incremental deformation gradient".into(),
-                particle: Some(p),
-            })?;
+            let mat = &materials[parts.material[p] as usize];
+            let sigma = mat.implicit_stress(&df, &f_new, j, &parts.stress[p]);
+            let v = jd * parts.vol[p];
+            let Some(inv3) = df.try_inverse() else {
+                fail(p, "singular incremental deformation gradient");
+                return;
+            };
             let inv = SMatrix::<f64, D, D>::from_fn(|a, b| inv3[(a, b)]);
             let s = SMatrix::<f64, D, D>::from_fn(|a, b| sigma[(a, b)]);
+            // At most 4³ stencil entries (cubic B-spline in 3D).
+            let mut gx = [SVector::<f64, D>::zeros(); 64];
+            let mut ci = [usize::MAX; 64];
             for (l, k) in rng.clone().enumerate() {
+                // Spatial gradient ∇ₓN = ΔF⁻ᵀ ∇N(xⁿ).
                 gx[l] = inv.transpose() * sd.g[k];
                 // Internal force v σ ∇ₓN (Guilkey Eq. 24), folded with signs.
                 let fi = s * gx[l] * v;
                 for a in 0..D {
                     let d = sd.dof[sd.node[k] * D + a];
                     if d != usize::MAX {
-                        r[d] -= sd.sign[k][a] * fi[a];
+                        // SAFETY: slab colouring gives concurrent tasks
+                        // disjoint reduced nodes, hence disjoint dofs.
+                        unsafe { *r_out.get(d) -= sd.sign[k][a] * fi[a] };
                     }
                 }
                 ci[l] = sd.compact[sd.node[k]];
             }
-            if let Some(vals) = vals.as_deref_mut() {
-                let (lam, mu) = mat.spatial_tangent(j).ok_or_else(|| Failure {
-                    what: "material has no tangent".into(),
-                    particle: Some(p),
-                })?;
+            if let Some(vals_out) = vals_out {
+                let Some((lam, mu)) = mat.spatial_tangent(j) else {
+                    fail(p, "material has no tangent");
+                    return;
+                };
                 for (l, k) in rng.clone().enumerate() {
                     if ci[l] == usize::MAX {
                         continue;
@@ -968,7 +1252,9 @@ impl<const D: usize> ImplicitRun<D> {
                     let row = &sd.bcol[sd.bptr[ci[l]]..sd.bptr[ci[l] + 1]];
                     let sg_i = s * gx[l];
                     for (m, kk) in rng.clone().enumerate() {
-                        if ci[m] == usize::MAX {
+                        // Dofs are numbered node by node in compact order, so
+                        // a block right of the diagonal is all upper triangle.
+                        if ci[m] == usize::MAX || (sd.lower && ci[m] > ci[l]) {
                             continue;
                         }
                         let Ok(pos) = row.binary_search(&ci[m]) else {
@@ -984,21 +1270,33 @@ impl<const D: usize> ImplicitRun<D> {
                                 if slot == usize::MAX {
                                     continue;
                                 }
+                                // Material (isotropic c: λ', μ') plus
+                                // geometric stiffness (∇N_i·σ∇N_j) δ_ac.
                                 let mut kv = lam * gi[a] * gj[c] + mu * gi[c] * gj[a];
                                 if a == c {
                                     kv += mu * gg + geo;
                                 }
-                                vals[slot] += v * kv * sd.sign[k][a] * sd.sign[kk][c];
+                                // SAFETY: the slot lies in the row of a node
+                                // of this particle (disjoint across tasks).
+                                unsafe {
+                                    *vals_out.get(slot) += v * kv * sd.sign[k][a] * sd.sign[kk][c]
+                                };
                             }
                         }
                     }
                 }
             }
-            ev.df[p] = df;
-            ev.stress[p] = sigma;
-            ev.j[p] = j;
+            // SAFETY: each particle writes only its own entries.
+            unsafe {
+                *df_out.get(p) = df;
+                *stress_out.get(p) = sigma;
+                *j_out.get(p) = j;
+            }
+        });
+        match failed.into_inner().unwrap_or_else(|e| e.into_inner()) {
+            Some((p, what)) => Err(Failure::new(what, Some(p))),
+            None => Ok(()),
         }
-        Ok(ev)
     }
 }
 
@@ -1019,27 +1317,25 @@ fn gather<const D: usize>(sd: &StepData<D>, u: &[f64], k: usize) -> SVector<f64,
 }
 
 impl<const D: usize> ImplicitRun<D> {
-    /// Solves K x = rhs in place; returns (linear iterations, LU used,
-    /// factorisation seconds, solve seconds).
+    /// Solves K x = rhs in place (refactorising when `refactor`, else with
+    /// the stored factorisation where there is one).
     fn solve(
         &mut self,
         vals: &[f64],
         rhs: &mut [f64],
         refactor: bool,
-    ) -> std::result::Result<(usize, bool, f64, f64), Failure> {
-        let lin = |e: SolverError| Failure {
-            what: format!("linear solve: {e}"),
-            particle: None,
-        };
+    ) -> std::result::Result<LinearReport, Failure> {
+        let lin = |e: SolverError| Failure::new(format!("linear solve: {e}"), None);
         let t0 = Instant::now();
+        let mut rep = LinearReport::default();
         let asm = self.cache.assembler.as_mut().expect("pattern built");
         let have_factor = self.cache.chol.is_some() || self.cache.lu.is_some();
         if !refactor && have_factor && self.params.linear == LinearSolver::Cholesky {
             // Modified Newton: reuse the factorisation of the last tangent.
-            let t1 = Instant::now();
-            let used_lu = self.cache.chol.is_none();
-            self.cache.solve_factored(used_lu, rhs).map_err(lin)?;
-            return Ok((0, used_lu, 0.0, t1.elapsed().as_secs_f64()));
+            rep.used_lu = self.cache.chol.is_none();
+            self.cache.solve_factored(rep.used_lu, rhs).map_err(lin)?;
+            rep.solve_s = t0.elapsed().as_secs_f64();
+            return Ok(rep);
         }
         let a = if refactor {
             asm.assemble(vals).map_err(lin)?
@@ -1053,11 +1349,23 @@ impl<const D: usize> ImplicitRun<D> {
                     let res = match self.cache.chol.as_mut() {
                         Some(c) => c.refactor(a),
                         None => Cholesky::new(a).map(|c| {
+                            rep.symbolic_s = c.symbolic_s();
                             self.cache.chol = Some(c);
                         }),
                     };
                     if res.is_err() {
                         self.cache.chol = None;
+                        if self.cache.stored_lower {
+                            // LU needs the full matrix: assemble it from
+                            // now on and redo the attempt.
+                            self.cache.full_storage = true;
+                            let mut f = Failure::new(
+                                "tangent not positive definite: full storage and LU from here",
+                                None,
+                            );
+                            f.redo = true;
+                            return Err(f);
+                        }
                         used_lu = true;
                     }
                 }
@@ -1067,18 +1375,20 @@ impl<const D: usize> ImplicitRun<D> {
                         None => self.cache.lu = Some(Lu::new(a).map_err(lin)?),
                     }
                 }
-                let tf = t0.elapsed().as_secs_f64();
+                rep.used_lu = used_lu;
+                rep.factor_s = t0.elapsed().as_secs_f64();
                 let t1 = Instant::now();
                 self.cache.solve_factored(used_lu, rhs).map_err(lin)?;
-                Ok((0, used_lu, tf, t1.elapsed().as_secs_f64()))
+                rep.solve_s = t1.elapsed().as_secs_f64();
+                Ok(rep)
             }
             LinearSolver::PcgJacobi { rel_tol, max_iter } => {
                 let pc = Jacobi::new(a).map_err(lin)?;
-                let tf = t0.elapsed().as_secs_f64();
+                rep.factor_s = t0.elapsed().as_secs_f64();
                 let t1 = Instant::now();
                 let b = rhs.to_vec();
                 rhs.iter_mut().for_each(|v| *v = 0.0);
-                let rep = solvers::pcg(
+                let kr = solvers::pcg(
                     a,
                     &pc,
                     &b,
@@ -1087,7 +1397,9 @@ impl<const D: usize> ImplicitRun<D> {
                     &mut self.cache.krylov,
                 )
                 .map_err(lin)?;
-                Ok((rep.iterations, false, tf, t1.elapsed().as_secs_f64()))
+                rep.iterations = kr.iterations;
+                rep.solve_s = t1.elapsed().as_secs_f64();
+                Ok(rep)
             }
         }
     }
@@ -1127,14 +1439,14 @@ impl<const D: usize> ImplicitRun<D> {
             }
         }
         if worst.0 > self.params.max_cell_fraction * hmin {
-            return Err(Failure {
-                what: format!(
+            return Err(Failure::new(
+                format!(
                     "particle moved {:.3} cells in one step (limit {})",
                     worst.0 / hmin,
                     self.params.max_cell_fraction
                 ),
-                particle: Some(worst.1),
-            });
+                Some(worst.1),
+            ));
         }
         let parts = &mut self.particles;
         for p in 0..np {
@@ -1263,4 +1575,14 @@ fn norm(v: &[f64]) -> f64 {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Euclidean norm over the free dofs (`presc` is NaN there).
+fn free_norm(v: &[f64], presc: &[f64]) -> f64 {
+    v.iter()
+        .zip(presc)
+        .filter(|(_, p)| p.is_nan())
+        .map(|(x, _)| x * x)
+        .sum::<f64>()
+        .sqrt()
 }

@@ -17,7 +17,8 @@ use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
 use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
 use crate::mpm::explicit::Uniform;
 use crate::mpm::implicit::{
-    ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, SurfaceLoad,
+    ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, PrescribedDisplacement,
+    SurfaceLoad,
 };
 use crate::mpm::{ExplicitParams, Particles};
 use crate::stepper::{SolidRun, TimeControl};
@@ -168,6 +169,9 @@ pub fn build_implicit_run<const D: usize>(
     if let Some(d) = im.dt_max {
         params.dt_max = d;
     }
+    if let Some(f) = im.max_cell_fraction {
+        params.max_cell_fraction = f;
+    }
     let dt = scene.time.dt.unwrap_or(scene.time.end);
     let mut run = ImplicitRun::new(grid, materials, particles, params, scene.time.end, dt)?;
     run.load_ramp = im.load_ramp;
@@ -287,6 +291,38 @@ pub fn build_implicit_run<const D: usize>(
         particle: loaded,
         force: forces,
     };
+    // Grips: the object's particles whose reference position lies in the
+    // region (all of them without one).
+    for (k, pr) in im.prescribed.iter().enumerate() {
+        let particle: Vec<usize> = ranges[pr.object]
+            .clone()
+            .filter(|&p| {
+                let x0 = run.particles.x0[p];
+                pr.region.as_ref().is_none_or(|g| g.contains(x0.as_slice()))
+            })
+            .collect();
+        if particle.is_empty() {
+            let key = if pr.region.is_some() {
+                "region"
+            } else {
+                "object"
+            };
+            return Err(SceneError::new(
+                format!("implicit.prescribed[{k}].{key}"),
+                format!("selects no particles of objects[{}]", pr.object),
+            )
+            .into());
+        }
+        let mut components = [true; D];
+        if let Some(c) = &pr.components {
+            components.copy_from_slice(&c[..D]);
+        }
+        run.prescribed.push(PrescribedDisplacement {
+            particle,
+            displacement: to_vec::<D>(&pr.displacement),
+            components,
+        });
+    }
     Ok(run)
 }
 

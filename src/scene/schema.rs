@@ -635,6 +635,33 @@ pub struct ImplicitSpec {
     pub load_ramp: Option<f64>,
     /// Largest timestep (default: `time.end`).
     pub dt_max: Option<f64>,
+    /// Largest particle displacement per step in cells; a step moving a
+    /// particle further is redone with a smaller Δt (default 0.5).
+    pub max_cell_fraction: Option<f64>,
+    /// Grips: particle sets moved by a prescribed displacement, ramped with
+    /// `load_ramp` (`[[implicit.prescribed]]`).
+    #[serde(default)]
+    pub prescribed: Vec<PrescribedSpec>,
+}
+
+/// A prescribed displacement (implicit mode): the particles of one object,
+/// optionally only those whose reference position lies in `region`, are held
+/// by a rigid grip that has moved by `displacement` at full load (ramped with
+/// `implicit.load_ramp`). The grid nodes the gripped particles touch move
+/// with the grip in the prescribed components; the force of the grip on the
+/// body is reported per step.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrescribedSpec {
+    /// Index into `objects`.
+    pub object: usize,
+    /// Displacement at full load (length `dim`).
+    pub displacement: Vec<f64>,
+    /// Which components are prescribed (length `dim`; default: all).
+    pub components: Option<Vec<bool>>,
+    /// Only the object's particles with reference position in this region
+    /// (default: the whole object).
+    pub region: Option<Geometry>,
 }
 
 fn default_true() -> bool {
@@ -663,6 +690,8 @@ impl Default for ImplicitSpec {
             max_newton_iterations: default_max_newton(),
             load_ramp: None,
             dt_max: None,
+            max_cell_fraction: None,
+            prescribed: Vec::new(),
         }
     }
 }
@@ -921,6 +950,9 @@ impl Scene {
         if let Some(d) = im.dt_max {
             positive("implicit.dt_max", d)?;
         }
+        if let Some(f) = im.max_cell_fraction {
+            positive("implicit.max_cell_fraction", f)?;
+        }
         for (i, o) in self.objects.iter().enumerate() {
             if let Some(p) = o.inner_pressure {
                 if !p.is_finite() {
@@ -940,6 +972,88 @@ impl Scene {
                         format!("objects[{i}].inner_pressure"),
                         "surface pressure loads are applied in implicit mode only (for now)",
                     ));
+                }
+            }
+        }
+        self.validate_prescribed()
+    }
+
+    /// `[[implicit.prescribed]]`: implicit mode, an existing object, vectors
+    /// of length `dim`, at least one prescribed component, a valid region.
+    fn validate_prescribed(&self) -> Result<(), SceneError> {
+        let dim = self.grid.dim;
+        for (k, pr) in self.implicit.prescribed.iter().enumerate() {
+            let p = |s: &str| format!("implicit.prescribed[{k}].{s}");
+            if self.time.mode != Mode::Implicit {
+                return Err(err(
+                    format!("implicit.prescribed[{k}]"),
+                    "prescribed displacements are applied in implicit mode only",
+                ));
+            }
+            if pr.object >= self.objects.len() {
+                return Err(err(
+                    p("object"),
+                    format!(
+                        "no object {} (the scene has {} objects, numbered from 0)",
+                        pr.object,
+                        self.objects.len()
+                    ),
+                ));
+            }
+            vec_len(&p("displacement"), &pr.displacement, dim)?;
+            if let Some(c) = &pr.components {
+                if c.len() != dim {
+                    return Err(err(
+                        p("components"),
+                        format!("must have {dim} entries (grid.dim), got {}", c.len()),
+                    ));
+                }
+                if !c.iter().any(|&b| b) {
+                    return Err(err(
+                        p("components"),
+                        "at least one component must be prescribed",
+                    ));
+                }
+            }
+            if let Some(g) = &pr.region {
+                let path = p("region");
+                validate_geometry(g, &path, dim)?;
+                let radius = |r: f64, key: &str| -> Result<(), SceneError> {
+                    if r.is_finite() && r >= 0.0 {
+                        Ok(())
+                    } else {
+                        Err(err(
+                            format!("{path}.{key}"),
+                            format!("must be ≥ 0 (got {r})"),
+                        ))
+                    }
+                };
+                match g {
+                    Geometry::Box { lower, upper } => {
+                        vec_len(&format!("{path}.lower"), lower, dim)?;
+                        vec_len(&format!("{path}.upper"), upper, dim)?;
+                        if let Some(d) = (0..dim).find(|&d| upper[d] < lower[d]) {
+                            return Err(err(
+                                format!("{path}.upper[{d}]"),
+                                format!("must be ≥ lower[{d}] = {}", lower[d]),
+                            ));
+                        }
+                    }
+                    Geometry::Disk { center, radius: r }
+                    | Geometry::Sphere { center, radius: r } => {
+                        vec_len(&format!("{path}.center"), center, dim)?;
+                        radius(*r, "radius")?;
+                    }
+                    Geometry::Annulus {
+                        center,
+                        inner_radius,
+                        outer_radius,
+                    } => {
+                        vec_len(&format!("{path}.center"), center, dim)?;
+                        radius(*inner_radius, "inner_radius")?;
+                        radius(*outer_radius, "outer_radius")?;
+                    }
+                    Geometry::HalfSpace { .. } => {}
                 }
             }
         }

@@ -17,11 +17,14 @@ use crate::harness::{plot_xy, PlotSeries, Point, Series, StudyResult, Style};
 fn point(m: &ImpmMeasured) -> Point {
     let newton = m.newton_iterations() as f64;
     let (mut asm, mut fac, mut sol, mut par) = (0.0, 0.0, 0.0, 0.0);
+    let (mut setup, mut symb) = (0.0, 0.0);
     for s in &m.stats {
         asm += s.assembly_s;
         fac += s.factor_s;
         sol += s.solve_s;
         par += s.particles_s;
+        setup += s.setup_s;
+        symb += s.symbolic_s;
     }
     Point::new(
         m.h,
@@ -36,6 +39,24 @@ fn point(m: &ImpmMeasured) -> Point {
     .with_extra("factor_s", fac)
     .with_extra("solve_s", sol)
     .with_extra("particles_s", par)
+    .with_extra("setup_s", setup)
+    .with_extra("symbolic_s", symb)
+}
+
+/// The run with the median wall time of `reps` repetitions (and all wall
+/// times, for the notes).
+fn median_run<M: Clone>(
+    reps: usize,
+    wall: impl Fn(&M) -> f64,
+    mut f: impl FnMut() -> anyhow::Result<M>,
+) -> anyhow::Result<(M, Vec<f64>)> {
+    let mut runs = Vec::with_capacity(reps);
+    for _ in 0..reps.max(1) {
+        runs.push(f()?);
+    }
+    runs.sort_by(|a, b| wall(a).total_cmp(&wall(b)));
+    let walls = runs.iter().map(&wall).collect();
+    Ok((runs[runs.len() / 2].clone(), walls))
 }
 
 fn explicit_point(m: &Measured) -> Point {
@@ -61,7 +82,7 @@ pub fn impm_column(quick: bool) -> anyhow::Result<StudyResult> {
     let ns: &[usize] = if quick {
         &[4, 8, 16]
     } else {
-        &[4, 8, 16, 32, 64, 128]
+        &[4, 8, 16, 32, 64, 128, 256, 512]
     };
     let mut series = Vec::new();
     for (shape, label) in [(ShapeKind::Linear, "linear"), (ShapeKind::Gimp, "gimp")] {
@@ -78,7 +99,8 @@ pub fn impm_column(quick: bool) -> anyhow::Result<StudyResult> {
         notes: vec![
             "Column l0 = 50 m, one cell wide, plane strain, rollers on the sides and the base, \
              neo-Hookean E = 1 MPa, nu = 0, rho = 80, g = 10, gravity ramped over 20 quasistatic \
-             load steps (implicit Newton, Cholesky); 2x2 particles per cell."
+             load steps (implicit Newton, Cholesky); 2x2 particles per cell. GIMP particle \
+             domains follow the stretch (l = l0 |F_dd|, frozen per step) as in the explicit path."
                 .into(),
             "Exact large-deformation solution: with nu = 0 the neo-Hookean column is in uniaxial \
              strain and P_yy = sigma_yy, so sigma_yy = -rho g (l0 - Y) at reference height Y \
@@ -147,12 +169,23 @@ pub fn impm_vs_explicit(quick: bool) -> anyhow::Result<StudyResult> {
     let mut imp_mod = Vec::new();
     let mut exp = Vec::new();
     let mut speedups = Vec::new();
+    // Medians of repeated runs (the implicit runs are short and noisier).
+    let (reps_imp, reps_exp) = if quick { (3, 1) } else { (5, 3) };
+    let wall = |m: &ImpmMeasured| m.wall_s;
+    let mut walls = Vec::new();
     for &dx in dxs {
-        let mi = cy.run_implicit(ShapeKind::Linear, dx, 1)?;
-        let mut run = cy.build_implicit(ShapeKind::Linear, dx, 1)?;
-        run.params.modified_newton = true;
-        let mm = cy.measure_implicit(run, dx)?;
-        let me = cy.run_explicit(ShapeKind::Linear, dx, 0.5, alpha, ramp, end)?;
+        let (mi, wi) = median_run(reps_imp, wall, || {
+            Ok(cy.run_implicit(ShapeKind::Linear, dx, 1)?)
+        })?;
+        let (mm, wm) = median_run(reps_imp, wall, || {
+            let mut run = cy.build_implicit(ShapeKind::Linear, dx, 1)?;
+            run.params.modified_newton = true;
+            Ok(cy.measure_implicit(run, dx)?)
+        })?;
+        let (me, we) = median_run(reps_exp, wall, || {
+            Ok(cy.run_explicit(ShapeKind::Linear, dx, 0.5, alpha, ramp, end)?)
+        })?;
+        walls.push((dx, wi, wm, we));
         let s = me.wall_s / mi.wall_s;
         let sm = me.wall_s / mm.wall_s;
         speedups.push((dx, mi.error, mm.error, me.error, s, sm));
@@ -228,10 +261,26 @@ pub fn impm_vs_explicit(quick: bool) -> anyhow::Result<StudyResult> {
         "Work-precision plot: results/impm_vs_explicit_work_precision.png (error vs wall time)."
             .into(),
     ];
-    for (dx, ei, em, ee, s, sm) in &speedups {
+    notes.push(format!(
+        "Wall times are medians of {reps_imp} implicit and {reps_exp} explicit runs on {} \
+         cores, rayon's default of one thread per core (both methods parallel: explicit P2G/G2P, implicit stress/residual/tangent \
+         evaluation; the sparse Cholesky runs on one thread).",
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    ));
+    for ((dx, ei, em, ee, s, sm), (_, wi, wm, we)) in speedups.iter().zip(&walls) {
+        let f = |w: &[f64]| {
+            w.iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join("/")
+        };
         notes.push(format!(
             "dx = {dx}: Eq. 43 implicit {ei:.4e} (modified Newton {em:.4e}), explicit {ee:.4e}; \
-             explicit/implicit wall time = {s:.1} (modified Newton {sm:.1})"
+             explicit/implicit wall time = {s:.1} (modified Newton {sm:.1}); walls [s] implicit \
+             {}, modified {}, explicit {}",
+            f(wi),
+            f(wm),
+            f(we)
         ));
     }
     Ok(StudyResult {
