@@ -11,9 +11,37 @@
 //! moving at uniform velocity and pressure keeps both.
 //!
 //! Reconstruction: first order `φ_f = φ_donor`; second order
-//! `φ_f = φ_donor ± ½ (1 − ν) σ`, `ν = |u*| Δt / h_d`, with the limited slope
-//! `σ` per cell (van Leer or monotonised central), the centroid of the
-//! swept region — second order in space and time for linear advection.
+//! `φ_f = φ_donor ± ½ (1 − ν) σ_d`, `ν = |u*| Δt / h_d`, with the limited
+//! slope `σ_d` per cell (van Leer, monotonised central, superbee, minmod),
+//! the centroid of the swept region in 1D — second order in space and time
+//! for linear advection in 1D.
+//!
+//! In 2D and 3D the region swept across a face in `Δt` is a parallelogram
+//! displaced by `−u Δt` in *every* direction, so the time-centred face value
+//! also needs the transverse displacement: corner transport upwind (CTU,
+//! Colella 1990, J. Comput. Phys. 87, Eqs. 2.9–2.11 for linear advection;
+//! LeVeque 2002 Sec. 20.5 "transverse propagation"),
+//!
+//! ```text
+//! φ_f = φ_c ± ½(1 − ν_d) σ_d(c) − Σ_{e≠d} ½ μ_e (φ̂^e_{c+½} − φ̂^e_{c−½}),
+//! μ_e = w_e Δt / h_e (signed),
+//! ```
+//!
+//! with `w` the donor cell's velocity and `φ̂^e` the 1D time-centred upwind
+//! states of the same limited reconstruction on the donor's two faces normal
+//! to `e` (upwind by the sign of `w_e`). Without the transverse sum
+//! ([`Advection::DimensionByDimension`]) the `Δt² u_d u_e ∂_d∂_e φ` term of
+//! the exact translation is missing: the time error of diagonal advection
+//! is first order in `Δt`. With it the scheme reproduces
+//! `φ(x_f − u Δt/2)` to second order; it is stable for
+//! `max_d |u_d| Δt / h_d ≤ 1` in 2D (Colella 1990 Sec. 2). In 3D the two
+//! transverse terms are summed without Saltzman's (1994) second transverse
+//! correction; that is stable for `max_d ν_d ≤ ½`, which the ICE time step
+//! (`Σ_d ν_d ≤ 1`) satisfies whenever no single direction dominates — use
+//! [`Advection::DimensionByDimension`] for strongly one-directional 3D flow
+//! at large Courant numbers. The transverse terms use the advective
+//! (non-conservative) form, so a uniform `φ` stays exactly uniform and the
+//! compatible-flux property holds unchanged.
 
 use nalgebra::SVector;
 
@@ -38,10 +66,28 @@ pub enum Limiter {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Advection {
-    /// First-order donor cell.
+    /// First-order donor cell (dimension by dimension).
     FirstOrder,
-    /// Second-order limited reconstruction.
+    /// Second-order limited reconstruction with corner transport (CTU) in
+    /// 2D/3D: second order in space and time for multidimensional
+    /// advection (see the module documentation). Identical to
+    /// [`Advection::DimensionByDimension`] in 1D.
     SecondOrder(Limiter),
+    /// Second-order limited reconstruction dimension by dimension (no
+    /// transverse terms): second order in space, but the cross term
+    /// `Δt² u_d u_e ∂_d∂_e φ` of oblique advection is missing (first order
+    /// in `Δt` in 2D/3D). The scheme of this code before CTU.
+    DimensionByDimension(Limiter),
+}
+
+impl Advection {
+    /// The limiter of a second-order scheme.
+    pub fn limiter(self) -> Option<Limiter> {
+        match self {
+            Self::FirstOrder => None,
+            Self::SecondOrder(l) | Self::DimensionByDimension(l) => Some(l),
+        }
+    }
 }
 
 /// Limited slope (change per cell) from the backward difference `a` and the
@@ -66,9 +112,113 @@ pub fn limited_slope(a: f64, b: f64, limiter: Limiter) -> f64 {
     }
 }
 
+/// Limited slope of the field `q` (read through `q`) in cell `c` along
+/// the direction with flat-index stride `s`.
+#[inline]
+fn slope_at(q: &impl Fn(usize) -> f64, c: usize, s: usize, lim: Limiter) -> f64 {
+    let qc = q(c);
+    limited_slope(qc - q(c - s), q(c + s) - qc, lim)
+}
+
+/// Value at the centroid of the region swept out of `donor` across its face
+/// normal to `d` on the `sign` side (`+1` upper, `−1` lower), for the field
+/// read through `q`. `nu` is the normal Courant number `|u*| Δt / h_d`;
+/// `mu[e]` the signed transverse Courant numbers `w_e Δt / h_e` of the
+/// donor (only used by [`Advection::SecondOrder`] for `e ≠ d`).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn centroid_value<const D: usize>(
+    q: impl Fn(usize) -> f64,
+    donor: usize,
+    d: usize,
+    strides: &[usize; D],
+    sign: f64,
+    nu: f64,
+    mu: &SVector<f64, D>,
+    scheme: Advection,
+) -> f64 {
+    let (lim, corner) = match scheme {
+        Advection::FirstOrder => return q(donor),
+        Advection::SecondOrder(l) => (l, true),
+        Advection::DimensionByDimension(l) => (l, false),
+    };
+    // 1D time-centred state (Fromm / MUSCL–Hancock for linear advection).
+    let mut v = q(donor) + sign * 0.5 * (1.0 - nu) * slope_at(&q, donor, strides[d], lim);
+    if corner {
+        // Colella (1990) Eq. 2.11: transverse upwind differences of the 1D
+        // time-centred states on the donor's faces normal to e, times
+        // ½ w_e Δt / h_e.
+        let down = if sign > 0.0 {
+            donor + strides[d]
+        } else {
+            donor - strides[d]
+        };
+        let (mut lo, mut hi) = (q(donor).min(q(down)), q(donor).max(q(down)));
+        let mut any = false;
+        for e in 0..D {
+            let m = mu[e];
+            if e == d || m == 0.0 {
+                continue;
+            }
+            any = true;
+            let s = strides[e];
+            let k = 0.5 * (1.0 - m.abs());
+            let (diff, up, up_down) = if m > 0.0 {
+                let lo = donor - s;
+                let diff = (q(donor) + k * slope_at(&q, donor, s, lim))
+                    - (q(lo) + k * slope_at(&q, lo, s, lim));
+                (diff, lo, down - s)
+            } else {
+                let hi = donor + s;
+                let diff = (q(hi) - k * slope_at(&q, hi, s, lim))
+                    - (q(donor) - k * slope_at(&q, donor, s, lim));
+                (diff, hi, down + s)
+            };
+            v -= 0.5 * m * diff;
+            for x in [q(up), q(up_down)] {
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        }
+        if any {
+            // The centroid `x_f − u Δt/2` lies among the donor, the cell
+            // across the face and their transverse-upwind neighbours: keep
+            // the value within their range (no new extrema; inactive where
+            // the field is smooth and monotone there).
+            v = v.clamp(lo, hi);
+        }
+    }
+    v
+}
+
+/// [`centroid_value`] of a non-negative extensive field (mass, volume
+/// fraction) with the corner-transport value also kept below
+/// `(2 − ν_d) q_donor`, the bound of the 1D reconstruction, so that no face
+/// takes more out of its donor than the dimension-by-dimension scheme can
+/// (the transverse terms use the cell velocity, which at a sharp interface
+/// can disagree with the face velocities that deliver the corner mass).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn extensive_value<const D: usize>(
+    q: &[f64],
+    donor: usize,
+    d: usize,
+    strides: &[usize; D],
+    sign: f64,
+    nu: f64,
+    mu: &SVector<f64, D>,
+    scheme: Advection,
+) -> f64 {
+    let v = centroid_value(|i| q[i], donor, d, strides, sign, nu, mu, scheme);
+    match scheme {
+        Advection::SecondOrder(_) if D > 1 => v.min((2.0 - nu.min(1.0)) * q[donor].max(0.0)),
+        _ => v,
+    }
+}
+
 /// Value of `q` at the centroid of the region swept out of `donor` across
-/// the face on its `sign` side (`+1` upper, `−1` lower); `nu` is the
-/// Courant number `|u*| Δt / h`.
+/// the face on its `sign` side (`+1` upper, `−1` lower) in 1D, or dimension
+/// by dimension; `nu` is the Courant number `|u*| Δt / h`.
 #[inline]
 pub fn face_value(
     q: &[f64],
@@ -79,34 +229,11 @@ pub fn face_value(
     scheme: Advection,
 ) -> f64 {
     let qc = q[donor];
-    match scheme {
-        Advection::FirstOrder => qc,
-        Advection::SecondOrder(lim) => {
+    match scheme.limiter() {
+        None => qc,
+        Some(lim) => {
             let s = limited_slope(qc - q[donor - stride], q[donor + stride] - qc, lim);
             qc + sign * 0.5 * (1.0 - nu) * s
-        }
-    }
-}
-
-/// Vector version of [`face_value`], component by component.
-#[inline]
-pub fn face_value_vec<const D: usize>(
-    q: &[SVector<f64, D>],
-    donor: usize,
-    stride: usize,
-    sign: f64,
-    nu: f64,
-    scheme: Advection,
-) -> SVector<f64, D> {
-    let qc = q[donor];
-    match scheme {
-        Advection::FirstOrder => qc,
-        Advection::SecondOrder(lim) => {
-            let (qm, qp) = (q[donor - stride], q[donor + stride]);
-            SVector::<f64, D>::from_fn(|k, _| {
-                let s = limited_slope(qc[k] - qm[k], qp[k] - qc[k], lim);
-                qc[k] + sign * 0.5 * (1.0 - nu) * s
-            })
         }
     }
 }
@@ -122,13 +249,23 @@ pub(crate) fn donor(face: usize, stride: usize, u: f64, dt: f64, h: f64) -> (usi
     }
 }
 
+/// Signed Courant numbers `w_e Δt / h_e` of the cell velocity `w`.
+#[inline]
+fn courants<const D: usize>(w: &SVector<f64, D>, dt: f64, h: &SVector<f64, D>) -> SVector<f64, D> {
+    SVector::<f64, D>::from_fn(|e, _| w[e] * dt / h[e])
+}
+
 /// Face fluxes of `q` per unit cell volume, `(u* Δt / h) q_f`, into
-/// `flux` (indexed by face), for every face normal to `d`.
+/// `flux` (indexed by face), for every face normal to `d`. `velocity` is
+/// the cell velocity (ghosts filled) that carries the transverse terms of
+/// [`Advection::SecondOrder`].
+#[allow(clippy::too_many_arguments)]
 pub fn scalar_fluxes<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
     ustar: &[f64],
     q: &[f64],
+    velocity: &[SVector<f64, D>],
     dt: f64,
     scheme: Advection,
     flux: &mut [f64],
@@ -140,9 +277,10 @@ pub fn scalar_fluxes<const D: usize>(
         for f in row {
             let u = ustar[f];
             let (c, sign, nu) = donor(f, s, u, dt, h);
-            let v = u * dt / h * face_value(q, c, s, sign, nu, scheme);
+            let mu = courants(&velocity[c], dt, &layout.h);
+            let qf = extensive_value(q, c, d, &layout.strides, sign, nu, &mu, scheme);
             // SAFETY: each face is written by one task only.
-            unsafe { out.set(f, v) };
+            unsafe { out.set(f, u * dt / h * qf) };
         }
     });
 }
@@ -181,7 +319,8 @@ impl<const D: usize> AdvectionFluxes<D> {
 pub struct AdvectedFields<'a, const D: usize> {
     /// Mass `M`.
     pub mass: &'a [f64],
-    /// Velocity `u^L`.
+    /// Velocity `u^L`; also the transverse velocity of the corner-transport
+    /// terms of [`Advection::SecondOrder`].
     pub velocity: &'a [SVector<f64, D>],
     /// Specific internal energy `e^L`.
     pub energy: &'a [f64],
@@ -211,22 +350,26 @@ pub fn material_fluxes<const D: usize>(
             Out::new(&mut out.volume[d]),
             Out::new(&mut out.kinetic[d]),
         );
+        let st = &layout.strides;
         par_face_rows(layout, d, |row| {
             for f in row {
                 let u = us[f];
                 let (c, sign, nu) = donor(f, s, u, dt, h);
-                let m_flux = u * dt / h * face_value(q.mass, c, s, sign, nu, scheme);
+                let mu = courants(&q.velocity[c], dt, &layout.h);
+                let value =
+                    |field: &[f64]| centroid_value(|i| field[i], c, d, st, sign, nu, &mu, scheme);
+                let m_flux = u * dt / h * extensive_value(q.mass, c, d, st, sign, nu, &mu, scheme);
+                let vel = SVector::<f64, D>::from_fn(|k, _| {
+                    centroid_value(|i| q.velocity[i][k], c, d, st, sign, nu, &mu, scheme)
+                });
                 // SAFETY: each face is written by one task only.
                 unsafe {
                     fm.set(f, m_flux);
-                    fmu.set(
-                        f,
-                        face_value_vec(q.velocity, c, s, sign, nu, scheme) * m_flux,
-                    );
-                    fe.set(f, m_flux * face_value(q.energy, c, s, sign, nu, scheme));
-                    fv.set(f, m_flux * face_value(q.sp_vol, c, s, sign, nu, scheme));
+                    fmu.set(f, vel * m_flux);
+                    fe.set(f, m_flux * value(q.energy));
+                    fv.set(f, m_flux * value(q.sp_vol));
                     if let Some(k) = q.kinetic {
-                        fk.set(f, m_flux * face_value(k, c, s, sign, nu, scheme));
+                        fk.set(f, m_flux * value(k));
                     }
                 }
             }
@@ -260,7 +403,140 @@ pub fn net_inflow_vec<const D: usize>(
 
 #[cfg(test)]
 mod tests {
+    use super::super::boundary::{fill_scalar, fill_vector, IceBoundary};
     use super::*;
+    use std::f64::consts::PI;
+
+    /// Exact cell average over a cell of width `h` centred at `x` of
+    /// `sin(2π x)` (times the cell average in the other direction).
+    fn sin_avg(x: f64, h: f64) -> f64 {
+        (2.0 * PI * x).sin() * (PI * h).sin() / (PI * h)
+    }
+
+    /// Pure advection on the periodic unit square at the uniform velocity
+    /// `u` (both components > 0) for one period in x (`t = 1/u_x`), with
+    /// fixed Courant number `nu_x = u_x Δt / h` (rounded so that an
+    /// integer number of steps ends at `t`): the mass `M` (cell averages of
+    /// `ρ = 1 + 0.3 sin 2πx sin 2πy`) and, compatibly (`F = F_M φ_f`), a
+    /// specific scalar `φ`. Exact solution: translation by `u t`. Returns
+    /// the mean L1 error of `ρ`, and the largest deviation of `φ` from its
+    /// initial value when `φ` starts uniform (`uniform_phi`).
+    fn advect_wave(
+        n: usize,
+        u: SVector<f64, 2>,
+        nu_x: f64,
+        scheme: Advection,
+        uniform_phi: bool,
+    ) -> (f64, f64) {
+        let h = 1.0 / n as f64;
+        let layout =
+            CellLayout::<2>::new(SVector::zeros(), SVector::<f64, 2>::new(h, h), [n, n]).unwrap();
+        let bcs = [
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+        ];
+        let t_end = 1.0 / u[0];
+        let steps = (t_end * u[0] / (nu_x * h)).round() as usize;
+        let dt = t_end / steps as f64;
+        let vol = h * h;
+        let rho = |x: &SVector<f64, 2>, t: f64| {
+            1.0 + 0.3 * sin_avg(x[0] - u[0] * t, h) * sin_avg(x[1] - u[1] * t, h)
+        };
+        let len = layout.len();
+        let mut mass = vec![0.0; len];
+        let mut phi = vec![0.0; len];
+        for &c in &layout.interior {
+            let x = layout.centre(c);
+            mass[c] = rho(&x, 0.0) * vol;
+            phi[c] = if uniform_phi {
+                0.7
+            } else {
+                1.0 + 0.2 * (2.0 * PI * (x[0] - 2.0 * x[1])).cos()
+            };
+        }
+        let mut vel = vec![u; len];
+        fill_vector(&layout, &bcs, &mut vel, |_| u);
+        let ustar: [Vec<f64>; 2] = std::array::from_fn(|d| vec![u[d]; len]);
+        let mut fx = AdvectionFluxes::<2>::new(len);
+        let mut mphi = vec![0.0; len];
+        for _ in 0..steps {
+            fill_scalar(&layout, &bcs, &mut mass, |_| 0.0);
+            fill_scalar(&layout, &bcs, &mut phi, |_| 0.0);
+            let fields = AdvectedFields {
+                mass: &mass,
+                velocity: &vel,
+                energy: &phi,
+                sp_vol: &phi,
+                kinetic: None,
+            };
+            material_fluxes(&layout, &ustar, &fields, dt, scheme, &mut fx);
+            for &c in &layout.interior {
+                mphi[c] = mass[c] * phi[c] + net_inflow(&layout, &fx.energy, c);
+            }
+            for &c in &layout.interior {
+                mass[c] += net_inflow(&layout, &fx.mass, c);
+                phi[c] = mphi[c] / mass[c];
+            }
+        }
+        let mut err = 0.0;
+        let mut dphi: f64 = 0.0;
+        for &c in &layout.interior {
+            err += (mass[c] / vol - rho(&layout.centre(c), t_end)).abs();
+            dphi = dphi.max((phi[c] - 0.7).abs());
+        }
+        (err / (n * n) as f64, dphi)
+    }
+
+    /// Diagonal advection (u = (1, 1)) at Courant number 0.5 per direction
+    /// (the largest the ICE step allows, `Σ_d ν_d ≤ 1`): corner transport
+    /// is second order (observed order ≥ 1.8 between N = 32 and 64, and
+    /// 64 and 128); the dimension-by-dimension scheme is not. The error at
+    /// N = 64 barely depends on the Courant number (≤ 1.5× from 0.05 to
+    /// 0.5, and stable at 0.9 per direction), where the dimension-by-
+    /// dimension error grows ≥ 2×.
+    #[test]
+    fn corner_transport_is_second_order_for_diagonal_advection() {
+        let u = SVector::<f64, 2>::new(1.0, 1.0);
+        let ctu = Advection::SecondOrder(Limiter::VanLeer);
+        let dbd = Advection::DimensionByDimension(Limiter::VanLeer);
+        let e: Vec<f64> = [32, 64, 128]
+            .iter()
+            .map(|&n| advect_wave(n, u, 0.5, ctu, false).0)
+            .collect();
+        for k in 0..2 {
+            let order = (e[k] / e[k + 1]).log2();
+            assert!(order >= 1.8, "CTU order {order}: {e:?}");
+        }
+        let small = advect_wave(64, u, 0.05, ctu, false).0;
+        let big = advect_wave(64, u, 0.9, ctu, false).0;
+        assert!(
+            e[1] <= 1.5 * small,
+            "CTU: nu 0.5 {:e} vs 0.05 {small:e}",
+            e[1]
+        );
+        assert!(big <= 1.5 * small, "CTU: nu 0.9 {big:e} vs 0.05 {small:e}");
+        let d_small = advect_wave(64, u, 0.05, dbd, false).0;
+        let d_big = advect_wave(64, u, 0.5, dbd, false).0;
+        assert!(d_big >= 2.0 * d_small, "DbD: {d_big:e} vs {d_small:e}");
+        assert!(e[1] < 0.5 * d_big);
+    }
+
+    /// Compatible fluxes with corner transport: a uniform specific quantity
+    /// carried by a non-uniform mass stays uniform to round-off, for every
+    /// scheme, along an oblique direction.
+    #[test]
+    fn uniform_specific_quantity_stays_uniform() {
+        let u = SVector::<f64, 2>::new(1.0, 0.6);
+        for scheme in [
+            Advection::FirstOrder,
+            Advection::SecondOrder(Limiter::VanLeer),
+            Advection::SecondOrder(Limiter::Superbee),
+            Advection::DimensionByDimension(Limiter::MonotonizedCentral),
+        ] {
+            let (_, dphi) = advect_wave(32, u, 0.4, scheme, true);
+            assert!(dphi < 1e-14, "{scheme:?}: {dphi:e}");
+        }
+    }
 
     #[test]
     fn limiters() {

@@ -1717,6 +1717,7 @@ pub(super) fn volume_fluxes<const D: usize>(
                 d,
                 &ws.ustar[r][d],
                 &mc.vol_frac,
+                &mc.velocity,
                 dt,
                 scheme,
                 &mut ws.theta_flux[d],

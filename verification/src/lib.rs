@@ -72,6 +72,11 @@ pub const STUDIES: &[Study] = &[
         ice_studies::ice_entropy_wave,
     ),
     (
+        "ice_diagonal_wave",
+        "2D density wave advected diagonally: corner transport vs dimension by dimension, error vs N and Courant number",
+        ice_studies::ice_diagonal_wave,
+    ),
+    (
         "ice_acoustic",
         "small-amplitude acoustic wave vs linear acoustics",
         ice_studies::ice_acoustic,
