@@ -10,7 +10,10 @@ fn main() {
     let start = std::time::Instant::now();
     let (h, steps) = piston_history(n, speed, ramp, 5.9).unwrap();
     for (r, p, e) in h {
-        println!("ratio {r:.3} p {p:.6e} exact {e:.6e} rel {:+.4e}", p / e - 1.0);
+        println!(
+            "ratio {r:.3} p {p:.6e} exact {e:.6e} rel {:+.4e}",
+            p / e - 1.0
+        );
     }
     println!("{steps} steps in {:.2} s", start.elapsed().as_secs_f64());
 }

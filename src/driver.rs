@@ -261,7 +261,10 @@ pub(crate) fn pad3<const D: usize>(v: &SVector<f64, D>) -> [f64; 3] {
     std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
 }
 
-pub(crate) fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+pub(crate) fn write_particles_vtu<const D: usize>(
+    path: &Path,
+    p: &Particles<D>,
+) -> std::io::Result<()> {
     let pts: Vec<[f64; 3]> = p.x.iter().map(pad3).collect();
     let vel: Vec<[f64; 3]> = p.v.iter().map(pad3).collect();
     let disp: Vec<[f64; 3]> =
@@ -296,7 +299,10 @@ pub(crate) fn write_particles_vtu<const D: usize>(path: &Path, p: &Particles<D>)
     )
 }
 
-pub(crate) fn write_particles_csv<const D: usize>(path: &Path, p: &Particles<D>) -> std::io::Result<()> {
+pub(crate) fn write_particles_csv<const D: usize>(
+    path: &Path,
+    p: &Particles<D>,
+) -> std::io::Result<()> {
     let axes = ["x", "y", "z"];
     let u = per_depth(D);
     let mut header: Vec<String> = Vec::new();

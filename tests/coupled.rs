@@ -35,8 +35,14 @@ fn solid_at_rest_in_still_gas_stays_at_rest() {
     }
     let (uf, up) = speeds(&run);
     let dp = pressure_dev(&run, 101_325.0);
-    eprintln!("t = {:e}, fluid {uf:e}, particles {up:e}, dp {dp:e}", run.fluid.time);
-    assert!(uf < 1e-9 && up < 1e-9, "spurious currents: fluid {uf:e}, particles {up:e}");
+    eprintln!(
+        "t = {:e}, fluid {uf:e}, particles {up:e}, dp {dp:e}",
+        run.fluid.time
+    );
+    assert!(
+        uf < 1e-9 && up < 1e-9,
+        "spurious currents: fluid {uf:e}, particles {up:e}"
+    );
     assert!(dp < 1e-12, "pressure changed by {dp:e}");
 }
 
@@ -59,7 +65,10 @@ fn translating_block(rigid: bool) {
         .iter()
         .map(|&c| (air.velocity[c] - nalgebra::SVector::<f64, 2>::from(u)).norm())
         .fold(0.0, f64::max);
-    eprintln!("rigid {rigid}: {} steps, moved {moved} cells, dp {dp:e}, du {du:e}", run.steps);
+    eprintln!(
+        "rigid {rigid}: {} steps, moved {moved} cells, dp {dp:e}, du {du:e}",
+        run.steps
+    );
     assert!(moved > 9.99, "moved {moved} cells");
     assert!(dp < 1e-10, "relative pressure change {dp:e}");
     assert!(du < 1e-8 * 100.0, "velocity change {du:e}");
@@ -112,7 +121,11 @@ fn solid_in_tension_next_to_gas_runs_without_nan() {
             p_min = p_min.min(run.fluid.pressure[c]);
         }
     }
-    let finite = run.particles.stress.iter().all(|s| s.iter().all(|v| v.is_finite()))
+    let finite = run
+        .particles
+        .stress
+        .iter()
+        .all(|s| s.iter().all(|v| v.is_finite()))
         && run.fluid.cells.iter().all(|mc| {
             mc.velocity.iter().all(|u| u.iter().all(|v| v.is_finite()))
                 && mc.temperature.iter().all(|t| t.is_finite())
@@ -131,7 +144,10 @@ fn piston_converges_to_the_adiabatic_law() {
     let err = |n: usize| {
         let (h, _) = piston_history(n, 10.0, 0.02, 3.01).unwrap();
         let &(r, p, e) = h.iter().find(|s| (s.0 - 3.0).abs() < 0.01).unwrap();
-        eprintln!("N = {n}: ratio {r:.3}, p/p_exact − 1 = {:+.4e}", p / e - 1.0);
+        eprintln!(
+            "N = {n}: ratio {r:.3}, p/p_exact − 1 = {:+.4e}",
+            p / e - 1.0
+        );
         (p / e - 1.0).abs()
     };
     let (e1, e2) = (err(60), err(120));
@@ -144,7 +160,8 @@ fn piston_converges_to_the_adiabatic_law() {
 #[test]
 fn pressurized_cylinder_eq43_converges() {
     use mpmice::diagnostics::coupled::measure_cylinder;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
     let err = |n: usize| {
         let mut sc = mpmice::scene::load(&path).unwrap();
         sc.grid.cells = vec![n, n];
@@ -154,7 +171,11 @@ fn pressurized_cylinder_eq43_converges() {
         }
         let m = measure_cylinder(&run, 0.5, 101_325.0);
         eprintln!("n = {n}: P = {:e}, Eq. 43 = {:e}", m.pressure, m.error43);
-        assert!((m.pressure - 19.3e6).abs() < 0.02 * 19.3e6, "P = {:e}", m.pressure);
+        assert!(
+            (m.pressure - 19.3e6).abs() < 0.02 * 19.3e6,
+            "P = {:e}",
+            m.pressure
+        );
         m.error43
     };
     let (e1, e2) = (err(12), err(24));

@@ -395,3 +395,67 @@ fn bad_fluid_input_names_its_key() {
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
+
+/// A coupled scene (steel block in air) and its bad inputs.
+const COUPLED_EXTRA: &str = r#"
+[[materials]]
+name = "air"
+type = "fluid"
+eos = "ideal_gas"
+gamma = 1.4
+cv = 717.5
+
+[[regions]]
+pressure = 101325.0
+states = [{ material = "air", volume_fraction = 1.0, density = 1.1768 }]
+"#;
+
+#[test]
+fn coupled_scene_bad_inputs_name_their_keys() {
+    let good = format!("{GOOD}{COUPLED_EXTRA}");
+    mpmice::scene::parse(&good).expect("the coupled scene is valid");
+    let heat = |material: &str, geometry: &str| {
+        format!(
+            "{good}\n[[heat_sources]]\nmaterial = \"{material}\"\ngeometry = {geometry}\npower = 1e9\nend = 1e-3\n"
+        )
+    };
+    let disk = "{ type = \"disk\", center = [0.5, 0.5], radius = 0.1 }";
+    let far = "{ type = \"disk\", center = [5.0, 5.0], radius = 0.1 }";
+    let cases: Vec<(String, &str, &str)> = vec![
+        (heat("water", disk), "heat_sources[0].material", "not a fluid"),
+        (heat("steel", disk), "heat_sources[0].material", "not a fluid"),
+        (heat("air", far), "heat_sources[0].geometry", "outside the domain"),
+        (
+            format!("{good}\n[coupling]\nmomentum_exchange = -1.0\n"),
+            "coupling.momentum_exchange",
+            ">= 0",
+        ),
+        (
+            format!("{good}\n[coupling]\nreference_pressure = 0.0\n"),
+            "coupling.reference_pressure",
+            "> 0",
+        ),
+        (
+            good.replace("[time]", "[mpm]\nupdate = \"musl\"\n\n[time]"),
+            "mpm.update",
+            "usf, usl",
+        ),
+        (
+            format!(
+                "{good}\n[[materials]]\nname = \"brass\"\ntype = \"solid\"\nmodel = \"neo_hookean\"\ndensity = 8500.0\nbulk_modulus = 1e11\nshear_modulus = 4e10\n"
+            ),
+            "materials",
+            "exactly one solid",
+        ),
+        (
+            GOOD.replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\nrigid = true"),
+            "materials[0].rigid",
+            "need a fluid",
+        ),
+    ];
+    for (text, path, word) in &cases {
+        let e = error_of(text);
+        assert_eq!(e.path, *path, "{e}");
+        assert!(e.message.contains(word), "`{}` lacks `{word}`", e.message);
+    }
+}

@@ -325,7 +325,11 @@ pub fn measure_wedge(
         .iter()
         .fold((0.0, 0.0), |(a, b), c| (a + c.0 * c.0, b + c.0 * c.1));
     let slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-    let ratios: Vec<f64> = columns.iter().map(|c| c.2).filter(|r| r.is_finite()).collect();
+    let ratios: Vec<f64> = columns
+        .iter()
+        .map(|c| c.2)
+        .filter(|r| r.is_finite())
+        .collect();
     WedgeMeasured {
         angle_deg: slope.atan().to_degrees(),
         pressure_ratio: ratios.iter().sum::<f64>() / ratios.len().max(1) as f64,

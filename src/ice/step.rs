@@ -889,9 +889,17 @@ pub fn stage_pressure<const D: usize>(
                 &mc.sp_vol,
                 &state.p_eq,
                 if rigid { 0.0 } else { fdt },
-                if rigid { 0.0 } else { params.gravity[d] * dt / fdt },
+                if rigid {
+                    0.0
+                } else {
+                    params.gravity[d] * dt / fdt
+                },
                 params.face_reconstruction,
-                if rigid { 0.0 } else { params.face_smooth_factor * dt },
+                if rigid {
+                    0.0
+                } else {
+                    params.face_smooth_factor * dt
+                },
                 out,
             );
             zero_wall_faces(layout, bcs, d, out);
@@ -1032,7 +1040,7 @@ pub fn stage_lagrangian<const D: usize>(
     let (t0, t1) = (state.time, state.time + dt);
     let sources = &params.heat_sources;
 
-        // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
+    // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
     // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
     // Appendix Eq. 53), per cell and all materials at once.
     {
@@ -1373,8 +1381,11 @@ pub fn stage_advect<const D: usize>(
                     // volume is orders of magnitude larger (a fluid floor
                     // inside a solid in tension) can be given more volume
                     // flux than it holds: keep its own specific volume.
+                    // In a coupled scene (where the solid field makes such
+                    // contrasts at every surface) this applies to any
+                    // fluid.
                     let m_cell: f64 = st.cells.iter().map(|mc| mc.mass[c]).sum();
-                    if m0 < 1e-6 * m_cell {
+                    if m0 < 1e-6 * m_cell || params.normalise_volume {
                         mv = m * fields.sp_vol[c];
                     }
                 }

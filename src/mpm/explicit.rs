@@ -411,7 +411,14 @@ impl<const D: usize> CoupledMpm<'_, D> {
                 scratch.lp.clear();
             }
             clear(gs);
-            p2g::<D, S, K, true, true, false>(ctx, kernel, &scratch.bins, &scratch.lp, particles, gs);
+            p2g::<D, S, K, true, true, false>(
+                ctx,
+                kernel,
+                &scratch.bins,
+                &scratch.lp,
+                particles,
+                gs,
+            );
             grid_velocity(ctx, gs);
             scratch.times.p2g_s += start.elapsed().as_secs_f64();
             Ok(())
@@ -460,7 +467,14 @@ impl<const D: usize> CoupledMpm<'_, D> {
             }
             let mid = Instant::now();
             scratch.times.g2p_s += (mid - start).as_secs_f64();
-            p2g::<D, S, K, false, false, true>(ctx, kernel, &scratch.bins, &scratch.lp, particles, gs);
+            p2g::<D, S, K, false, false, true>(
+                ctx,
+                kernel,
+                &scratch.bins,
+                &scratch.lp,
+                particles,
+                gs,
+            );
             gs.force
                 .par_iter_mut()
                 .zip(extra_force.par_iter())
@@ -472,7 +486,15 @@ impl<const D: usize> CoupledMpm<'_, D> {
             Ok(())
         }
         let ctx = self.ctx(Some((node_pressure, p_ref)));
-        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch, extra_force)
+        with_kernel!(
+            self.params.shape,
+            run,
+            &ctx,
+            particles,
+            gs,
+            scratch,
+            extra_force
+        )
     }
 
     /// Step 13: particle velocity (FLIP, Guilkey Eq. 26) and position

@@ -8,8 +8,8 @@ pub mod particles;
 mod scatter;
 
 pub use explicit::{
-    explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes, StepScratch,
-    UpdateScheme,
+    explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes,
+    StepScratch, UpdateScheme,
 };
 pub use implicit::{ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad};
 pub use particles::Particles;

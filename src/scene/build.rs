@@ -599,7 +599,10 @@ pub fn build_coupled_run<const D: usize>(
             .iter()
             .position(|n| *n == h.material)
             .ok_or_else(|| {
-                SceneError::new(format!("heat_sources[{i}].material"), "not a fluid material")
+                SceneError::new(
+                    format!("heat_sources[{i}].material"),
+                    "not a fluid material",
+                )
             })?;
         let layout = &state.layout;
         let mut power = vec![0.0; layout.len()];

@@ -401,7 +401,10 @@ impl Geometry {
                 let mut hi = vec![f64::INFINITY; dim];
                 for d in 0..dim.min(2) {
                     lo[d] = vertices.iter().map(|v| v[d]).fold(f64::INFINITY, f64::min);
-                    hi[d] = vertices.iter().map(|v| v[d]).fold(f64::NEG_INFINITY, f64::max);
+                    hi[d] = vertices
+                        .iter()
+                        .map(|v| v[d])
+                        .fold(f64::NEG_INFINITY, f64::max);
                 }
                 (lo, hi)
             }
@@ -1053,7 +1056,7 @@ impl Scene {
                         radius(*inner_radius, "inner_radius")?;
                         radius(*outer_radius, "outer_radius")?;
                     }
-                    Geometry::HalfSpace { .. } => {}
+                    Geometry::HalfSpace { .. } | Geometry::Polygon { .. } => {}
                 }
             }
         }
