@@ -141,7 +141,7 @@ pub(crate) fn run_coupled_dim<const D: usize>(
             cells.snapshot(&run.fluid)?;
             next_out += interval.unwrap_or(f64::INFINITY);
         }
-        if steps % 16 == 0 {
+        if steps.is_multiple_of(16) {
             bar.set_position((1000.0 * t / end) as u64);
             bar.set_message(format!("{t:.4e}"));
         }

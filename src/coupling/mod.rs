@@ -366,7 +366,7 @@ impl<const D: usize> CoupledRun<D> {
             for r in 0..self.solid {
                 let mc = &mut self.fluid.cells[r];
                 mc.mass[c] *= keep;
-                if !(mc.mass[c] > 0.0) {
+                if mc.mass[c].is_nan() || mc.mass[c] <= 0.0 {
                     mc.mass[c] = floor * vol / mc.sp_vol[c].max(f64::MIN_POSITIVE);
                 }
             }

@@ -170,6 +170,10 @@ pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
     Ok(run)
 }
 
+/// One piston sample: (compression ratio `V1/V2`, closed-end pressure,
+/// `P1 (V1/V2)^γ`).
+pub type PistonSample = (f64, f64, f64);
+
 /// The piston run of [`piston`] until the compression ratio reaches
 /// `ratio_end`; returns `(ratio, p_bottom, p_exact)` samples at the ratios
 /// `2, 2.5, 3, …` (the cell pressure at the closed end against Guilkey
@@ -182,7 +186,7 @@ pub fn piston_history(
     speed: f64,
     ramp: f64,
     ratio_end: f64,
-) -> Result<(Vec<(f64, f64, f64)>, u64)> {
+) -> Result<(Vec<PistonSample>, u64)> {
     let mut run = piston(n, speed, ramp)?;
     let p1 = 101_325.0;
     let mut out = Vec::new();

@@ -943,7 +943,7 @@ pub fn stage_pressure<const D: usize>(
                 // Guilkey Eq. 29.
                 let mut dp = -dt * div_sum[c] / stk[c];
                 let mut p = st.p_eq[c] + dp;
-                if !(p > p_min) && dp.is_finite() {
+                if p <= p_min && dp.is_finite() {
                     // The linearised Eq. 29 overshoots below the admissible
                     // range (a strong expansion, or a solid in tension on
                     // its threshold EOS, Guilkey Fig. 1, whose κ grows as p

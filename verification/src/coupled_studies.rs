@@ -22,9 +22,12 @@ fn plot_dir(quick: bool) -> PathBuf {
     }
 }
 
+/// `(r, σ_r, σ_θ)` of one particle of the Fig. 3a row.
+pub type RowStress = (f64, f64, f64);
+
 /// One coupled cylinder run from `cases/pressurized_cylinder.toml` at cell
 /// size `dx`: (Eq. 43 point, the Fig. 3a row, measured P).
-pub fn cylinder_at(dx: f64) -> anyhow::Result<(Point, Vec<(f64, f64, f64)>, f64)> {
+pub fn cylinder_at(dx: f64) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
     let path = repo_root().join("cases/pressurized_cylinder.toml");
     let mut sc = scene::load(&path)?;
     let n = (1.2 / dx).round() as usize;
