@@ -1,8 +1,11 @@
 //! Time stepping: one step per mode, built from the kernels in the order of
 //! the papers, with timestep control.
 //!
-//! Today: the explicit solid (MPM-only) run. The coupled MPM-ICE steps of
-//! Guilkey Sec. 3.3 will sit beside it and reuse the same kernels.
+//! Here: the explicit solid (MPM-only) run. The coupled MPM-ICE step of
+//! Guilkey Sec. 3.3 is [`crate::coupling::CoupledRun`]; it reuses the same
+//! MPM kernels, split into phases ([`crate::mpm::CoupledMpm`]), and the ICE
+//! stages ([`crate::ice::stage_pressure`], [`crate::ice::stage_lagrangian`],
+//! [`crate::ice::stage_advect`]).
 
 use nalgebra::SVector;
 
