@@ -4,7 +4,7 @@
 //! "elem/s" is cell-steps per second per material.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use mpmice::ice::{step, CellLayout};
+use mpmice::ice::{step, Advection, CellLayout, Limiter};
 use mpmice::ice::{
     ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState, IceWorkspace, MaterialInit,
 };
@@ -48,8 +48,13 @@ fn bench(c: &mut Criterion) {
         [IceBoundary::Outflow, IceBoundary::Outflow],
         [IceBoundary::Wall, IceBoundary::Wall],
     ];
+    // `literal_dbd`: the literal step with the dimension-by-dimension
+    // advection instead of corner transport (the cost of the CTU terms).
+    let mut dbd = IceParams::new(bcs.clone());
+    dbd.advection = Advection::DimensionByDimension(Limiter::VanLeer);
     for (name, mut params) in [
         ("literal", IceParams::new(bcs.clone())),
+        ("literal_dbd", dbd),
         ("high_resolution", IceParams::high_resolution(bcs.clone())),
     ] {
         params.exchange = Some(ExchangeCoefficients::uniform(2, 1e15, 0.0));
