@@ -10,6 +10,7 @@ use crate::driver::{
 };
 use crate::driver_fluid::{energies, FluidWriter};
 use crate::error::{Error, Result};
+use crate::material::eos::EquationOfState;
 use crate::output::vtk::PvdSeries;
 use crate::scene::{build_coupled_run, Format, Scene};
 use crate::stepper::Energies;
@@ -53,7 +54,7 @@ fn total_energies<const D: usize>(run: &CoupledRun<D>) -> Energies {
     let mut e = energies(&run.fluid);
     // The solid field's cells are a copy of the particles: count those.
     let sc = &run.fluid.cells[run.solid];
-    let cv = 450.0;
+    let cv = run.solid_eos.specific_heat_cv();
     for &c in &run.fluid.layout.interior {
         e.kinetic -= 0.5 * sc.mass[c] * sc.velocity[c].norm_squared();
         e.strain -= sc.mass[c] * cv * sc.temperature[c];
@@ -184,7 +185,9 @@ pub(crate) fn run_coupled_dim<const D: usize>(
         // Fluid mass (walls and heat sources keep it; outflow faces do not)
         // and particle mass together.
         mass_drift: ((mf1 + ms1) - (mf0 + ms0)) / (mf0 + ms0),
-        momentum_drift: 0.0,
+        // Not reported: walls and the pressure at them exchange momentum
+        // with the coupled system (JSON null).
+        momentum_drift: f64::NAN,
         energy_drift: if e_scale > 0.0 {
             (e1.kinetic + e1.strain - e_scale) / e_scale
         } else {

@@ -100,11 +100,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 sum.wall_s,
                 sum.threads
             );
+            // A drift a mode does not report (NaN, JSON null) prints "n/a".
+            let show = |x: f64| {
+                if x.is_nan() {
+                    "n/a".to_string()
+                } else {
+                    format!("{x:.2e}")
+                }
+            };
             println!(
-                "drift: mass {:.2e}, momentum {:.2e}, energy {:.2e}; outputs in {}",
-                sum.mass_drift,
-                sum.momentum_drift,
-                sum.energy_drift,
+                "drift: mass {}, momentum {}, energy {}; outputs in {}",
+                show(sum.mass_drift),
+                show(sum.momentum_drift),
+                show(sum.energy_drift),
                 out_dir.display()
             );
             Ok(())
