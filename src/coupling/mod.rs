@@ -43,6 +43,23 @@ use crate::mpm::{
     stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, Particles, StepScratch,
 };
 
+/// The MPM phases of the current step, borrowing only the run's MPM fields
+/// (so the particles, grid state and scratch can be borrowed mutably
+/// beside it).
+macro_rules! phases {
+    ($run:ident, $dt:expr) => {
+        CoupledMpm {
+            grid: &$run.grid,
+            materials: &$run.materials,
+            params: &$run.mpm,
+            body: $run.body.as_deref().map(|b| b as &dyn BodyForce<D>),
+            t: $run.fluid.time,
+            dt: $dt,
+            step: $run.steps,
+        }
+    };
+}
+
 /// Settings of the coupling.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CouplingParams {
@@ -254,15 +271,7 @@ impl<const D: usize> CoupledRun<D> {
 
     /// Step 1: P2G and node → cell of the solid's mass and velocity.
     fn p2g_to_cells(&mut self, dt: f64) -> Result<()> {
-        let phases = CoupledMpm {
-            grid: &self.grid,
-            materials: &self.materials,
-            params: &self.mpm,
-            body: self.body.as_deref().map(|b| b as &dyn BodyForce<D>),
-            t: self.fluid.time,
-            dt,
-            step: self.steps,
-        };
+        let phases = phases!(self, dt);
         phases.p2g(&self.particles, &mut self.gs, &mut self.scratch)?;
         nodes_to_cells(
             &self.gs,
@@ -510,15 +519,7 @@ impl<const D: usize> CoupledRun<D> {
                 gs.accel[i] = SVector::zeros();
             }
         } else {
-            let phases = CoupledMpm {
-                grid: &self.grid,
-                materials: &self.materials,
-                params: &self.mpm,
-                body: self.body.as_deref().map(|b| b as &dyn BodyForce<D>),
-                t: self.fluid.time,
-                dt,
-                step: self.steps,
-            };
+            let phases = phases!(self, dt);
             phases.solve(
                 &mut self.particles,
                 &mut self.gs,
@@ -590,15 +591,7 @@ impl<const D: usize> CoupledRun<D> {
             self.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
             self.particles.v.par_iter_mut().for_each(|u| *u = v);
         } else {
-            let phases = CoupledMpm {
-                grid: &self.grid,
-                materials: &self.materials,
-                params: &self.mpm,
-                body: self.body.as_deref().map(|b| b as &dyn BodyForce<D>),
-                t: self.fluid.time,
-                dt,
-                step: self.steps,
-            };
+            let phases = phases!(self, dt);
             phases.g2p(&mut self.particles, &self.gs, &mut self.scratch)?;
         }
         // Step 12: fluid advection and the commit of the cell state.

@@ -74,7 +74,7 @@ pub fn block_in_air(
     let mut params = IceParams::new([[fbc.clone(), fbc.clone()], [fbc.clone(), fbc]]);
     params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
     let m = steel();
-    let mut particles = fill_box(
+    let particles = fill_box(
         &grid,
         &SVector::from(lo),
         &SVector::from(hi),
@@ -83,8 +83,22 @@ pub fn block_in_air(
         |_| true,
     );
     let us = SVector::<f64, 2>::from(u_solid);
-    for v in &mut particles.v {
-        *v = us;
+    steel_run(grid, particles, us, rigid, fluid, params)
+}
+
+/// A coupled run of steel particles moving at `v` (prescribed if `rigid`)
+/// with the linear hat, USF, `p_ref = 101325` and the default coupling.
+fn steel_run<const D: usize>(
+    grid: Grid<D>,
+    mut particles: crate::mpm::Particles<D>,
+    v: SVector<f64, D>,
+    rigid: bool,
+    fluid: IceState<D>,
+    params: IceParams<D>,
+) -> Result<CoupledRun<D>> {
+    let m = steel();
+    for u in &mut particles.v {
+        *u = v;
     }
     let min_mass = particles.mass.iter().copied().fold(f64::INFINITY, f64::min);
     let mpm = ExplicitParams {
@@ -103,7 +117,7 @@ pub fn block_in_air(
         params,
         "steel",
         eos,
-        rigid.then_some(us),
+        rigid.then_some(v),
         CouplingParams::default(),
         0.5,
     )
@@ -134,7 +148,7 @@ pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
     params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
     let m = steel();
     let v = SVector::<f64, 1>::new(-speed);
-    let mut particles = fill_box(
+    let particles = fill_box(
         &grid,
         &SVector::<f64, 1>::new(1.0),
         &SVector::<f64, 1>::new(1.1),
@@ -142,30 +156,7 @@ pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
         m.density,
         |_| true,
     );
-    for u in &mut particles.v {
-        *u = v;
-    }
-    let min_mass = particles.mass.iter().copied().fold(f64::INFINITY, f64::min);
-    let mpm = ExplicitParams {
-        shape: ShapeKind::Linear,
-        scheme: UpdateScheme::Usf,
-        mass_floor: 1e-12 * min_mass,
-        damping: 0.0,
-    };
-    let eos = solid_eos(&m, 101_325.0);
-    let mut run = CoupledRun::new(
-        grid,
-        vec![m],
-        particles,
-        mpm,
-        fluid,
-        params,
-        "piston",
-        eos,
-        Some(v),
-        CouplingParams::default(),
-        0.5,
-    )?;
+    let mut run = steel_run(grid, particles, v, true, fluid, params)?;
     run.rigid_ramp = ramp;
     Ok(run)
 }

@@ -1158,6 +1158,14 @@ pub fn stage_lagrangian<const D: usize>(
                         }
                     }
                 }
+                // f_θ among the materials that receive the flux work and the
+                // exchange heat (the Eulerian ones).
+                let mut stk_e = 0.0;
+                for r in 0..nm {
+                    if !lagr[r] {
+                        stk_e += theta[r] * kappa[r][c];
+                    }
+                }
                 if cons {
                     // Conservative Eq. 34: Δ(mE) = −Δt Σ_f A p*_f Σ_s θ_s,f u*_s,f
                     // (the stored fluxes carry Δt A / V).
@@ -1168,13 +1176,6 @@ pub fn stage_lagrangian<const D: usize>(
                     }
                     de *= vol;
                     let de_int = de - dke_src;
-                    // f_θ among the materials that receive the work.
-                    let mut stk_e = 0.0;
-                    for r in 0..nm {
-                        if !lagr[r] {
-                            stk_e += theta[r] * kappa[r][c];
-                        }
-                    }
                     for r in 0..nm {
                         if lagr[r] {
                             continue;
@@ -1198,12 +1199,6 @@ pub fn stage_lagrangian<const D: usize>(
                         // The kinetic energy dissipated by the exchange
                         // becomes heat.
                         let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
-                        let mut stk_e = 0.0;
-                        for r in 0..nm {
-                            if !lagr[r] {
-                                stk_e += theta[r] * kappa[r][c];
-                            }
-                        }
                         for r in 0..nm {
                             if lagr[r] {
                                 continue;

@@ -249,24 +249,7 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
         clock = now;
     };
     let mut t = scratch.times;
-    if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
-        return Err(ctx.fail(
-            Some(p),
-            None,
-            "particle position is not finite or has left the grid",
-        ));
-    }
-    if ctx.params.shape == ShapeKind::Gimp {
-        let inv_h = ctx.grid.inv_h;
-        scratch.lp.resize(particles.len(), SVector::zeros());
-        scratch
-            .lp
-            .par_iter_mut()
-            .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
-            .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
-    } else {
-        scratch.lp.clear();
-    }
+    prepare(ctx, particles, scratch)?;
     lap(&mut t.bin_s);
     let bins = &scratch.bins;
     let dx = &mut scratch.dx;
@@ -392,24 +375,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch: &mut StepScratch<D>,
         ) -> Result<()> {
             let start = Instant::now();
-            if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
-                return Err(ctx.fail(
-                    Some(p),
-                    None,
-                    "particle position is not finite or has left the grid",
-                ));
-            }
-            if ctx.params.shape == ShapeKind::Gimp {
-                let inv_h = ctx.grid.inv_h;
-                scratch.lp.resize(particles.len(), SVector::zeros());
-                scratch
-                    .lp
-                    .par_iter_mut()
-                    .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
-                    .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
-            } else {
-                scratch.lp.clear();
-            }
+            prepare(ctx, particles, scratch)?;
             clear(gs);
             p2g::<D, S, K, true, true, false>(
                 ctx,
@@ -530,6 +496,34 @@ impl<const D: usize> CoupledMpm<'_, D> {
         let ctx = self.ctx(None);
         with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
     }
+}
+
+/// Start of a step: bins the particles into slabs and freezes the GIMP
+/// half-widths (l = l⁰|F_dd|) for every transfer of the step.
+fn prepare<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    particles: &Particles<D>,
+    scratch: &mut StepScratch<D>,
+) -> Result<()> {
+    if let Err(p) = scratch.bins.build(ctx.grid, &particles.x) {
+        return Err(ctx.fail(
+            Some(p),
+            None,
+            "particle position is not finite or has left the grid",
+        ));
+    }
+    if ctx.params.shape == ShapeKind::Gimp {
+        let inv_h = ctx.grid.inv_h;
+        scratch.lp.resize(particles.len(), SVector::zeros());
+        scratch
+            .lp
+            .par_iter_mut()
+            .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
+            .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
+    } else {
+        scratch.lp.clear();
+    }
+    Ok(())
 }
 
 fn clear<const D: usize>(gs: &mut GridState<D>) {

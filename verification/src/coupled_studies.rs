@@ -8,18 +8,10 @@ use mpmice::diagnostics::coupled::{measure_cylinder, piston_history};
 use mpmice::scene;
 
 use crate::harness::{plot_xy, PlotSeries, Point, Series, StudyResult, Style};
+use crate::impm_studies::plot_dir;
 
 fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn plot_dir(quick: bool) -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
-    if quick {
-        root.join("quick")
-    } else {
-        root
-    }
 }
 
 /// `(r, σ_r, σ_θ)` of one particle of the Fig. 3a row.

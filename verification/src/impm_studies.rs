@@ -66,7 +66,7 @@ fn explicit_point(m: &Measured) -> Point {
 }
 
 /// Where the extra plots of a study go (next to the harness output).
-fn plot_dir(quick: bool) -> PathBuf {
+pub(crate) fn plot_dir(quick: bool) -> PathBuf {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
     if quick {
         root.join("quick")
