@@ -155,6 +155,39 @@ fn piston_converges_to_the_adiabatic_law() {
     assert!(e1 / e2 > 1.6, "not converging: {e1:e} -> {e2:e}");
 }
 
+/// `cases/piston.toml` is the piston of `diagnostics::coupled::piston`: at
+/// N = 120 and compression ratio 3 (t = 0.01 + (1 − 1/3)/10 s) its
+/// closed-end pressure is the diagnostic run's to round-off and within the
+/// first-order bound of Eq. 44.
+#[test]
+fn piston_case_file_matches_the_adiabatic_law() {
+    use mpmice::diagnostics::coupled::piston;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/piston.toml");
+    let mut sc = mpmice::scene::load(&path).unwrap();
+    sc.grid.cells = vec![120];
+    let t_end = 0.01 + (1.0 - 1.0 / 3.0) / 10.0;
+    let mut run = mpmice::scene::build_coupled_run::<1>(&sc).unwrap();
+    let mut reference = piston(120, 10.0, 0.02).unwrap();
+    for r in [&mut run, &mut reference] {
+        while r.fluid.time < t_end * (1.0 - 1e-12) {
+            r.step(t_end - r.fluid.time).unwrap();
+        }
+    }
+    let c0 = run.fluid.layout.interior[0];
+    let (p, p_ref) = (run.fluid.pressure[c0], reference.fluid.pressure[c0]);
+    let exact = 101_325.0 * 3.0f64.powf(1.4);
+    eprintln!("scene p = {p:e}, diagnostic p = {p_ref:e}, exact {exact:e}");
+    assert!(
+        (p / p_ref - 1.0).abs() < 1e-9,
+        "scene {p:e} vs diagnostic {p_ref:e}"
+    );
+    assert!(
+        (p / exact - 1.0).abs() < 0.035,
+        "p/exact − 1 = {:e}",
+        p / exact - 1.0
+    );
+}
+
 /// Guilkey Sec. 4.1 through the scene file: Eq. 43 error below 0.13 at
 /// dx = 0.05 and converging at about first order from dx = 0.1.
 #[test]

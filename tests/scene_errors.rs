@@ -431,6 +431,11 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             ">= 0",
         ),
         (
+            format!("{good}\n[coupling]\nrigid_ramp = -0.1\n"),
+            "coupling.rigid_ramp",
+            ">= 0",
+        ),
+        (
             format!("{good}\n[coupling]\nreference_pressure = 0.0\n"),
             "coupling.reference_pressure",
             "> 0",

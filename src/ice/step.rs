@@ -374,6 +374,7 @@ pub struct IceWorkspace<const D: usize> {
     pub(super) implicit: super::implicit::ImplicitSlot<D>,
     pub(super) last_dt: Option<f64>,
     pub(super) accel: Vec<Vec<SVector<f64, D>>>,
+
     pub(super) vel_pred: Vec<Vec<SVector<f64, D>>>,
 }
 
@@ -409,6 +410,7 @@ impl<const D: usize> IceWorkspace<D> {
             implicit: Default::default(),
             last_dt: None,
             accel: Vec::new(),
+
             vel_pred: Vec::new(),
         }
     }
@@ -599,13 +601,23 @@ pub fn equilibrate<const D: usize>(
 /// `c̃ = c √(max_f v_f / v)` seen through the face specific volumes of
 /// Guilkey Eq. 28.
 pub fn timestep<const D: usize>(state: &IceState<D>, cfl: f64) -> f64 {
-    timestep_with(state, cfl, 1.0)
+    timestep_with(state, cfl, 1.0, &[])
 }
 
 /// [`timestep`] with the sound speed scaled by `sound_factor`
 /// (`cfl / max_c Σ_d max_r (|u_r,d| + sound_factor c̃_r)/h_d`): `0` is the
-/// advective limit of the semi-implicit pressure.
-pub fn timestep_with<const D: usize>(state: &IceState<D>, cfl: f64, sound_factor: f64) -> f64 {
+/// advective limit of the semi-implicit pressure. Materials with
+/// `rigid[r]` (a prescribed velocity, [`Frame::Rigid`]) add their velocity
+/// but not their sound speed: their face velocities do not respond to the
+/// pressure (Eq. 28 is replaced by the prescribed value and the exchange
+/// locks the fluid to it where they are present), so no acoustic wave
+/// travels through them.
+pub fn timestep_with<const D: usize>(
+    state: &IceState<D>,
+    cfl: f64,
+    sound_factor: f64,
+    rigid: &[bool],
+) -> f64 {
     let layout = &state.layout;
     let rate = max_rows(layout, |row| {
         let mut rate: f64 = 0.0;
@@ -614,14 +626,14 @@ pub fn timestep_with<const D: usize>(state: &IceState<D>, cfl: f64, sound_factor
             for d in 0..D {
                 let mut w: f64 = 0.0;
                 let s = layout.strides[d];
-                for (mat, mc) in state.materials.iter().zip(&state.cells) {
+                for (r, (mat, mc)) in state.materials.iter().zip(&state.cells).enumerate() {
                     let v = mc.sp_vol[c];
                     // The face velocity (Guilkey Eq. 28) couples the cell to
                     // its neighbours through v_f = 2 v_c v_n/(v_c + v_n)
                     // (< 2 v_n): the effective sound speed is c √(max v_f/v_c).
                     let hm = |vn: f64| 2.0 * v * vn / (v + vn);
                     let vf = hm(mc.sp_vol[c - s]).max(hm(mc.sp_vol[c + s])).max(v);
-                    let cs = if sound_factor > 0.0 {
+                    let cs = if sound_factor > 0.0 && !rigid.get(r).copied().unwrap_or(false) {
                         sound_factor
                             * mat.eos.sound_speed(1.0 / v, mc.temperature[c])
                             * (vf / v).sqrt()
@@ -832,7 +844,7 @@ pub fn stage_pressure<const D: usize>(
         // through `sound_speed_factor`, default 0), and the step grows by at
         // most `max_dt_growth` per step.
         let factor = implicit.map_or(1.0, |sp| sp.sound_speed_factor);
-        let mut dt = timestep_with(state, params.cfl, factor);
+        let mut dt = timestep_with(state, params.cfl, factor, &params.rigid_mask());
         if let Some(mu) = mu {
             let rate = viscous_rate(state, mu);
             if rate > 0.0 {
@@ -1186,6 +1198,7 @@ pub fn stage_lagrangian<const D: usize>(
                 }
                 if let Some(ex) = k_on {
                     let ke0: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
+                    let u0 = u;
                     exchange_momentum_fixed(
                         &ex.momentum,
                         dt,
@@ -1199,12 +1212,26 @@ pub fn stage_lagrangian<const D: usize>(
                         // The kinetic energy dissipated by the exchange
                         // becomes heat.
                         let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
+                        // A material held at a prescribed velocity U does
+                        // work U · (the momentum the others gain) on the
+                        // cell: the dissipation is ke0 − ke1 + that work
+                        // (½ m (U − u0)² ≥ 0 for one fluid locked to it).
+                        let mut work = 0.0;
+                        if any_fixed {
+                            if let Some(s) = (0..nm).find(|&s| fixed[s]) {
+                                let gained: SVector<f64, D> = (0..nm)
+                                    .filter(|&r| !fixed[r])
+                                    .map(|r| (u[r] - u0[r]) * mass[r])
+                                    .sum();
+                                work = u[s].dot(&gained);
+                            }
+                        }
                         for r in 0..nm {
                             if lagr[r] {
                                 continue;
                             }
                             let f_theta = theta[r] * kappa[r][c] / stk_e;
-                            t[r] += f_theta * (ke0 - ke1) / (mass[r] * cv[r]);
+                            t[r] += f_theta * (ke0 - ke1 + work) / (mass[r] * cv[r]);
                         }
                     }
                 }

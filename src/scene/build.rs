@@ -648,5 +648,6 @@ pub fn build_coupled_run<const D: usize>(
     )
     .map_err(|e| SceneError::new("materials", e.to_string()))?;
     run.body = body;
+    run.rigid_ramp = cs.rigid_ramp;
     Ok(run)
 }

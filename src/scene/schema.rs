@@ -257,6 +257,10 @@ pub struct CouplingSpec {
     /// Temperature of the (isothermal) solid in the cells (> 0).
     #[serde(default = "default_solid_t")]
     pub solid_temperature: f64,
+    /// Time over which a rigid solid's prescribed velocity rises smoothly
+    /// from zero, `V (1 − cos(π t/T))/2` (≥ 0; 0: impulsive start).
+    #[serde(default)]
+    pub rigid_ramp: f64,
 }
 
 fn default_p_ref() -> f64 {
@@ -275,6 +279,7 @@ impl Default for CouplingSpec {
             reference_pressure: default_p_ref(),
             momentum_exchange: default_k_solid(),
             solid_temperature: default_solid_t(),
+            rigid_ramp: 0.0,
         }
     }
 }
@@ -1198,6 +1203,12 @@ impl Scene {
         let c = &self.coupling;
         positive("coupling.reference_pressure", c.reference_pressure)?;
         positive("coupling.solid_temperature", c.solid_temperature)?;
+        if !(c.rigid_ramp.is_finite() && c.rigid_ramp >= 0.0) {
+            return Err(err(
+                "coupling.rigid_ramp",
+                format!("must be finite and >= 0 (seconds), got {}", c.rigid_ramp),
+            ));
+        }
         if !(c.momentum_exchange.is_finite() && c.momentum_exchange >= 0.0) {
             return Err(err(
                 "coupling.momentum_exchange",
