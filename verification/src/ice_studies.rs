@@ -576,8 +576,11 @@ fn time_at_error_bracketed(points: &[Point], target: f64) -> Option<f64> {
 /// `A = 0.5`, run as an ideal gas (`γ = 1.4`, `ρ = 1` uniform initially,
 /// pressure from the formula) with `c = 100` (Mach ≤ 0.021) to `t = 1`, on
 /// 16² … 128², explicit (cfl 1) and semi-implicit at acoustic Courant
-/// numbers 1, 10 and 50; RMS velocity error against the exact solution
-/// against wall time, and the Mach-number floor at fixed resolution.
+/// numbers 1, 10 and 50 (Guilkey Eq. 28 as written), and 10, 20 and 50
+/// with the convective predictor (`SemiImplicit::convective_predictor =
+/// 1`); RMS velocity error against the exact solution against wall time,
+/// the speed-up at equal error (both ways, log-log interpolation, no
+/// extrapolation), and the Mach-number floor at fixed resolution.
 ///
 /// # Errors
 /// Any solver error.
@@ -643,7 +646,7 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     }
     let mut series = Vec::new();
     let mut notes = vec![format!(
-        "inviscid (nu = 0) periodic vortex, A = {amplitude}, gamma = {gamma}, rho = 1, c = {c0} (max Mach {:.3}), t = {t_end}; error = RMS velocity error vs the exact incompressible solution at the cell centres; cfl on |u| + c (explicit ICE, second order van Leer, Guilkey Eq. 28 as written)",
+        "inviscid (nu = 0) periodic vortex, A = {amplitude}, gamma = {gamma}, rho = 1, c = {c0} (max Mach {:.3}), t = {t_end}; error = RMS velocity error vs the exact incompressible solution at the cell centres; cfl on |u| + c (second order corner-transport van Leer; Guilkey Eq. 28 as written, except the 'predictor 1' series, whose Eq. 28 sees u + dt a with a the previous step's advective acceleration); wall times from a shared 2-core machine, compare within one run",
         (2.0f64.sqrt() * (1.0 + amplitude)) / c0
     )];
     for (params, label) in &modes {
