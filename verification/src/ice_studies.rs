@@ -602,8 +602,10 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     };
     let run_case = |params: &IceParams<2>, n: usize, c: f64| -> Result<(f64, f64, FluidRunStats)> {
         let st = periodic_vortex(gas(gamma)?, n, amplitude, c * c / gamma)?;
+        let cpu0 = process_cpu_s();
         let run = run_fluid(st, params, t_end, 10_000_000)
             .with_context(|| format!("low-Mach vortex N = {n}, c = {c}"))?;
+        let cpu_s = process_cpu_s() - cpu0;
         let (eu, ep) = vortex_errors(&run.state, amplitude);
         Ok((
             eu,
@@ -611,6 +613,7 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
             FluidRunStats {
                 steps: run.steps,
                 wall_s: run.wall_s,
+                cpu_s,
                 outer: run.outer_iterations,
                 linear: run.linear_iterations,
                 retries: run.retries,
@@ -662,7 +665,8 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
                     .with_extra("steps", st.steps as f64)
                     .with_extra("retries", st.retries as f64)
                     .with_extra("outer_per_step", per(st.outer))
-                    .with_extra("linear_per_step", per(st.linear)),
+                    .with_extra("linear_per_step", per(st.linear))
+                    .with_extra("cpu_s", st.cpu_s),
             );
             pressure_points.push(Point::new(h, ep, st.wall_s, ups));
             notes.push(format!(
@@ -726,9 +730,31 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     // point's error (log-log interpolation of the explicit curve, no
     // extrapolation) over the semi-implicit wall time.
     let explicit_pts = series[0].points.clone();
+    let cpu_of = |p: &Point| p.extra.get("cpu_s").and_then(|v| v.as_f64());
+    let explicit_cpu: Vec<Point> = explicit_pts
+        .iter()
+        .filter_map(|p| cpu_of(p).map(|c| Point::new(p.h, p.error, c, 0.0)))
+        .collect();
     let mut finest_b = Vec::new();
+    let mut finest_cpu: Option<(f64, String)> = None;
     for s in series.iter_mut().skip(2).step_by(2) {
         for (i, p) in s.points.iter_mut().enumerate() {
+            let cpu_speedup = cpu_of(p)
+                .and_then(|c| time_at_error_bracketed(&explicit_cpu, p.error).map(|t| t / c))
+                .filter(|x| x.is_finite());
+            p.extra.insert(
+                "speedup_at_equal_error_cpu".into(),
+                serde_json::Value::from(cpu_speedup),
+            );
+            if let Some(x) = cpu_speedup {
+                notes.push(format!(
+                    "CPU-time speed-up at equal error: {}, N = {}: {x:.2}x",
+                    s.label, ns[i]
+                ));
+                if i == ns.len() - 1 && finest_cpu.as_ref().is_none_or(|b| x > b.0) {
+                    finest_cpu = Some((x, format!("{}, N = {}", s.label, ns[i])));
+                }
+            }
             let t_ex = time_at_error_bracketed(&explicit_pts, p.error);
             let speedup = t_ex.map_or(f64::NAN, |t| t / p.wall_s.max(1e-12));
             p.extra.insert(
@@ -758,6 +784,12 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     }
     for (x, what) in finest_b {
         keep_best(x, what);
+    }
+    if let Some((x, what)) = &finest_cpu {
+        notes.push(format!(
+            "best CPU-time speed-up at equal error on the finest grid: {x:.2}x ({what}); target >= 5x: {}",
+            if *x >= 5.0 { "met" } else { "not met" }
+        ));
     }
     match best {
         Some((x, l)) => notes.push(format!(
@@ -832,8 +864,32 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     })
 }
 
+/// CPU time (user + system, all threads) consumed by this process so far,
+/// from `/proc/self/stat` (clock ticks of 10 ms); NaN where unavailable.
+/// Less sensitive than wall time to other processes on a shared machine.
+fn process_cpu_s() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the command name `(...)`: state is field 3, utime 14,
+    // stime 15.
+    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    match (
+        f.get(11).and_then(|x| x.parse::<f64>().ok()),
+        f.get(12).and_then(|x| x.parse::<f64>().ok()),
+    ) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
+}
+
 /// Counters of one run of [`ice_low_mach`].
 struct FluidRunStats {
+    /// CPU time (user + system, all threads) of the run; NaN off Linux.
+    cpu_s: f64,
     steps: u64,
     wall_s: f64,
     outer: u64,
