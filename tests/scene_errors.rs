@@ -382,6 +382,14 @@ fn bad_fluid_input_names_its_key() {
             "fluid.pressure.max_outer_iterations",
             "≥ 1",
         ),
+        (
+            fluid_edit(
+                "[fluid]",
+                "[fluid.pressure]\nconvective_predictor = 1.5\n\n[fluid]",
+            ),
+            "fluid.pressure.convective_predictor",
+            "[0, 1]",
+        ),
     ];
     let mut wrong = Vec::new();
     for (text, path, word) in cases {

@@ -129,19 +129,36 @@ pub struct SemiImplicit {
     /// Largest ratio of a time step to the previous one, `≥ 1`.
     pub max_dt_growth: f64,
     /// Convective predictor `β ∈ [0, 1]`: the cell velocities entering the
-    /// face velocities of Guilkey Eq. 28 are `u + β Δt a`, `a` the previous
-    /// step's advective acceleration (advected minus Lagrangian velocity
-    /// over `Δt`). Eq. 28 has no convection, so without it (`β = 0`) the
-    /// pressure solve corrects the previous step's convection and the
-    /// pressure lags one step: an `O(Δt)` error that is negligible at the
-    /// acoustic time step. Measured on the low-Mach vortex (N = 32): RMS
-    /// velocity error at acoustic CFL 10 3.37e-3 → 3.26e-3 with `β = 1`, at
-    /// CFL 50 unchanged (9.5e-3), so the lag is not the dominant time error
-    /// there — with the dimension-by-dimension advection. With corner
-    /// transport (`ice_low_mach --quick`, N = 64, t = 0.5) it is: `β = 1`
-    /// takes the error at acoustic CFL 10 from 1.01e-3 to 8.05e-4 and at
-    /// CFL 50 from 2.28e-3 to 9.73e-4 (explicit CFL 1: 8.25e-4). Default
-    /// `0` (Guilkey Eq. 28 as written).
+    /// face velocities of Guilkey Eq. 28 are `uⁿ + β Δt aⁿ⁻¹`, with
+    /// `aⁿ⁻¹ = (uⁿ − u_Lⁿ⁻¹)/Δtⁿ⁻¹` the previous step's advective
+    /// acceleration (its advected, step 12, minus its Lagrangian, Eq. 38,
+    /// velocity).
+    ///
+    /// Why: Guilkey (Sec. 3.3, step 3) builds `u*` from "a time advanced
+    /// estimate for the cell centered velocity", but Eq. 28 advances the
+    /// cell velocity by the pressure (and body-force) acceleration only; the
+    /// Lagrangian–Eulerian split adds this step's convective change in
+    /// step 12, after Eqs. 29–30 have fixed the pressure. So with `β = 0`
+    /// the pressure makes `Σ∇·(θu*)` consistent with a velocity that lacks
+    /// this step's convection, which is corrected only by the next step's
+    /// pressure: the pressure lags one step, an `O(Δt)` error that is
+    /// negligible at the explicit (acoustic) time step and dominant at
+    /// large acoustic Courant numbers. `β = 1` adds the convective change
+    /// to the time-advanced estimate, extrapolated from the previous step
+    /// (first-order extrapolation, error `O(Δt²)` in the estimate), as
+    /// projection methods include the convective term in the predicted
+    /// face (MAC) velocities they project (Bell, Colella & Glaz, J. Comput.
+    /// Phys. 85 (1989) 257). Only the face velocities change: mass,
+    /// momentum and energy stay in flux form and are conserved as before.
+    /// The first step of a run has no previous acceleration and uses
+    /// Eq. 28 as written. Used only by the semi-implicit pressure.
+    ///
+    /// Measured: `ice_low_mach --quick` (N = 64, t = 0.5) RMS velocity
+    /// error at acoustic CFL 10 1.01e-3 → 8.05e-4 and at CFL 50 2.28e-3 →
+    /// 9.73e-4 with `β = 1` (explicit CFL 1: 8.25e-4); the full study's
+    /// numbers are in `verification/RESULTS.md`. Stable at acoustic CFL
+    /// 100 (`acoustic_cfl_100_with_predictor_is_stable`). Default `0`
+    /// (Guilkey Eq. 28 as written).
     pub convective_predictor: f64,
 }
 

@@ -1456,9 +1456,14 @@ pub fn stage_advect<const D: usize>(
             ws.vel_pred = (0..nm).map(|_| vec![SVector::zeros(); n]).collect();
         }
         // Advective acceleration of this step (advected minus Lagrangian
-        // velocity, per unit time).
+        // velocity, per unit time); zero for materials that are not
+        // advected here (carried by particles or rigid).
         for r in 0..nm {
             let (acc, u, ul) = (&mut ws.accel[r], &state.cells[r].velocity, &ws.vel_l[r]);
+            if params.frame(r) != Frame::Eulerian {
+                acc.fill(SVector::zeros());
+                continue;
+            }
             for &c in &layout.interior {
                 acc[c] = (u[c] - ul[c]) / dt;
             }

@@ -542,7 +542,7 @@ pub fn build_fluid_run<const D: usize>(
             max_linear_iterations: ps.max_linear_iterations,
             sound_speed_factor: ps.sound_speed_factor,
             max_dt_growth: ps.max_dt_growth,
-            ..SemiImplicit::default()
+            convective_predictor: ps.convective_predictor,
         });
     }
     params

@@ -574,6 +574,10 @@ pub struct PressureSolveSpec {
     /// Largest growth of the timestep from one step to the next (≥ 1).
     #[serde(default = "default_dt_growth")]
     pub max_dt_growth: f64,
+    /// Convective predictor `β ∈ [0, 1]` of the face velocities
+    /// (`mpmice::ice::SemiImplicit::convective_predictor`; default 0).
+    #[serde(default)]
+    pub convective_predictor: f64,
 }
 
 fn default_pressure_solver() -> PressureSolverKind {
@@ -605,6 +609,7 @@ impl Default for PressureSolveSpec {
             max_linear_iterations: default_max_linear(),
             sound_speed_factor: 0.0,
             max_dt_growth: default_dt_growth(),
+            convective_predictor: 0.0,
         }
     }
 }
@@ -931,6 +936,13 @@ impl Scene {
         }
         if !(ps.max_dt_growth.is_finite() && ps.max_dt_growth >= 1.0) {
             return Err(err("fluid.pressure.max_dt_growth", "must be ≥ 1"));
+        }
+        let b = ps.convective_predictor;
+        if !(b.is_finite() && (0.0..=1.0).contains(&b)) {
+            return Err(err(
+                "fluid.pressure.convective_predictor",
+                format!("must be in [0, 1] (got {b})"),
+            ));
         }
         let periodic = self
             .grid

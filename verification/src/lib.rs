@@ -88,7 +88,7 @@ pub const STUDIES: &[Study] = &[
     ),
     (
         "ice_low_mach",
-        "low-Mach periodic vortex, explicit vs semi-implicit ICE at acoustic CFL 1/10/50: order, Mach floor, work-precision",
+        "low-Mach periodic vortex, explicit vs semi-implicit ICE at acoustic CFL 1/10/50 (and 10/20/50 with the convective predictor): order, Mach floor, work-precision, speed-up at equal error",
         ice_studies::ice_low_mach,
     ),
 ];
