@@ -64,8 +64,8 @@ fn max_deviation<const D: usize>(run: &FluidRun<D>, velocity: &[f64]) -> f64 {
     for &c in &s.layout.interior {
         dev = dev.max((s.mixture_density(c) - 1.0).abs());
         dev = dev.max((s.p_eq[c] - 1.0).abs());
-        for d in 0..D {
-            dev = dev.max((s.cells[0].velocity[c][d] - velocity[d]).abs());
+        for (u, v) in s.cells[0].velocity[c].iter().zip(velocity) {
+            dev = dev.max((u - v).abs());
         }
     }
     dev
