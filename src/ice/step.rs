@@ -553,7 +553,11 @@ pub fn equilibrate<const D: usize>(
     }
     let p_out = Out::new(p_eq);
     let (step_no, t_now) = (*steps, *time);
-    let single = nm == 1 && !params.normalise_volume;
+    // Ideal gas only: p(ρ, T) has no cancellation there (a stiffened gas
+    // with a large p_∞ keeps the iteration on the density balance).
+    let single = nm == 1
+        && !params.normalise_volume
+        && matches!(eos[0], crate::material::eos::FluidEos::IdealGas(_));
     let p_min0 = min_pressure(&eos[0]);
     let lay: &CellLayout<D> = layout;
     try_rows(lay, |row| {
@@ -580,7 +584,7 @@ pub fn equilibrate<const D: usize>(
                 t[r] = temp_in[r][c];
             }
             if single {
-                // One material: Eq. 13 is θ = ρ̂ v = 1, so v = 1/ρ̂ and
+                // One ideal gas: Eq. 13 is θ = ρ̂ v = 1, so v = 1/ρ̂ and
                 // p = p(ρ̂, T) directly (no iteration).
                 let p = eos[0].pressure(rb[0], t[0]);
                 if p.is_finite() && p > p_min0 && rb[0] > 0.0 {
