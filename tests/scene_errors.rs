@@ -472,3 +472,122 @@ fn coupled_scene_bad_inputs_name_their_keys() {
         assert!(e.message.contains(word), "`{}` lacks `{word}`", e.message);
     }
 }
+
+/// The fluid scene with an inflow face on x = 0 (air entering at 10 m/s).
+fn inflow_scene(face: &str, state: &str) -> String {
+    fluid_edit("x_lower = \"fixed\"", "x_lower = \"free\"").replacen(
+        "exchange = { momentum = 1e15 }\n",
+        &format!("exchange = {{ momentum = 1e15 }}\n\n[fluid.inflow.{face}]\n{state}\n"),
+        1,
+    )
+}
+
+const INFLOW_STATE: &str = "pressure = 1e5\nstates = [{ material = \"air\", volume_fraction = 1.0, temperature = 300.0, velocity = [10.0] }]";
+
+#[test]
+fn inflow_faces_are_built_and_bad_ones_name_their_key() {
+    let good = inflow_scene("x_lower", INFLOW_STATE);
+    let scene = mpmice::scene::parse(&good).expect("the inflow scene is valid");
+    let (_, params) = mpmice::scene::build_fluid_run::<1>(&scene).expect("build");
+    match &params.boundaries[0][0] {
+        mpmice::ice::IceBoundary::Inflow(states) => {
+            // air as given (ρ = p/(R T), R = c_v (γ − 1)), water at a trace.
+            assert_eq!(states.len(), 2);
+            let rho_air = 1e5 / (717.5 * 0.4 * 300.0);
+            assert!((states[0].density / rho_air - 1.0).abs() < 1e-12);
+            assert!((states[0].temperature / 300.0 - 1.0).abs() < 1e-12);
+            assert_eq!(states[0].velocity[0], 10.0);
+            assert!(states[1].vol_frac < 1e-9 && states[1].vol_frac > 0.0);
+        }
+        other => panic!("x_lower is {other:?}"),
+    }
+    assert_eq!(
+        params.boundaries[0][1],
+        mpmice::ice::IceBoundary::Wall,
+        "x_upper stays a wall"
+    );
+    let st = |s: &str| INFLOW_STATE.replace("temperature = 300.0", s);
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            inflow_scene("x_lower", INFLOW_STATE)
+                .replace("x_lower = \"free\"", "x_lower = \"fixed\""),
+            "fluid.inflow.x_lower",
+            "grid.boundary.x_lower = \"free\"",
+        ),
+        (
+            inflow_scene("y_lower", INFLOW_STATE),
+            "fluid.inflow.y_lower",
+            "allowed faces: x_lower, x_upper",
+        ),
+        (
+            inflow_scene("x_min", INFLOW_STATE),
+            "fluid.inflow.x_min",
+            "x_lower",
+        ),
+        (
+            inflow_scene("x_lower", &INFLOW_STATE.replace("\"air\"", "\"oil\"")),
+            "fluid.inflow.x_lower.states[0].material",
+            "unknown fluid material `oil`; defined: air, water",
+        ),
+        (
+            inflow_scene("x_lower", &st("temperature = -300.0")),
+            "fluid.inflow.x_lower.states[0].temperature",
+            "> 0",
+        ),
+        (
+            inflow_scene("x_lower", &st("temperature = 300.0, density = 1.0")),
+            "fluid.inflow.x_lower.states[0].density",
+            "exactly one of density or temperature",
+        ),
+        (
+            inflow_scene("x_lower", &INFLOW_STATE.replace("1.0,", "0.5,")),
+            "fluid.inflow.x_lower.states",
+            "sum to 1",
+        ),
+        (
+            inflow_scene("x_lower", &INFLOW_STATE.replace("[10.0]", "[10.0, 0.0]")),
+            "fluid.inflow.x_lower.states[0].velocity",
+            "1 components",
+        ),
+        (
+            inflow_scene(
+                "x_lower",
+                &INFLOW_STATE.replace("pressure = 1e5", "pressure = -1e5"),
+            ),
+            "fluid.inflow.x_lower.pressure",
+            "> 0",
+        ),
+        (
+            inflow_scene("x_lower", &INFLOW_STATE.replace("pressure = 1e5\n", "")),
+            "fluid.inflow.x_lower",
+            "missing field `pressure`",
+        ),
+        (
+            inflow_scene("x_lower", &format!("{INFLOW_STATE}\nspeed = 3.0")),
+            "fluid.inflow.x_lower.speed",
+            "pressure",
+        ),
+        (
+            format!("{GOOD}{COUPLED_EXTRA}\n[fluid.inflow.x_upper]\n{INFLOW_STATE}\n")
+                .replace("[10.0]", "[10.0, 0.0]"),
+            "fluid.inflow.x_upper",
+            "fluid-only",
+        ),
+        (
+            format!("{GOOD}\n[fluid.inflow.x_upper]\n{INFLOW_STATE}\n"),
+            "fluid.inflow",
+            "no fluid",
+        ),
+    ];
+    let mut wrong = Vec::new();
+    for (text, path, word) in &cases {
+        match mpmice::scene::parse(text) {
+            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
+            Err(e) if e.path != *path || !e.to_string().contains(word) => {
+                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
+            }
+            Err(_) => {}
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}

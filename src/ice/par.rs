@@ -83,12 +83,18 @@ impl<'a, T> Out<'a, T> {
 }
 
 /// Runs `f` on every interior x-row (a range of flat cell indices) in
-/// parallel; returns the first error in row order.
+/// parallel; returns the first error in row order. A layout with one row
+/// (1D) runs on the calling thread (every helper here does).
 pub(crate) fn try_rows<const D: usize>(
     layout: &CellLayout<D>,
     f: impl Fn(Range<usize>) -> Result<(), IceError> + Sync + Send,
 ) -> Result<(), IceError> {
     let n = layout.cells[0];
+    if let [s] = layout.rows[..] {
+        // One row (1D): no work to share; running it here avoids the
+        // hand-off to the thread pool (the result is the same).
+        return f(s..s + n);
+    }
     layout
         .rows
         .par_iter()
@@ -102,6 +108,9 @@ pub(crate) fn par_rows<const D: usize>(
     f: impl Fn(Range<usize>) + Sync + Send,
 ) {
     let n = layout.cells[0];
+    if let [s] = layout.rows[..] {
+        return f(s..s + n);
+    }
     layout.rows.par_iter().for_each(|&s| f(s..s + n));
 }
 
@@ -111,6 +120,9 @@ pub(crate) fn max_rows<const D: usize>(
     f: impl Fn(Range<usize>) -> f64 + Sync + Send,
 ) -> f64 {
     let n = layout.cells[0];
+    if let [s] = layout.rows[..] {
+        return f(s..s + n).max(0.0);
+    }
     layout
         .rows
         .par_iter()
@@ -126,5 +138,8 @@ pub(crate) fn par_face_rows<const D: usize>(
     f: impl Fn(Range<usize>) + Sync + Send,
 ) {
     let n = layout.cells[0] + usize::from(d == 0);
+    if let [s] = layout.face_rows[d][..] {
+        return f(s..s + n);
+    }
     layout.face_rows[d].par_iter().for_each(|&s| f(s..s + n));
 }

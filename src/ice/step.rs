@@ -59,6 +59,12 @@ pub struct IceParams<const D: usize> {
     /// `face_reconstruction` is on: `γ = 1/2` time-centres the face
     /// velocity at `t + Δt/2` (MUSCL–Hancock-like), `0` drops the term.
     pub face_smooth_factor: f64,
+    /// MUSCL–Hancock half-step predictor of the reconstructed face states
+    /// of Guilkey Eq. 28 (needs `face_reconstruction`; see
+    /// [`super::faces::face_velocities`]): the face velocity sees the
+    /// velocity and pressure at `t + Δt/2` on either side of the face,
+    /// including the convective term; `face_smooth_factor` is then not used.
+    pub face_predictor: bool,
     /// Weight `w` of `Δp` in the pressure of the momentum and energy
     /// sources, `p = p_eq + w Δp` (Guilkey Eq. 30 has `w = 1`); `w = 1/2`
     /// centres the pressure force at `t + Δt/2`. `0 ≤ w ≤ 1`.
@@ -168,6 +174,7 @@ impl<const D: usize> IceParams<D> {
             face_reconstruction: None,
             viscosity: None,
             face_smooth_factor: 0.0,
+            face_predictor: false,
             pressure_weight: 1.0,
             implicit: None,
             frames: Vec::new(),
@@ -210,6 +217,25 @@ impl<const D: usize> IceParams<D> {
         }
     }
 
+    /// [`Self::high_resolution`] with the MUSCL–Hancock predictor of the
+    /// face states of Guilkey Eq. 28 (`face_predictor`; the resolved
+    /// pressure gradient and the convective term at `t + Δt/2`), which
+    /// keeps the scheme second order in time up to `cfl = 0.8`: the same
+    /// ICE step (Eqs. 28–41) with time-centred face states. The jump
+    /// (dissipation) part of Eq. 28 is taken with `face_dt_factor = 0.625`,
+    /// so that `α ν = 1/2` at the largest acoustic Courant number `ν = 0.8`
+    /// (for a pressure jump `[p]` the term is `α ν [p]/(ρ c)`, and `[p]/(2ρc)`
+    /// is the acoustic Riemann (Godunov) value). Sod L1(ρ): 7.96e-4 at
+    /// N = 800 in 481 steps (high resolution: 7.42e-4 in 934 steps).
+    pub fn hancock(boundaries: Boundaries<D>) -> Self {
+        Self {
+            cfl: 0.8,
+            face_dt_factor: 0.625,
+            face_predictor: true,
+            ..Self::high_resolution(boundaries)
+        }
+    }
+
     /// Checks the parameters against a state.
     ///
     /// # Errors
@@ -243,6 +269,12 @@ impl<const D: usize> IceParams<D> {
             return Err(invalid(
                 "face_dt_factor",
                 format!("must be in (0, 1], got {}", self.face_dt_factor),
+            ));
+        }
+        if self.face_predictor && self.face_reconstruction.is_none() {
+            return Err(invalid(
+                "face_predictor",
+                "needs face_reconstruction (a limiter for the face states)",
             ));
         }
         for (name, x) in [
@@ -376,6 +408,8 @@ pub struct IceWorkspace<const D: usize> {
     pub(super) accel: Vec<Vec<SVector<f64, D>>>,
 
     pub(super) vel_pred: Vec<Vec<SVector<f64, D>>>,
+    /// Mixture bulk modulus `1/Σ θ κ` per cell (face predictor only).
+    pub(super) bulk: Vec<f64>,
 }
 
 impl<const D: usize> IceWorkspace<D> {
@@ -412,6 +446,7 @@ impl<const D: usize> IceWorkspace<D> {
             accel: Vec::new(),
 
             vel_pred: Vec::new(),
+            bulk: Vec::new(),
         }
     }
 }
@@ -520,6 +555,12 @@ pub fn equilibrate<const D: usize>(
     }
     let p_out = Out::new(p_eq);
     let (step_no, t_now) = (*steps, *time);
+    // Ideal gas only: p(ρ, T) has no cancellation there (a stiffened gas
+    // with a large p_∞ keeps the iteration on the density balance).
+    let single = nm == 1
+        && !params.normalise_volume
+        && matches!(eos[0], crate::material::eos::FluidEos::IdealGas(_));
+    let p_min0 = min_pressure(&eos[0]);
     let lay: &CellLayout<D> = layout;
     try_rows(lay, |row| {
         let mut rb = [0.0; MAX_MATERIALS];
@@ -543,6 +584,21 @@ pub fn equilibrate<const D: usize>(
             for r in 0..nm {
                 rb[r] = mass_in[r][c] / vt;
                 t[r] = temp_in[r][c];
+            }
+            if single {
+                // One ideal gas: Eq. 13 is θ = ρ̂ v = 1, so v = 1/ρ̂ and
+                // p = p(ρ̂, T) directly (no iteration).
+                let p = eos[0].pressure(rb[0], t[0]);
+                if p.is_finite() && p > p_min0 && rb[0] > 0.0 {
+                    local_max = local_max.max(1);
+                    // SAFETY: cell c is written by this task only.
+                    unsafe {
+                        p_out.set(c, p);
+                        sv_out[0].set(c, 1.0 / rb[0]);
+                        th_out[0].set(c, 1.0);
+                    }
+                    continue;
+                }
             }
             // SAFETY: cell c is read and written by this task only.
             let guess = unsafe { p_out.get(c) };
@@ -881,6 +937,29 @@ pub fn stage_pressure<const D: usize>(
             fill_vector(layout, bcs, vp, |s| s[r].velocity);
         }
     }
+    let predictor_on = params.face_predictor && params.face_reconstruction.is_some();
+    if predictor_on {
+        // K = 1/Σ_s θ_s κ_s per cell, ghosts included (the predictor reads
+        // the two cells of each face).
+        ws.bulk.resize(layout.len(), 0.0);
+        let cells = &state.cells;
+        let mats = &state.materials;
+        let bulk = |(c, k): (usize, &mut f64)| {
+            let mut stk = 0.0;
+            for (mat, mc) in mats.iter().zip(cells) {
+                let v = mc.sp_vol[c];
+                if v > 0.0 && mc.vol_frac[c] > 0.0 {
+                    stk += mc.vol_frac[c] * mat.eos.compressibility(1.0 / v, mc.temperature[c]);
+                }
+            }
+            *k = if stk > 0.0 { 1.0 / stk } else { 0.0 };
+        };
+        if layout.rows.len() == 1 {
+            ws.bulk.iter_mut().enumerate().for_each(bulk);
+        } else {
+            ws.bulk.par_iter_mut().enumerate().for_each(bulk);
+        }
+    }
     for r in 0..nm {
         let mc = &state.cells[r];
         let vel_in = if use_pred {
@@ -907,10 +986,15 @@ pub fn stage_pressure<const D: usize>(
                     params.gravity[d] * dt / fdt
                 },
                 params.face_reconstruction,
-                if rigid {
+                if rigid || predictor_on {
                     0.0
                 } else {
                     params.face_smooth_factor * dt
+                },
+                if predictor_on && !rigid {
+                    Some((0.5 * dt, &ws.bulk[..]))
+                } else {
+                    None
                 },
                 out,
             );
@@ -988,13 +1072,18 @@ pub fn stage_pressure<const D: usize>(
     // Step 6: face pressure (Guilkey Eq. 31).
     {
         let cells = &state.cells;
-        ws.mix_mass.par_iter_mut().enumerate().for_each(|(i, m)| {
+        let mix = |(i, m): (usize, &mut f64)| {
             let mut sum = 0.0;
             for mc in cells {
                 sum += mc.mass[i];
             }
             *m = sum;
-        });
+        };
+        if layout.rows.len() == 1 {
+            ws.mix_mass.iter_mut().enumerate().for_each(mix);
+        } else {
+            ws.mix_mass.par_iter_mut().enumerate().for_each(mix);
+        }
     }
     for d in 0..D {
         face_pressure(layout, d, &ws.press, &ws.mix_mass, &mut ws.pstar[d]);

@@ -9,9 +9,10 @@ use super::schema::{
 use crate::error::SceneError;
 use crate::grid::{Boundary, Grid};
 use crate::ice::implicit::{LinearSolver as PressureSolver, SemiImplicit};
+use crate::ice::state::temperature_from_rho_p;
 use crate::ice::{
     Advection, CellLayout, ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState,
-    Limiter, MaterialInit,
+    InflowState, Limiter, MaterialInit,
 };
 use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
 use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
@@ -388,6 +389,71 @@ fn temperature_of(eos: &FluidEos, rho: f64, p: f64) -> f64 {
     t0 + (p - eos.pressure(rho, t0)) / eos.dp_dt(rho, t0)
 }
 
+/// One [`MaterialInit`] per fluid material (in `materials` order) from a
+/// scene's pressure and listed states (a region or an inflow face, `key`):
+/// density from the EOS where a temperature is given, absent materials at a
+/// trace volume fraction, fractions renormalised to sum to 1.
+fn material_states<const D: usize>(
+    materials: &[IceMaterial],
+    key: &str,
+    pressure: f64,
+    states_in: &[super::schema::FluidStateSpec],
+) -> Result<Vec<MaterialInit<D>>, SceneError> {
+    let mut states = Vec::with_capacity(materials.len());
+    // Reference temperature for the absent materials: the first listed.
+    let first = &states_in[0];
+    let first_eos = &materials[materials
+        .iter()
+        .position(|m| m.name == first.material)
+        .unwrap_or(0)]
+    .eos;
+    let t_ref = match (first.temperature, first.density) {
+        (Some(t), _) => t,
+        (None, Some(rho)) => temperature_of(first_eos, rho, pressure),
+        _ => 300.0,
+    };
+    for mat in materials {
+        let listed = states_in.iter().find(|s| s.material == mat.name);
+        let (theta, rho, vel) = match listed {
+            Some(s) => {
+                let rho = match s.density {
+                    Some(rho) => rho,
+                    // Validation guarantees a temperature here; the EOS
+                    // rejects a missing (NaN) one anyway.
+                    None => mat
+                        .eos
+                        .density(pressure, s.temperature.unwrap_or(f64::NAN))
+                        .map_err(|e| SceneError::new(format!("{key}.states"), e.to_string()))?,
+                };
+                let v = s
+                    .velocity
+                    .as_deref()
+                    .map(to_vec::<D>)
+                    .unwrap_or_else(SVector::zeros);
+                (s.volume_fraction, rho, v)
+            }
+            None => {
+                let rho = mat
+                    .eos
+                    .density(pressure, t_ref)
+                    .map_err(|e| SceneError::new(format!("{key}.pressure"), e.to_string()))?;
+                (0.0, rho, SVector::zeros())
+            }
+        };
+        states.push(MaterialInit::new(theta, rho, pressure, vel));
+    }
+    // Multi-material ICE needs every material present in every cell:
+    // raise absent ones to a trace fraction and renormalise to Σθ = 1.
+    for st in states.iter_mut() {
+        st.vol_frac = st.vol_frac.max(TRACE_VOLUME_FRACTION);
+    }
+    let sum: f64 = states.iter().map(|st| st.vol_frac).sum();
+    for st in states.iter_mut() {
+        st.vol_frac /= sum;
+    }
+    Ok(states)
+}
+
 /// Builds the fluid-only ICE run of a validated scene with `D == dim`: the
 /// initial state sampled at cell centres from `[[regions]]` (the last region
 /// containing a centre wins) and the parameters from `[fluid]`.
@@ -428,60 +494,12 @@ pub fn build_fluid_run<const D: usize>(
     // Per region: one MaterialInit per fluid material, computed once.
     let mut inits: Vec<Vec<MaterialInit<D>>> = Vec::with_capacity(scene.regions.len());
     for (ri, r) in scene.regions.iter().enumerate() {
-        let mut states = Vec::with_capacity(materials.len());
-        // Reference temperature for the absent materials: the first listed.
-        let first = &r.states[0];
-        let first_eos = &materials[fluids
-            .iter()
-            .position(|(_, m)| m.name == first.material)
-            .unwrap_or(0)]
-        .eos;
-        let t_ref = match (first.temperature, first.density) {
-            (Some(t), _) => t,
-            (None, Some(rho)) => temperature_of(first_eos, rho, r.pressure),
-            _ => 300.0,
-        };
-        for mat in &materials {
-            let listed = r.states.iter().find(|s| s.material == mat.name);
-            let (theta, rho, vel) = match listed {
-                Some(s) => {
-                    let rho = match s.density {
-                        Some(rho) => rho,
-                        // Validation guarantees a temperature here; the EOS
-                        // rejects a missing (NaN) one anyway.
-                        None => mat
-                            .eos
-                            .density(r.pressure, s.temperature.unwrap_or(f64::NAN))
-                            .map_err(|e| {
-                                SceneError::new(format!("regions[{ri}].states"), e.to_string())
-                            })?,
-                    };
-                    let v = s
-                        .velocity
-                        .as_deref()
-                        .map(to_vec::<D>)
-                        .unwrap_or_else(SVector::zeros);
-                    (s.volume_fraction, rho, v)
-                }
-                None => {
-                    let rho = mat.eos.density(r.pressure, t_ref).map_err(|e| {
-                        SceneError::new(format!("regions[{ri}].pressure"), e.to_string())
-                    })?;
-                    (0.0, rho, SVector::zeros())
-                }
-            };
-            states.push(MaterialInit::new(theta, rho, r.pressure, vel));
-        }
-        // Multi-material ICE needs every material present in every cell:
-        // raise absent ones to a trace fraction and renormalise to Σθ = 1.
-        for st in states.iter_mut() {
-            st.vol_frac = st.vol_frac.max(TRACE_VOLUME_FRACTION);
-        }
-        let sum: f64 = states.iter().map(|st| st.vol_frac).sum();
-        for st in states.iter_mut() {
-            st.vol_frac /= sum;
-        }
-        inits.push(states);
+        inits.push(material_states::<D>(
+            &materials,
+            &format!("regions[{ri}]"),
+            r.pressure,
+            &r.states,
+        )?);
     }
     let regions = &scene.regions;
     let state = IceState::new(layout, materials, |x| {
@@ -493,16 +511,36 @@ pub fn build_fluid_run<const D: usize>(
         inits[k].clone()
     })
     .map_err(|e| SceneError::new("regions", e.to_string()))?;
-    let bcs: [[IceBoundary<D>; 2]; D] = std::array::from_fn(|d| {
+    let mut bcs: [[IceBoundary<D>; 2]; D] = std::array::from_fn(|d| {
         std::array::from_fn(|side| match grid.bc[d][side] {
             Boundary::Fixed | Boundary::Symmetry => IceBoundary::Wall,
             Boundary::Free => IceBoundary::Outflow,
             Boundary::Periodic => IceBoundary::Periodic,
         })
     });
+    // Inflow faces: the prescribed state of every material in the ghosts.
+    for (d, faces) in scene.fluid.inflow.faces().iter().enumerate().take(D) {
+        for (side, (spec, name)) in faces.iter().enumerate() {
+            let Some(spec) = spec else { continue };
+            let key = format!("fluid.inflow.{name}");
+            let inits = material_states::<D>(&state.materials, &key, spec.pressure, &spec.states)?;
+            let states = inits
+                .iter()
+                .zip(&state.materials)
+                .map(|(m, mat)| InflowState {
+                    vol_frac: m.vol_frac,
+                    density: m.density,
+                    temperature: temperature_from_rho_p(&mat.eos, m.density, m.pressure),
+                    velocity: m.velocity,
+                })
+                .collect();
+            bcs[d][side] = IceBoundary::Inflow(states);
+        }
+    }
     let mut params = match scene.fluid.variant {
         FluidVariant::Literal => IceParams::new(bcs),
         FluidVariant::HighResolution => IceParams::high_resolution(bcs),
+        FluidVariant::Hancock => IceParams::hancock(bcs),
     };
     params.cfl = scene.time.cfl;
     if let Some(l) = scene.fluid.limiter {

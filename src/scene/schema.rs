@@ -491,6 +491,10 @@ pub enum FluidVariant {
     /// Limited reconstruction in Eq. 28, face velocity and pressure force
     /// time-centred (see `ice::IceParams::high_resolution`).
     HighResolution,
+    /// `high_resolution` with the MUSCL–Hancock half-step predictor of the
+    /// face states, second order in time up to `time.cfl = 0.8` (see
+    /// `ice::IceParams::hancock`).
+    Hancock,
 }
 
 /// Slope limiter of the second-order reconstruction.
@@ -535,6 +539,69 @@ pub struct FluidSpec {
     /// Implicit pressure solve (used when `time.mode = "semi_implicit"`).
     #[serde(default)]
     pub pressure: PressureSolveSpec,
+    /// Inflow (prescribed-state, Dirichlet) faces of the fluid,
+    /// `[fluid.inflow.x_lower]` …; such a face needs
+    /// `grid.boundary.<face> = "free"` (or no entry).
+    #[serde(default)]
+    pub inflow: InflowSpec,
+}
+
+/// Inflow faces of the fluid: the state of every fluid material beyond the
+/// face (the ghost cells), given like a `[[regions]]` entry. Faces not
+/// given keep their `grid.boundary` condition.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InflowSpec {
+    /// Face x = lower.
+    pub x_lower: Option<InflowFaceSpec>,
+    /// Face x = upper.
+    pub x_upper: Option<InflowFaceSpec>,
+    /// Face y = lower.
+    pub y_lower: Option<InflowFaceSpec>,
+    /// Face y = upper.
+    pub y_upper: Option<InflowFaceSpec>,
+    /// Face z = lower.
+    pub z_lower: Option<InflowFaceSpec>,
+    /// Face z = upper.
+    pub z_upper: Option<InflowFaceSpec>,
+}
+
+impl InflowSpec {
+    /// The faces as `[[lower, upper]; 3]` with their key names.
+    pub fn faces(&self) -> [[(Option<&InflowFaceSpec>, &'static str); 2]; 3] {
+        [
+            [
+                (self.x_lower.as_ref(), "x_lower"),
+                (self.x_upper.as_ref(), "x_upper"),
+            ],
+            [
+                (self.y_lower.as_ref(), "y_lower"),
+                (self.y_upper.as_ref(), "y_upper"),
+            ],
+            [
+                (self.z_lower.as_ref(), "z_lower"),
+                (self.z_upper.as_ref(), "z_upper"),
+            ],
+        ]
+    }
+
+    /// `true` when some face is an inflow.
+    pub fn any(&self) -> bool {
+        self.faces().iter().flatten().any(|(f, _)| f.is_some())
+    }
+}
+
+/// The prescribed fluid state of an inflow face: one pressure shared by the
+/// materials and a state per material (density or temperature, volume
+/// fraction, velocity), as in `[[regions]]`. Materials not listed get a
+/// trace volume fraction.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InflowFaceSpec {
+    /// Pressure (> 0 for gases; > −p_inf for a stiffened gas).
+    pub pressure: f64,
+    /// States of the materials flowing in.
+    pub states: Vec<FluidStateSpec>,
 }
 
 /// Linear solver of the implicit pressure equation.
@@ -1096,85 +1163,139 @@ impl Scene {
             }
         }
         for (i, r) in self.regions.iter().enumerate() {
-            let p = |k: &str| format!("regions[{i}].{k}");
             if let Some(g) = &r.geometry {
-                validate_region_shape(g, &p("geometry"), dim)?;
+                validate_region_shape(g, &format!("regions[{i}].geometry"), dim)?;
             }
-            if !r.pressure.is_finite() {
-                return Err(err(p("pressure"), "must be finite"));
-            }
-            if r.states.is_empty() {
-                return Err(err(p("states"), "at least one material state is required"));
-            }
-            let mut sum = 0.0;
-            for (k, st) in r.states.iter().enumerate() {
-                let q = |key: &str| format!("regions[{i}].states[{k}].{key}");
-                let Some(m) = self
-                    .materials
-                    .iter()
-                    .find(|m| m.name == st.material && m.kind == MaterialKind::Fluid)
-                else {
-                    let names: Vec<&str> = self
-                        .materials
-                        .iter()
-                        .filter(|m| m.kind == MaterialKind::Fluid)
-                        .map(|m| m.name.as_str())
-                        .collect();
+            self.validate_fluid_states(&format!("regions[{i}]"), r.pressure, &r.states)?;
+        }
+        self.validate_fluid_inflow()?;
+        Ok(())
+    }
+
+    /// Checks of the inflow faces (`fluid.inflow.<face>`).
+    fn validate_fluid_inflow(&self) -> Result<(), SceneError> {
+        let dim = self.grid.dim;
+        let grid_faces = self.grid.boundary.faces();
+        for (axis, faces) in self.fluid.inflow.faces().iter().enumerate() {
+            for (side, (spec, name)) in faces.iter().enumerate() {
+                let Some(spec) = spec else { continue };
+                let key = format!("fluid.inflow.{name}");
+                if axis >= dim {
                     return Err(err(
-                        q("material"),
-                        format!(
-                            "unknown fluid material `{}`; defined: {}",
-                            st.material,
-                            names.join(", ")
-                        ),
-                    ));
-                };
-                if r.states[..k].iter().any(|o| o.material == st.material) {
-                    return Err(err(
-                        q("material"),
-                        format!("`{}` listed twice", st.material),
+                        key,
+                        format!("the grid has dim {dim}; allowed faces: {}", face_names(dim)),
                     ));
                 }
-                if !(st.volume_fraction.is_finite() && (0.0..=1.0).contains(&st.volume_fraction)) {
-                    return Err(err(
-                        q("volume_fraction"),
-                        format!("must be in [0, 1] (got {})", st.volume_fraction),
-                    ));
+                if self.materials.iter().any(|m| m.kind == MaterialKind::Solid) {
+                    return Err(err(key, "inflow faces are available for fluid-only scenes"));
                 }
-                sum += st.volume_fraction;
-                match (st.density, st.temperature) {
-                    (Some(d), None) => positive(&q("density"), d)?,
-                    (None, Some(t)) => positive(&q("temperature"), t)?,
-                    _ => {
+                if let Some(bc) = grid_faces[axis][side].0 {
+                    if bc != Boundary::Free {
                         return Err(err(
-                            q("density"),
-                            "give exactly one of density or temperature",
-                        ))
+                            key,
+                            format!(
+                                "an inflow face needs grid.boundary.{name} = \"free\" (or no \
+                                 entry), got \"{}\"",
+                                match bc {
+                                    Boundary::Fixed => "fixed",
+                                    Boundary::Symmetry => "symmetry",
+                                    Boundary::Periodic => "periodic",
+                                    Boundary::Free => "free",
+                                }
+                            ),
+                        ));
                     }
                 }
-                if let Some(v) = &st.velocity {
-                    vec_len(&q("velocity"), v, dim)?;
-                }
-                let p_min = match m.eos {
-                    Some(EosKind::StiffenedGas) => -m.p_inf.unwrap_or(0.0),
-                    _ => 0.0,
-                };
-                if r.pressure <= p_min {
-                    return Err(err(
-                        p("pressure"),
-                        format!(
-                            "must be > {p_min} for material `{}` (got {})",
-                            st.material, r.pressure
-                        ),
-                    ));
-                }
+                self.validate_fluid_states(&key, spec.pressure, &spec.states)?;
             }
-            if (sum - 1.0).abs() > 1e-9 {
+        }
+        Ok(())
+    }
+
+    /// Checks of a pressure and a list of material states (a region or an
+    /// inflow face) under the key `prefix`.
+    fn validate_fluid_states(
+        &self,
+        prefix: &str,
+        pressure: f64,
+        states: &[FluidStateSpec],
+    ) -> Result<(), SceneError> {
+        let dim = self.grid.dim;
+        let p = |k: &str| format!("{prefix}.{k}");
+        if !pressure.is_finite() {
+            return Err(err(p("pressure"), "must be finite"));
+        }
+        if states.is_empty() {
+            return Err(err(p("states"), "at least one material state is required"));
+        }
+        let mut sum = 0.0;
+        for (k, st) in states.iter().enumerate() {
+            let q = |key: &str| format!("{prefix}.states[{k}].{key}");
+            let Some(m) = self
+                .materials
+                .iter()
+                .find(|m| m.name == st.material && m.kind == MaterialKind::Fluid)
+            else {
+                let names: Vec<&str> = self
+                    .materials
+                    .iter()
+                    .filter(|m| m.kind == MaterialKind::Fluid)
+                    .map(|m| m.name.as_str())
+                    .collect();
                 return Err(err(
-                    p("states"),
-                    format!("volume fractions must sum to 1 (got {sum})"),
+                    q("material"),
+                    format!(
+                        "unknown fluid material `{}`; defined: {}",
+                        st.material,
+                        names.join(", ")
+                    ),
+                ));
+            };
+            if states[..k].iter().any(|o| o.material == st.material) {
+                return Err(err(
+                    q("material"),
+                    format!("`{}` listed twice", st.material),
                 ));
             }
+            if !(st.volume_fraction.is_finite() && (0.0..=1.0).contains(&st.volume_fraction)) {
+                return Err(err(
+                    q("volume_fraction"),
+                    format!("must be in [0, 1] (got {})", st.volume_fraction),
+                ));
+            }
+            sum += st.volume_fraction;
+            match (st.density, st.temperature) {
+                (Some(d), None) => positive(&q("density"), d)?,
+                (None, Some(t)) => positive(&q("temperature"), t)?,
+                _ => {
+                    return Err(err(
+                        q("density"),
+                        "give exactly one of density or temperature",
+                    ))
+                }
+            }
+            if let Some(v) = &st.velocity {
+                vec_len(&q("velocity"), v, dim)?;
+            }
+            let p_min = match m.eos {
+                Some(EosKind::StiffenedGas) => -m.p_inf.unwrap_or(0.0),
+                _ => 0.0,
+            };
+            if pressure <= p_min {
+                return Err(err(
+                    p("pressure"),
+                    format!(
+                        "must be > {p_min} for material `{}` (got {})",
+                        st.material, pressure
+                    ),
+                ));
+            }
+        }
+        if (sum - 1.0).abs() > 1e-9 {
+            return Err(err(
+                p("states"),
+                format!("volume fractions must sum to 1 (got {sum})"),
+            ));
         }
         Ok(())
     }
@@ -1281,6 +1402,14 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// The face keys of a grid of dimension `dim`, comma separated.
+fn face_names(dim: usize) -> String {
+    [
+        "x_lower", "x_upper", "y_lower", "y_upper", "z_lower", "z_upper",
+    ][..2 * dim.min(3)]
+        .join(", ")
 }
 
 fn err(path: impl Into<String>, msg: impl Into<String>) -> SceneError {
@@ -1574,6 +1703,11 @@ impl Scene {
             return Err(err(
                 "regions",
                 "regions set fluid states; the scene has no fluid",
+            ));
+        } else if self.fluid.inflow.any() {
+            return Err(err(
+                "fluid.inflow",
+                "inflow faces set fluid states; the scene has no fluid",
             ));
         }
         let out = &self.output;

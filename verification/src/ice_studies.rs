@@ -212,6 +212,18 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
             },
             "high resolution with MC, cfl 0.5".into(),
         ),
+        (
+            IceParams::hancock(bcs.clone()),
+            "Hancock (high resolution + MUSCL-Hancock face states, α 0.625, cfl 0.8)".into(),
+        ),
+        (
+            IceParams {
+                cfl: 0.4,
+                face_dt_factor: 1.0,
+                ..IceParams::hancock(bcs.clone())
+            },
+            "Hancock, α 1, cfl 0.4".into(),
+        ),
     ];
     let mut series = Vec::new();
     let mut notes = vec![
@@ -242,6 +254,18 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
                 p.error
             ));
         }
+        for (target, fortran) in [(5.1e-4, 0.053), (3.1e-4, 0.16)] {
+            let line = match wall_to_reach(&points, target) {
+                Some((t, extrapolated)) => format!(
+                    "{series_label}: wall time to reach L1 = {target:.1e}: {t:.3} s{} (Fortran Roe/MC: {fortran} s, ratio {:.2})",
+                    if extrapolated { " (extrapolated)" } else { "" },
+                    t / fortran
+                ),
+                None => format!("{series_label}: L1 = {target:.1e} not bracketed"),
+            };
+            eprintln!("{line}");
+            notes.push(line);
+        }
         series.push(Series::new(series_label, "L1", points));
     }
     Ok(StudyResult {
@@ -249,6 +273,29 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
         series,
         notes,
     })
+}
+
+/// Wall time at which a series (points ordered by decreasing `h`) reaches
+/// the error `target`: log-log interpolation of wall time against error
+/// between the two points that bracket it, or extrapolation from the last
+/// two points (flagged `true`) when the finest error is still above it.
+/// `None` when every error is below the target or fewer than two points.
+pub fn wall_to_reach(points: &[Point], target: f64) -> Option<(f64, bool)> {
+    if points.len() < 2 || points[0].error <= target {
+        return None;
+    }
+    let interp = |a: &Point, b: &Point| {
+        let s = (target.ln() - a.error.ln()) / (b.error.ln() - a.error.ln());
+        (a.wall_s.ln() + s * (b.wall_s.ln() - a.wall_s.ln())).exp()
+    };
+    for w in points.windows(2) {
+        if w[0].error > target && w[1].error <= target {
+            return Some((interp(&w[0], &w[1]), false));
+        }
+    }
+    let n = points.len();
+    let (a, b) = (&points[n - 2], &points[n - 1]);
+    (b.error < a.error).then(|| (interp(a, b), true))
 }
 
 /// A density wave `ρ = 1 + 0.2 sin 2πx` advected at `u = 1`, `p = 1`
@@ -264,10 +311,19 @@ pub fn ice_entropy_wave(quick: bool) -> Result<StudyResult> {
     };
     let rho = |x: f64| 1.0 + 0.2 * (2.0 * PI * x).sin();
     let mut series = Vec::new();
-    for adv in [
-        Advection::FirstOrder,
-        Advection::SecondOrder(Limiter::VanLeer),
-        Advection::SecondOrder(Limiter::MonotonizedCentral),
+    let literal = |adv: Advection| {
+        let mut p = IceParams::new(periodic1());
+        p.advection = adv;
+        (p, label(adv).to_string())
+    };
+    for (params, series_label) in [
+        literal(Advection::FirstOrder),
+        literal(Advection::SecondOrder(Limiter::VanLeer)),
+        literal(Advection::SecondOrder(Limiter::MonotonizedCentral)),
+        (
+            IceParams::hancock(periodic1()),
+            "Hancock (superbee, cfl 0.8)".to_string(),
+        ),
     ] {
         let mut points = Vec::new();
         for &n in ns {
@@ -282,8 +338,6 @@ pub fn ice_entropy_wave(quick: bool) -> Result<StudyResult> {
                     SVector::<f64, 1>::new(1.0),
                 )]
             })?;
-            let mut params = IceParams::new(periodic1());
-            params.advection = adv;
             let run = run_fluid(st, &params, 1.0, 10_000_000)?;
             let s = &run.state;
             let err = s
@@ -296,12 +350,12 @@ pub fn ice_entropy_wave(quick: bool) -> Result<StudyResult> {
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups));
         }
-        series.push(Series::new(label(adv), "L1", points));
+        series.push(Series::new(series_label, "L1", points));
     }
     Ok(StudyResult {
         study: "ice_entropy_wave".into(),
         series,
-        notes: vec!["density wave at uniform u = 1, p = 1, gamma = 1.4, periodic, t = 1, cfl = 0.5 on |u| + c; L1 = mean |ρ − ρ_exact| over cells (cell-centre samples)".into()],
+        notes: vec!["density wave at uniform u = 1, p = 1, gamma = 1.4, periodic, t = 1, cfl = 0.5 on |u| + c (Hancock 0.8); L1 = mean |ρ − ρ_exact| over cells (cell-centre samples)".into()],
     })
 }
 
@@ -347,6 +401,10 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
             },
             "high resolution with MC, cfl 0.4",
         ),
+        (
+            IceParams::hancock(periodic1()),
+            "Hancock (MUSCL-Hancock face states, superbee, cfl 0.8)",
+        ),
     ] {
         let mut points = Vec::new();
         for &n in ns {
@@ -381,7 +439,7 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
     Ok(StudyResult {
         study: "ice_acoustic".into(),
         series,
-        notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5 (high resolution 0.4); error relative to the amplitude".into()],
+        notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5 (high resolution 0.4, Hancock 0.8); error relative to the amplitude".into()],
     })
 }
 
