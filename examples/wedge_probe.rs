@@ -26,7 +26,14 @@ fn main() {
     }
     let wall = start.elapsed().as_secs_f64();
     let tip = 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]);
-    let m = measure_wedge(&run.fluid, tip, 20.0, 101_325.0, 3.771 * 101_325.0, (0.05, 0.15));
+    let m = measure_wedge(
+        &run.fluid,
+        tip,
+        20.0,
+        101_325.0,
+        3.771 * 101_325.0,
+        (0.05, 0.15),
+    );
     println!(
         "h {h:.5} cells {:?} angle {:.3} ratio {:.4} steps {} wall {:.1} s",
         sc.grid.cells, m.angle_deg, m.pressure_ratio, run.steps, wall
