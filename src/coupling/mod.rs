@@ -397,7 +397,8 @@ impl<const D: usize> CoupledRun<D> {
             .map_or(1.0, |sp| sp.sound_speed_factor);
         // Explicit: every material's sound speed (a deformable solid's too:
         // Eq. 29 in cells it shares; not a rigid one's); semi-implicit:
-        // advection only (factor 0 by default) — the solid field stays explicit through `solid_dt`.
+        // advection only (factor 0 by default) — the solid field stays
+        // explicit through `solid_dt`.
         let fluid_dt =
             ice::timestep_with(&self.fluid, self.ice.cfl, factor, &self.ice.rigid_mask());
         let solid_dt = if self.rigid_velocity.is_some() || self.particles.is_empty() {
