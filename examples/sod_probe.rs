@@ -78,17 +78,7 @@ fn main() {
         }
         walls.sort_by(|a, b| a.partial_cmp(b).unwrap());
         let run = out.unwrap();
-        let s = &run.state;
-        let h = 1.0 / n as f64;
-        let mut err = 0.0;
-        for &c in &s.layout.interior {
-            let x = s.layout.centre(c)[0];
-            let avg = ex
-                .cell_average(x - 0.5 * h, x + 0.5 * h, 0.5, s.time, 4)
-                .unwrap();
-            err += (s.mixture_density(c) - avg.rho).abs();
-        }
-        err /= n as f64;
+        let err = ex.l1_density_error(&run.state, 0.5).unwrap();
         println!(
             "{variant} cfl {cfl} N {n:5} L1 {err:.4e} steps {:5} wall median {:.4} s (min {:.4}) {:.3e} cell-steps/s",
             run.steps,

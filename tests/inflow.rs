@@ -113,17 +113,7 @@ fn a_supersonic_inflow_drives_the_exact_shock() {
         scene.grid.cells = vec![n];
         let (state, params) = build_fluid_run::<1>(&scene).expect("build");
         let r = run_fluid(state, &params, scene.time.end, 10_000_000).expect("run");
-        let s = &r.state;
-        let h = 1.0 / n as f64;
-        let mut l1 = 0.0;
-        for &c in &s.layout.interior {
-            let x = s.layout.centre(c)[0];
-            let e = exact
-                .cell_average(x - 0.5 * h, x + 0.5 * h, 0.0, s.time, 4)
-                .expect("average");
-            l1 += (s.mixture_density(c) - e.rho).abs();
-        }
-        l1 /= n as f64;
+        let l1 = exact.l1_density_error(&r.state, 0.0).expect("average");
         eprintln!("inflow shock N = {n}: {} steps, L1(rho) {l1:.4e}", r.steps);
         errors.push(l1);
     }

@@ -35,8 +35,20 @@ fn edit(from: &str, to: &str) -> String {
     GOOD.replacen(from, to, 1)
 }
 
-fn error_of(text: &str) -> mpmice::error::SceneError {
-    mpmice::scene::parse(text).expect_err("must be rejected")
+/// Every `(scene text, key path, word)` must be rejected naming that key
+/// path with the word in its message; all mismatches are reported at once.
+fn assert_each_names_its_key(cases: &[(String, &str, &str)]) {
+    let mut wrong = Vec::new();
+    for (text, path, word) in cases {
+        match mpmice::scene::parse(text) {
+            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
+            Err(e) if e.path != *path || !e.message.contains(word) => {
+                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
+            }
+            Err(_) => {}
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
 #[test]
@@ -168,14 +180,7 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
         ),
         ("this is = not toml [".to_string(), "<toml>", "TOML"),
     ];
-    let mut wrong = Vec::new();
-    for (text, path, word) in cases {
-        let e = error_of(text);
-        if e.path != *path || !e.to_string().contains(word) {
-            wrong.push(format!("expected `{path}` with `{word}`, got: {e}"));
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert_each_names_its_key(cases);
 }
 
 #[test]
@@ -391,17 +396,7 @@ fn bad_fluid_input_names_its_key() {
             "[0, 1]",
         ),
     ];
-    let mut wrong = Vec::new();
-    for (text, path, word) in cases {
-        match mpmice::scene::parse(text) {
-            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
-            Err(e) if e.path != *path || !e.to_string().contains(word) => {
-                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
-            }
-            Err(_) => {}
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert_each_names_its_key(cases);
 }
 
 /// A coupled scene (steel block in air) and its bad inputs.
@@ -466,11 +461,7 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             "need a fluid",
         ),
     ];
-    for (text, path, word) in &cases {
-        let e = error_of(text);
-        assert_eq!(e.path, *path, "{e}");
-        assert!(e.message.contains(word), "`{}` lacks `{word}`", e.message);
-    }
+    assert_each_names_its_key(&cases);
 }
 
 /// The fluid scene with an inflow face on x = 0 (air entering at 10 m/s).
@@ -579,15 +570,5 @@ fn inflow_faces_are_built_and_bad_ones_name_their_key() {
             "no fluid",
         ),
     ];
-    let mut wrong = Vec::new();
-    for (text, path, word) in &cases {
-        match mpmice::scene::parse(text) {
-            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
-            Err(e) if e.path != *path || !e.to_string().contains(word) => {
-                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
-            }
-            Err(_) => {}
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert_each_names_its_key(&cases);
 }

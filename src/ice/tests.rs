@@ -25,16 +25,7 @@ pub(crate) fn shock_tube_l1(
         gamma,
     )
     .unwrap();
-    let h = state.layout.h[0];
-    let mut err = 0.0;
-    for &c in &state.layout.interior {
-        let x = state.layout.centre(c)[0];
-        let avg = ex
-            .cell_average(x - 0.5 * h, x + 0.5 * h, x0, state.time, 4)
-            .unwrap();
-        err += (state.mixture_density(c) - avg.rho).abs();
-    }
-    err / state.layout.num_interior() as f64
+    ex.l1_density_error(state, x0).unwrap()
 }
 
 fn walls1() -> [[IceBoundary<1>; 2]; 1] {
@@ -87,14 +78,14 @@ fn the_face_predictor_needs_a_reconstruction() {
     }
 }
 
+/// The unit square in `n × n` cells.
+fn unit_square(n: usize) -> CellLayout<2> {
+    let h = 1.0 / n as f64;
+    CellLayout::<2>::new(SVector::zeros(), SVector::<f64, 2>::new(h, h), [n, n]).unwrap()
+}
+
 fn smooth_2d(nx: usize) -> IceState<2> {
-    let h = 1.0 / nx as f64;
-    let layout = CellLayout::<2>::new(
-        SVector::<f64, 2>::zeros(),
-        SVector::<f64, 2>::new(h, h),
-        [nx, nx],
-    )
-    .unwrap();
+    let layout = unit_square(nx);
     IceState::new(layout, vec![gas(1.4)], |x| {
         let tp = 2.0 * std::f64::consts::PI;
         let rho = 1.0 + 0.3 * (tp * x[0]).sin() * (tp * x[1]).cos();
@@ -236,13 +227,7 @@ fn interface_keeps_uniform_pressure_and_velocity() {
 #[test]
 fn cylindrical_explosion_is_symmetric_about_the_diagonal() {
     let n = 40;
-    let h = 1.0 / n as f64;
-    let layout = CellLayout::<2>::new(
-        SVector::<f64, 2>::zeros(),
-        SVector::<f64, 2>::new(h, h),
-        [n, n],
-    )
-    .unwrap();
+    let layout = unit_square(n);
     let st = IceState::new(layout, vec![gas(1.4)], |x| {
         let r = ((x[0] - 0.35).powi(2) + (x[1] - 0.35).powi(2)).sqrt();
         let (rho, p) = if r < 0.2 { (1.0, 1.0) } else { (0.125, 0.1) };
@@ -670,13 +655,7 @@ fn viscous_shear_wave_decays_at_the_exact_rate() {
 /// `≈ 0.49` per direction, `cfl = 1`), one period: L1 density error and the
 /// largest deviations of pressure and velocity from uniform.
 fn diagonal_wave(n: usize, adv: Advection) -> (f64, f64, f64) {
-    let h = 1.0 / n as f64;
-    let layout = CellLayout::<2>::new(
-        SVector::<f64, 2>::zeros(),
-        SVector::<f64, 2>::new(h, h),
-        [n, n],
-    )
-    .unwrap();
+    let layout = unit_square(n);
     let tp = 2.0 * std::f64::consts::PI;
     let rho = |x: &SVector<f64, 2>| 1.0 + 0.2 * (tp * x[0]).sin() * (tp * x[1]).sin();
     let u0 = SVector::<f64, 2>::new(1.0, 1.0);

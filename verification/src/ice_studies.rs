@@ -236,15 +236,8 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
             let st = shock_tube(gas(1.4)?, n, l, r, 0.5)?;
             let run =
                 run_fluid(st, &params, 0.2, 10_000_000).with_context(|| format!("Sod N = {n}"))?;
-            let s = &run.state;
             let h = 1.0 / n as f64;
-            let mut err = 0.0;
-            for &c in &s.layout.interior {
-                let x = s.layout.centre(c)[0];
-                let avg = exact.cell_average(x - 0.5 * h, x + 0.5 * h, 0.5, s.time, 4)?;
-                err += (s.mixture_density(c) - avg.rho).abs();
-            }
-            err /= n as f64;
+            let err = exact.l1_density_error(&run.state, 0.5)?;
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups).with_extra("steps", run.steps as f64));
         }
