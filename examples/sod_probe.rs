@@ -1,6 +1,7 @@
 //! Sod L1(ρ) error and median wall time for one ICE variant:
 //! `cargo run --release --example sod_probe -- high_resolution 0.4 5 400 800 1600`
-//! (variant, cfl, repetitions, N...).
+//! (variant `literal` | `high_resolution` | `hancock`, cfl, repetitions,
+//! N...).
 use mpmice::diagnostics::riemann::{ExactRiemann, PrimitiveState};
 use mpmice::ice::{run_fluid, shock_tube, Advection, IceBoundary, IceMaterial, IceParams, Limiter};
 use mpmice::material::eos::IdealGas;
@@ -19,6 +20,7 @@ fn main() {
     let bcs = [[IceBoundary::Outflow, IceBoundary::Outflow]];
     let mut p = match variant.as_str() {
         "literal" => IceParams::new(bcs),
+        "hancock" => IceParams::hancock(bcs),
         _ => IceParams::high_resolution(bcs),
     };
     p.cfl = cfl;
