@@ -742,7 +742,6 @@ pub(super) fn implicit_pressure<const D: usize>(
         .as_ref()
         .ok_or_else(|| invalid("implicit", "workspace missing"))?;
     let p_min = min_pressure_all(state);
-    let w = params.pressure_weight;
     for &c in &layout.interior {
         let p = state.p_eq[c] + iw.dp[c];
         if !(p.is_finite() && p > p_min) {
@@ -755,6 +754,7 @@ pub(super) fn implicit_pressure<const D: usize>(
                 retryable: true,
             });
         }
+        let w = params.source_weight(iw.dp[c], state.p_eq[c]);
         ws.press[c] = state.p_eq[c] + w * iw.dp[c];
     }
     Ok((outer, linear))

@@ -541,6 +541,7 @@ pub fn build_fluid_run<const D: usize>(
         FluidVariant::Literal => IceParams::new(bcs),
         FluidVariant::HighResolution => IceParams::high_resolution(bcs),
         FluidVariant::Hancock => IceParams::hancock(bcs),
+        FluidVariant::HancockAcoustic => IceParams::hancock_acoustic(bcs),
     };
     params.cfl = scene.time.cfl;
     if let Some(l) = scene.fluid.limiter {

@@ -495,6 +495,10 @@ pub enum FluidVariant {
     /// face states, second order in time up to `time.cfl = 0.8` (see
     /// `ice::IceParams::hancock`).
     Hancock,
+    /// `hancock` with acoustic-Riemann shock dissipation (acoustic jump in
+    /// Eq. 28, full `Δp` weight in compression, a linear face viscosity),
+    /// made for `time.cfl = 0.9` (see `ice::IceParams::hancock_acoustic`).
+    HancockAcoustic,
 }
 
 /// Slope limiter of the second-order reconstruction.
