@@ -62,8 +62,10 @@ pub enum LinearSolver {
     /// reused; numeric refactorisation every step.
     Direct,
     /// Conjugate gradients preconditioned by one geometric multigrid V-cycle
-    /// ([`solvers::Multigrid`], hierarchy refreshed every step). Not for
-    /// periodic boundaries.
+    /// ([`solvers::Multigrid`], hierarchy refreshed every step). Periodic
+    /// directions need an even number of cells unless the grid is small
+    /// enough (≤ 2048 cells) to be the multigrid's directly solved coarsest
+    /// level.
     PcgMultigrid,
     /// Conjugate gradients preconditioned by the diagonal.
     PcgJacobi,
@@ -189,11 +191,11 @@ impl SemiImplicit {
         }
     }
 
-    /// Checks the parameters (`periodic`: some boundary is periodic).
+    /// Checks the parameters.
     ///
     /// # Errors
     /// [`IceError::InvalidInput`] naming the field (`implicit.…`).
-    pub fn validate(&self, periodic: bool) -> Result<(), IceError> {
+    pub fn validate(&self) -> Result<(), IceError> {
         let t = self.linear_tolerance;
         if !(t.is_finite() && t > 0.0 && t < 1.0) {
             return Err(invalid(
@@ -235,12 +237,6 @@ impl SemiImplicit {
                 format!("must be in [0, 1], got {b}"),
             ));
         }
-        if periodic && self.linear_solver == LinearSolver::PcgMultigrid {
-            return Err(invalid(
-                "implicit.linear_solver",
-                "pcg_multigrid does not support periodic boundaries; use direct or pcg_jacobi",
-            ));
-        }
         Ok(())
     }
 }
@@ -261,8 +257,9 @@ struct Link {
     face: usize,
     /// Face normal.
     d: usize,
-    /// Face position in the [`CellStencil`] (`usize::MAX` for a periodic
-    /// link).
+    /// Face position in the [`CellStencil`] (position 0 of its direction
+    /// for a periodic link, the stencil's wrap face; `usize::MAX` without a
+    /// stencil).
     sface: usize,
 }
 
@@ -345,6 +342,19 @@ impl PressureSystem {
         } else {
             None
         };
+        for d in 0..D {
+            let periodic = bcs[d].each_ref().map(|b| *b == IceBoundary::Periodic);
+            if periodic[0] != periodic[1] {
+                return Err(invalid(
+                    format!("boundaries[{d}]"),
+                    "periodic must be set on both sides",
+                ));
+            }
+            if let (true, Some(st)) = (periodic[0], stencil.as_mut()) {
+                st.set_periodic(d)
+                    .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
+            }
+        }
         let mut links = Vec::new();
         let mut dirichlet = Vec::new();
         for d in 0..D {
@@ -382,7 +392,7 @@ impl PressureSystem {
                                     j: unknown[f],
                                     face: f,
                                     d,
-                                    sface: usize::MAX,
+                                    sface,
                                 });
                             }
                         }
