@@ -51,8 +51,8 @@
 //! interior face. The sweep fused along the outermost axis (rows in 2D,
 //! planes in 3D) would let the second colour of the first row read the
 //! first colour of the last row before it is updated, so along a periodic
-//! outermost axis the two colours are swept one after the other instead
-//! (exact red–black order, slightly more memory traffic).
+//! outermost axis the last row's (plane's) first colour is updated before
+//! the fused loop (see `rb_sweep`): the order stays exactly red–black.
 //!
 //! Red–black ordering needs an **even** number of cells along a periodic
 //! axis: with an odd count, cells `0` and `n − 1` have the same colour but
@@ -78,9 +78,7 @@
 use std::sync::{Mutex, MutexGuard};
 use std::time::Instant;
 
-use faer::sparse::SparseColMat;
-
-use crate::assembly::SparsityPattern;
+use crate::assembly::Assembler;
 use crate::direct::Cholesky;
 use crate::error::{check_len, is_pos, Result, SolveReport, SolverError};
 use crate::krylov::KrylovOptions;
@@ -279,22 +277,19 @@ impl Level {
         }
     }
 
-    /// Matrix of this level in natural (unpadded) ordering.
-    fn matrix(&self) -> Result<SparseColMat<usize, f64>> {
+    /// Calls `emit(row, col, value)` for the triplets of this level's
+    /// matrix in natural (unpadded) ordering, in a fixed order that depends
+    /// only on the dimensions and periodic axes.
+    fn for_each_triplet(&self, mut emit: impl FnMut(usize, usize, f64)) {
         let [nx, ny, nz] = self.n;
         let idx = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
-        let mut rows = Vec::new();
-        let mut cols = Vec::new();
-        let mut vals = Vec::new();
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
                     let c = [i, j, k];
                     let p = self.pidx(i, j, k);
                     let me = idx(i, j, k);
-                    rows.push(me);
-                    cols.push(me);
-                    vals.push(self.diag[p]);
+                    emit(me, me, self.diag[p]);
                     for a in 0..self.ndim() {
                         let st = self.stride(a);
                         // Periodic: the wrap neighbour (with two cells both
@@ -302,23 +297,42 @@ impl Level {
                         if c[a] > 0 || self.periodic[a] {
                             let mut nb = c;
                             nb[a] = if c[a] > 0 { c[a] - 1 } else { self.n[a] - 1 };
-                            rows.push(me);
-                            cols.push(idx(nb[0], nb[1], nb[2]));
-                            vals.push(-self.a[a][p]);
+                            emit(me, idx(nb[0], nb[1], nb[2]), -self.a[a][p]);
                         }
                         if c[a] + 1 < self.n[a] || self.periodic[a] {
                             let mut nb = c;
                             nb[a] = if c[a] + 1 < self.n[a] { c[a] + 1 } else { 0 };
-                            rows.push(me);
-                            cols.push(idx(nb[0], nb[1], nb[2]));
-                            vals.push(-self.a[a][p + st]);
+                            emit(me, idx(nb[0], nb[1], nb[2]), -self.a[a][p + st]);
                         }
                     }
                 }
             }
         }
+    }
+
+    /// Assembler of this level's matrix (pattern analysed once) with the
+    /// current values.
+    fn assembler(&self) -> Result<(Assembler, Vec<f64>)> {
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        self.for_each_triplet(|r, c, v| {
+            rows.push(r);
+            cols.push(c);
+            vals.push(v);
+        });
         let n = self.cells();
-        SparsityPattern::new(n, n, &rows, &cols)?.build(&vals)
+        let mut asm = Assembler::new(n, n, &rows, &cols)?;
+        asm.assemble(&vals)?;
+        Ok((asm, vals))
+    }
+
+    /// Current triplet values (order of [`Level::for_each_triplet`]) into
+    /// `out`, without allocation.
+    fn triplet_values(&self, out: &mut [f64]) {
+        let mut t = 0;
+        self.for_each_triplet(|_, _, v| {
+            out[t] = v;
+            t += 1;
+        });
     }
 }
 
@@ -360,6 +374,10 @@ pub struct Multigrid {
     opts: MgOptions,
     levels: Vec<Level>,
     transfers: Vec<Transfer>,
+    /// Matrix of the coarsest level, refreshed in place by `refresh`.
+    coarse_asm: Assembler,
+    /// Triplet values of the coarsest level.
+    coarse_vals: Vec<f64>,
     state: Mutex<State>,
     setup_s: f64,
 }
@@ -803,40 +821,58 @@ fn zero_row(lv: &Level, u: &mut [f64], f: &[f64], j: usize, k: usize, color: usi
     }
 }
 
-/// One half-sweep: the cells of `color` only (periodic ghosts refreshed
-/// first). With `from_zero` the previous content of `u` is ignored.
-fn half_sweep<const D3: bool>(
+/// One colour pass over "unit" `t` of the outermost axis (row `t` in 2D,
+/// plane `t` in 3D, whose periodic y ghost rows are refreshed first).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn colour_pass<const D3: bool>(
     lv: &Level,
     u: &mut [f64],
     f: &[f64],
+    t: usize,
     color: usize,
     omega: f64,
-    from_zero: bool,
+    zero: bool,
 ) {
-    let [_, ny, nz] = lv.n;
-    if D3 && lv.periodic[2] {
-        fill_ghost_planes(lv, u);
-    }
-    for k in 0..nz {
+    if D3 {
         if lv.periodic[1] {
-            fill_ghost_rows(lv, u, k);
+            fill_ghost_rows(lv, u, t);
         }
-        for j in 0..ny {
-            if from_zero {
-                zero_row(lv, u, f, j, k, color, omega);
+        for j in 0..lv.n[1] {
+            if zero {
+                zero_row(lv, u, f, j, t, color, omega);
             } else {
-                gs_row::<D3>(lv, u, f, j, k, color, omega);
+                gs_row::<true>(lv, u, f, j, t, color, omega);
             }
         }
+    } else if zero {
+        zero_row(lv, u, f, t, 0, color, omega);
+    } else {
+        gs_row::<false>(lv, u, f, t, 0, color, omega);
+    }
+}
+
+/// Periodic ghosts of the outermost axis (rows in 2D, planes in 3D).
+#[inline]
+fn fill_outer_ghosts<const D3: bool>(lv: &Level, u: &mut [f64]) {
+    if D3 {
+        fill_ghost_planes(lv, u);
+    } else {
+        fill_ghost_rows(lv, u, 0);
     }
 }
 
 /// One red–black sweep (`first` colour, then the other), fused so that the
 /// second colour trails the first by one row (2D) or one plane (3D); this is
 /// exactly equivalent to two full half-sweeps but reads the data once. With
-/// `from_zero` the previous content of `u` is ignored (taken as 0). Along a
-/// periodic outermost axis (y in 2D, z in 3D) the two half-sweeps run one
-/// after the other (see the module documentation).
+/// `from_zero` the previous content of `u` is ignored (taken as 0).
+///
+/// Along a periodic outermost axis (`m` rows/planes) the second colour of
+/// unit 0 needs the *updated* first colour of unit `m − 1`, so that unit's
+/// first colour is done before the loop (it reads only the second colour of
+/// units `m − 2` and 0, not yet updated); the ghost units are refreshed
+/// around it and before the last unit's second colour. The order is still
+/// exactly red–black.
 fn rb_sweep<const D3: bool>(
     lv: &Level,
     u: &mut [f64],
@@ -845,48 +881,23 @@ fn rb_sweep<const D3: bool>(
     omega: f64,
     from_zero: bool,
 ) {
-    let [_, ny, nz] = lv.n;
     let second = 1 - first;
-    if lv.periodic[if D3 { 2 } else { 1 }] {
-        half_sweep::<D3>(lv, u, f, first, omega, from_zero);
-        half_sweep::<D3>(lv, u, f, second, omega, false);
-        return;
+    let m = if D3 { lv.n[2] } else { lv.n[1] };
+    let outer_periodic = lv.periodic[if D3 { 2 } else { 1 }];
+    if outer_periodic {
+        fill_outer_ghosts::<D3>(lv, u);
+        colour_pass::<D3>(lv, u, f, m - 1, first, omega, from_zero);
+        fill_outer_ghosts::<D3>(lv, u);
     }
-    if D3 {
-        for k in 0..=nz {
-            if k < nz {
-                if lv.periodic[1] {
-                    fill_ghost_rows(lv, u, k);
-                }
-                for j in 0..ny {
-                    if from_zero {
-                        zero_row(lv, u, f, j, k, first, omega);
-                    } else {
-                        gs_row::<true>(lv, u, f, j, k, first, omega);
-                    }
-                }
-            }
-            if k >= 1 {
-                if lv.periodic[1] {
-                    fill_ghost_rows(lv, u, k - 1);
-                }
-                for j in 0..ny {
-                    gs_row::<true>(lv, u, f, j, k - 1, second, omega);
-                }
-            }
+    for t in 0..=m {
+        if t < m && !(outer_periodic && t == m - 1) {
+            colour_pass::<D3>(lv, u, f, t, first, omega, from_zero);
         }
-    } else {
-        for j in 0..=ny {
-            if j < ny {
-                if from_zero {
-                    zero_row(lv, u, f, j, 0, first, omega);
-                } else {
-                    gs_row::<false>(lv, u, f, j, 0, first, omega);
-                }
+        if t >= 1 {
+            if outer_periodic && t == m {
+                fill_outer_ghosts::<D3>(lv, u);
             }
-            if j >= 1 {
-                gs_row::<false>(lv, u, f, j - 1, 0, second, omega);
-            }
+            colour_pass::<D3>(lv, u, f, t - 1, second, omega, false);
         }
     }
 }
@@ -1144,8 +1155,9 @@ impl Multigrid {
             levels.push(coarse);
         }
         let last = levels.last().expect("at least one level");
-        let coarse =
-            Cholesky::with_pivot_tol(&last.matrix()?, 0.0).map_err(|e| coarse_error(last, e))?;
+        let (coarse_asm, coarse_vals) = last.assembler()?;
+        let coarse = Cholesky::with_pivot_tol(coarse_asm.matrix(), 0.0)
+            .map_err(|e| coarse_error(last, e))?;
         let work = levels
             .iter()
             .map(|l| Work {
@@ -1159,13 +1171,17 @@ impl Multigrid {
             opts: *opts,
             levels,
             transfers,
+            coarse_asm,
+            coarse_vals,
             state: Mutex::new(State { work, coarse, cbuf }),
             setup_s: t0.elapsed().as_secs_f64(),
         })
     }
 
     /// Recomputes all level operators for new coefficients on the same grid
-    /// (same dimensions), reusing all memory; the coarsest factorisation is
+    /// (same dimensions and boundary kinds), reusing all memory (no
+    /// allocation unless the coefficients disconnect the grid, see
+    /// [`CellStencil::check_nonsingular`]); the coarsest factorisation is
     /// refactorised numerically only.
     pub fn refresh(&mut self, stencil: &CellStencil) -> Result<()> {
         let t0 = Instant::now();
@@ -1174,6 +1190,15 @@ impl Multigrid {
                 "grid dims {:?} differ from the hierarchy's {:?}",
                 stencil.dims(),
                 self.levels[0].n
+            )));
+        }
+        let fine = &self.levels[0];
+        let periodic: [bool; 3] =
+            std::array::from_fn(|a| a < fine.ndim() && stencil.is_periodic(a) && fine.n[a] >= 2);
+        if periodic != fine.periodic {
+            return Err(SolverError::invalid(format!(
+                "periodic axes {periodic:?} differ from the hierarchy's {:?}",
+                fine.periodic
             )));
         }
         stencil.check_nonsingular()?;
@@ -1185,10 +1210,15 @@ impl Multigrid {
             c[0].compute_diag()?;
         }
         let last = self.levels.last().expect("levels");
-        let m = last.matrix()?;
-        self.lock()
+        last.triplet_values(&mut self.coarse_vals);
+        let m = self.coarse_asm.assemble(&self.coarse_vals)?;
+        let state = match self.state.get_mut() {
+            Ok(s) => s,
+            Err(p) => p.into_inner(),
+        };
+        state
             .coarse
-            .refactor(&m)
+            .refactor(m)
             .map_err(|e| coarse_error(last, e))?;
         self.setup_s = t0.elapsed().as_secs_f64();
         Ok(())

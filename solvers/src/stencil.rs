@@ -438,28 +438,9 @@ impl CellStencil {
         self.validate()?;
         let n = self.num_cells();
         let [nx, ny, nz] = self.dims;
-        // Anchored cells: diag_extra > 0 or a Dirichlet face with c > 0.
-        let mut anchored: Vec<bool> = self.diag_extra.iter().map(|&d| d > 0.0).collect();
-        for a in 0..self.ndim {
-            let na = self.dims[a];
-            for k in 0..nz {
-                for j in 0..ny {
-                    for i in 0..nx {
-                        let c = [i, j, k];
-                        if c[a] != 0 && c[a] + 1 != na {
-                            continue;
-                        }
-                        for side in 0..2 {
-                            let on = if side == 0 { c[a] == 0 } else { c[a] + 1 == na };
-                            if on && self.boundary_coeff(a, side, c) > 0.0 {
-                                anchored[self.cell_index(c)] = true;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        // Fast path: every interior face has c > 0, so the grid is connected.
+        // Fast path (no allocation, as every step's multigrid refresh calls
+        // this): every interior face has c > 0, so the grid is connected and
+        // one anchor anywhere suffices.
         let all_connected = (0..self.ndim).all(|a| {
             let na = self.dims[a];
             self.interior_faces(a)
@@ -468,7 +449,11 @@ impl CellStencil {
         });
         let periodic_axes = (0..self.ndim).filter(|&a| self.periodic[a]).count();
         if all_connected {
-            if anchored.iter().any(|&x| x) {
+            let mut any = self.diag_extra.iter().any(|&d| d > 0.0);
+            if !any {
+                self.for_each_boundary_anchor(|_| any = true);
+            }
+            if any {
                 return Ok(());
             }
             return Err(SolverError::Singular {
@@ -477,6 +462,9 @@ impl CellStencil {
                 ),
             });
         }
+        // Anchored cells: diag_extra > 0 or a Dirichlet face with c > 0.
+        let mut anchored: Vec<bool> = self.diag_extra.iter().map(|&d| d > 0.0).collect();
+        self.for_each_boundary_anchor(|p| anchored[p] = true);
         // General case: union-find over faces with c > 0.
         let mut parent: Vec<usize> = (0..n).collect();
         fn find(parent: &mut [usize], mut x: usize) -> usize {
@@ -517,6 +505,28 @@ impl CellStencil {
             }
         }
         Ok(())
+    }
+
+    /// Calls `f(cell)` for every cell with a Dirichlet face with `c > 0`.
+    fn for_each_boundary_anchor(&self, mut f: impl FnMut(usize)) {
+        let [nx, ny, nz] = self.dims;
+        for a in 0..self.ndim {
+            let na = self.dims[a];
+            let ext = |b: usize| if b == a { 1 } else { [nx, ny, nz][b] };
+            for side in 0..2 {
+                for k in 0..ext(2) {
+                    for j in 0..ext(1) {
+                        for i in 0..ext(0) {
+                            let mut c = [i, j, k];
+                            c[a] = if side == 0 { 0 } else { na - 1 };
+                            if self.boundary_coeff(a, side, c) > 0.0 {
+                                f(self.cell_index(c));
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Iterator over the interior faces of `axis`: (face index, low cell,

@@ -534,4 +534,11 @@ fn periodic_refresh_matches_new() {
     mg.apply(&r, &mut z1);
     fresh.apply(&r, &mut z2);
     assert!(rel_diff(&z1, &z2) < 1e-13);
+    // Other boundary kinds than the hierarchy's are an error.
+    let s3 = from_field(d, &inclusion_field(d, 1e3), BoundaryKind::Neumann, 1e-4);
+    let err = mg.refresh(&s3).unwrap_err();
+    assert!(
+        matches!(err, SolverError::InvalidInput { ref detail } if detail.contains("periodic")),
+        "{err}"
+    );
 }

@@ -15,7 +15,7 @@ use super::boundary::{fill_scalar, fill_vector, zero_wall_faces, Boundaries, Ice
 use super::equilibration::{equilibrate_cell, min_pressure, EquilibrationSettings};
 use super::exchange::{exchange_heat, exchange_momentum_fixed, ExchangeCoefficients};
 use super::faces::{face_exchange, face_pressure, face_velocities};
-use super::implicit::{LinearSolver, SemiImplicit};
+use super::implicit::{pressure_mg_options, LinearSolver, SemiImplicit};
 use super::par::{max_rows, par_face_rows, par_rows, try_rows, Out};
 use super::state::{CellLayout, IceState};
 use super::{invalid, IceError, Site, MAX_MATERIALS};
@@ -255,7 +255,7 @@ impl<const D: usize> IceParams<D> {
             // Multigrid's red–black smoother needs an even number of cells
             // along a periodic direction, unless the whole grid is its
             // directly solved coarsest level.
-            let coarse_max = solvers::MgOptions::default().coarse_max_cells;
+            let coarse_max = pressure_mg_options().coarse_max_cells;
             let cells = state.layout.cells;
             if sp.linear_solver == LinearSolver::PcgMultigrid
                 && cells.iter().product::<usize>() > coarse_max

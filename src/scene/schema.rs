@@ -1013,9 +1013,9 @@ impl Scene {
         }
         // Multigrid's red–black smoother needs an even number of cells along
         // a periodic axis (unless the whole grid is its directly solved
-        // coarsest level, `solvers::MgOptions::coarse_max_cells`).
+        // coarsest level, `ice::pressure_mg_options`).
         let total: usize = self.grid.cells.iter().product();
-        let coarse_max = solvers::MgOptions::default().coarse_max_cells;
+        let coarse_max = crate::ice::pressure_mg_options().coarse_max_cells;
         if ps.solver == PressureSolverKind::PcgMultigrid && total > coarse_max {
             let faces = self.grid.boundary.faces();
             for (d, (f, &n)) in faces.iter().zip(&self.grid.cells).enumerate() {
