@@ -5,6 +5,23 @@
 //! (semi-implicit modes use the convective predictor β = 1 unless
 //! `BETA=0`; `T_END` overrides the end time). Prints one line per N:
 //! `N error median_wall median_cpu steps linear_per_step walls...`.
+//!
+//! Measured 2026-11-21 on the shared 2-core machine (load 7.8–8.5; three
+//! interleaved rounds of one run each, medians; 256² at load ~5–8, the
+//! explicit 256² run once), speed-up = explicit time interpolated log-log
+//! at the same RMS velocity error / semi-implicit time:
+//!
+//! | mode (β = 1) | N | error | wall [s] | CPU [s] | speed-up wall / CPU |
+//! |---|---:|---:|---:|---:|---:|
+//! | explicit CFL 1 | 64 | 1.436e-3 | 4.22 | 2.83 | — |
+//! | explicit CFL 1 | 128 | 4.317e-4 | 31.9 | 20.9 | — |
+//! | explicit CFL 1 | 256 | 1.283e-4 | 158 | 154 | — |
+//! | pcg_multigrid CFL 50 | 64 | 1.886e-3 | 0.145 | 0.140 | 18.3x / 13.7x |
+//! | pcg_multigrid CFL 50 | 128 | 8.532e-4 | 1.35 | 0.96 | 7.5x / 7.0x |
+//! | pcg_multigrid CFL 50 | 256 | 4.111e-4 | 14.9 | 7.65 | 2.3x / 3.0x |
+//! | pcg_multigrid CFL 20 | 128 | 5.066e-4 | 3.92 | 2.22 | 6.2x / 7.2x |
+//! | pcg_multigrid CFL 20 | 256 | 1.989e-4 | 21.8 | 18.9 | 4.1x / 4.0x |
+//! | direct CFL 50 | 128 | 8.532e-4 | 3.52 | 1.92 | 2.9x / 3.5x |
 use mpmice::ice::{
     periodic_vortex, periodic_vortex_exact, run_fluid, IceBoundary, IceMaterial, IceParams,
     LinearSolver, SemiImplicit,
