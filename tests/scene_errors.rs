@@ -269,6 +269,25 @@ fn fluid_edit(from: &str, to: &str) -> String {
     FLUID.replacen(from, to, 1)
 }
 
+/// Periodic faces with the multigrid pressure solver are accepted on an
+/// even grid and on an odd one small enough to be the multigrid's directly
+/// solved coarsest level (the odd large grid is in the error table).
+#[test]
+fn periodic_pcg_multigrid_is_accepted() {
+    for cells in [2048, 127] {
+        let s = fluid_edit(
+            "cells = [50]\nboundary = { x_lower = \"fixed\", x_upper = \"fixed\" }",
+            &format!(
+                "cells = [{cells}]\nboundary = {{ x_lower = \"periodic\", x_upper = \"periodic\" }}\n\n\
+                 [fluid.pressure]\nsolver = \"pcg_multigrid\""
+            ),
+        );
+        if let Err(e) = mpmice::scene::parse(&s) {
+            panic!("{cells} cells: {e}");
+        }
+    }
+}
+
 #[test]
 fn the_fluid_scene_is_accepted_and_runs() {
     let s = mpmice::scene::parse(FLUID).expect("valid");
@@ -362,6 +381,15 @@ fn bad_fluid_input_names_its_key() {
             ),
             "fluid.pressure.solver",
             "pcg_multigrid",
+        ),
+        (
+            fluid_edit(
+                "cells = [50]\nboundary = { x_lower = \"fixed\", x_upper = \"fixed\" }",
+                "cells = [129]\nboundary = { x_lower = \"periodic\", x_upper = \"periodic\" }\n\n\
+                 [fluid.pressure]\nsolver = \"pcg_multigrid\"",
+            ),
+            "fluid.pressure.solver",
+            "even number of cells",
         ),
         (
             fluid_edit(

@@ -5,7 +5,9 @@
 //!
 //! Default sizes are kept small so that `cargo bench -p solvers` finishes in
 //! a few minutes; set `SOLVERS_BENCH_LARGE=1` to add 1024² and 96³ for the
-//! multigrid paths. The full scaling table (all sizes and methods, slopes,
+//! multigrid paths. The `pcg_multigrid_periodic` group repeats the
+//! multigrid rows with all boundaries periodic (256²: setup, refresh,
+//! solve; 1024²: setup + solve). The full scaling table (all sizes and methods, slopes,
 //! crossover) is printed by `cargo run --release -p solvers --example
 //! scaling`.
 
@@ -115,6 +117,47 @@ fn benches(c: &mut Criterion) {
             bch.iter(|| {
                 mg.apply(&b, &mut z);
                 black_box(z[0])
+            })
+        });
+    }
+    g.finish();
+
+    // Periodic boundaries (all axes), the same 1e3 inclusion: the
+    // pressure operator of the periodic ICE vortex. Setup, `refresh` (what
+    // the ICE step does when only the values change) and solve at 256²;
+    // setup + solve together at 1024² (one row, to keep the bench short).
+    let mut g = c.benchmark_group("pcg_multigrid_periodic");
+    g.sample_size(10).measurement_time(Duration::from_secs(3));
+    for d in [[256, 256, 1], [1024, 1024, 1]] {
+        let st = from_field(d, &inclusion_field(d, 1e3), BoundaryKind::Periodic, 1e-6);
+        let b = zero_mean_rhs(st.num_cells(), 42);
+        let o = MgOptions::default();
+        let mut ws = KrylovWorkspace::with_dim(b.len());
+        let mut x = vec![0.0; b.len()];
+        if d[0] >= 1024 {
+            g.bench_function(format!("setup+solve/{}", label(d)), |bch| {
+                bch.iter(|| {
+                    let mg = Multigrid::new(&st, &o).unwrap();
+                    x.fill(0.0);
+                    black_box(pcg(&st, &mg, &b, &mut x, &TOL, &mut ws).unwrap())
+                })
+            });
+            continue;
+        }
+        g.bench_function(format!("setup/{}", label(d)), |bch| {
+            bch.iter(|| black_box(Multigrid::new(&st, &o).unwrap()))
+        });
+        let mut mg = Multigrid::new(&st, &o).unwrap();
+        g.bench_function(format!("refresh/{}", label(d)), |bch| {
+            bch.iter(|| {
+                mg.refresh(&st).unwrap();
+                black_box(mg.setup_s())
+            })
+        });
+        g.bench_function(format!("solve/{}", label(d)), |bch| {
+            bch.iter(|| {
+                x.fill(0.0);
+                black_box(pcg(&st, &mg, &b, &mut x, &TOL, &mut ws).unwrap())
             })
         });
     }

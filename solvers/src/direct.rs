@@ -122,14 +122,20 @@ impl CscCopy {
 
     fn diagonal(&self) -> Vec<f64> {
         let mut d = vec![0.0; self.n];
+        self.diagonal_into(&mut d);
+        d
+    }
+
+    /// The diagonal into `d` (length `n`), without allocation.
+    fn diagonal_into(&self, d: &mut [f64]) {
         for (j, dj) in d.iter_mut().enumerate() {
+            *dj = 0.0;
             for k in self.col_ptr[j]..self.col_ptr[j + 1] {
                 if self.row_idx[k] == j {
                     *dj += self.vals[k];
                 }
             }
         }
-        d
     }
 }
 
@@ -214,8 +220,7 @@ impl Cholesky {
     pub fn refactor(&mut self, a: &SparseColMat<usize, f64>) -> Result<()> {
         let t0 = Instant::now();
         self.a.update(a)?;
-        let d = self.a.diagonal();
-        self.a_diag.copy_from_slice(&d);
+        self.a.diagonal_into(&mut self.a_diag);
         self.factor_numeric()?;
         self.setup_s = t0.elapsed().as_secs_f64();
         Ok(())

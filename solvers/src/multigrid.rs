@@ -36,13 +36,49 @@
 //! All-Neumann problems are accepted when some `diag_extra > 0`; a component
 //! without `diag_extra` and without Dirichlet face is rejected at setup with
 //! [`SolverError::Singular`].
+//!
+//! # Periodic axes
+//!
+//! A periodic axis of the [`CellStencil`] stays periodic on every coarse
+//! level (until it is one cell wide, where the wrap face links a cell to
+//! itself and drops out). The padded arrays' ghost layers hold copies of
+//! the opposite side along periodic axes (zeros along the others): they are
+//! refreshed before each red–black half-sweep reads them, before every
+//! residual and before the prolongation reads the coarse correction, and
+//! the restriction folds what it scatters into ghosts back onto the cells
+//! they copy (the transpose of the ghost fill), so the cycle stays
+//! symmetric. The coarse wrap face uses the same series/parallel rule as an
+//! interior face. The sweep fused along the outermost axis (rows in 2D,
+//! planes in 3D) would let the second colour of the first row read the
+//! first colour of the last row before it is updated, so along a periodic
+//! outermost axis the last row's (plane's) first colour is updated before
+//! the fused loop (see `rb_sweep`): the order stays exactly red–black.
+//!
+//! Red–black ordering needs an **even** number of cells along a periodic
+//! axis: with an odd count, cells `0` and `n − 1` have the same colour but
+//! are neighbours, so a half-sweep is no longer a set of independent
+//! updates, its result depends on the order inside the colour, and the
+//! post-smoother is no longer the adjoint of the pre-smoother (the
+//! preconditioner would not be symmetric and CG could fail). Therefore:
+//! a finest level with an odd periodic axis is rejected by
+//! [`Multigrid::new`] with [`SolverError::InvalidInput`] unless it is small
+//! enough to be the coarsest level ([`MgOptions::coarse_max_cells`]);
+//! coarsening stops at the first level with an odd periodic axis, which is
+//! then solved directly (e.g. 2D 96² stops at 24² as usual, 2D 150² would
+//! stop at 75² — correct, but a larger coarse factorisation).
+//!
+//! An all-periodic operator is singular without `diag_extra` (rejected at
+//! setup, [`SolverError::Singular`]); with a small positive `diag_extra` it
+//! is SPD but nearly singular, and the coarsest level (whose `diag_extra`
+//! is the sum of the fine values, so it is relatively better conditioned
+//! than the fine level) is factorised by Cholesky without a pivot
+//! threshold. Should round-off make that factorisation fail, setup reports
+//! [`SolverError::Singular`] naming the coarsest level.
 
 use std::sync::{Mutex, MutexGuard};
 use std::time::Instant;
 
-use faer::sparse::SparseColMat;
-
-use crate::assembly::SparsityPattern;
+use crate::assembly::Assembler;
 use crate::direct::Cholesky;
 use crate::error::{check_len, is_pos, Result, SolveReport, SolverError};
 use crate::krylov::KrylovOptions;
@@ -117,6 +153,9 @@ impl Default for MgOptions {
 struct Level {
     n: [usize; 3],
     d3: bool,
+    /// Axis that wraps (periodic with at least two cells): its ghosts are
+    /// copies of the opposite side.
+    periodic: [bool; 3],
     sy: usize,
     sz: usize,
     len: usize,
@@ -130,13 +169,16 @@ struct Level {
 }
 
 impl Level {
-    fn new(n: [usize; 3], d3: bool) -> Self {
+    fn new(n: [usize; 3], d3: bool, periodic: [bool; 3]) -> Self {
         let sy = n[0] + 2;
         let sz = if d3 { sy * (n[1] + 2) } else { 0 };
         let len = sy * (n[1] + 2) * if d3 { n[2] + 2 } else { 1 };
+        let axes = if d3 { 3 } else { 2 };
+        let periodic = std::array::from_fn(|a| a < axes && periodic[a] && n[a] >= 2);
         Self {
             n,
             d3,
+            periodic,
             sy,
             sz,
             len,
@@ -173,6 +215,12 @@ impl Level {
         self.n[0] * self.n[1] * self.n[2]
     }
 
+    /// First periodic axis with an odd number of cells (red–black colouring
+    /// inconsistent across the wrap), if any.
+    fn odd_periodic_axis(&self) -> Option<usize> {
+        (0..self.ndim()).find(|&a| self.periodic[a] && self.n[a] % 2 == 1)
+    }
+
     fn compute_diag(&mut self) -> Result<()> {
         let [nx, ny, nz] = self.n;
         for k in 0..nz {
@@ -207,14 +255,21 @@ impl Level {
                     let p = self.pidx(i, j, k);
                     self.extra[p] = s.diag_extra()[s.cell_index(c)];
                     for a in 0..self.ndim() {
-                        self.a[a][p] = if c[a] == 0 {
+                        let own = s.face_coeffs(a)[s.face_index(a, c)];
+                        self.a[a][p] = if c[a] == 0 && !self.periodic[a] {
                             s.boundary_coeff(a, 0, c)
                         } else {
-                            s.face_coeffs(a)[s.face_index(a, c)]
+                            own
                         };
                         if c[a] + 1 == self.n[a] {
                             let st = self.stride(a);
-                            self.a[a][p + st] = s.boundary_coeff(a, 1, c);
+                            self.a[a][p + st] = if self.periodic[a] {
+                                let mut f0 = c;
+                                f0[a] = 0;
+                                s.face_coeffs(a)[s.face_index(a, f0)]
+                            } else {
+                                s.boundary_coeff(a, 1, c)
+                            };
                         }
                     }
                 }
@@ -222,44 +277,62 @@ impl Level {
         }
     }
 
-    /// Matrix of this level in natural (unpadded) ordering.
-    fn matrix(&self) -> Result<SparseColMat<usize, f64>> {
+    /// Calls `emit(row, col, value)` for the triplets of this level's
+    /// matrix in natural (unpadded) ordering, in a fixed order that depends
+    /// only on the dimensions and periodic axes.
+    fn for_each_triplet(&self, mut emit: impl FnMut(usize, usize, f64)) {
         let [nx, ny, nz] = self.n;
         let idx = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
-        let mut rows = Vec::new();
-        let mut cols = Vec::new();
-        let mut vals = Vec::new();
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
                     let c = [i, j, k];
                     let p = self.pidx(i, j, k);
                     let me = idx(i, j, k);
-                    rows.push(me);
-                    cols.push(me);
-                    vals.push(self.diag[p]);
+                    emit(me, me, self.diag[p]);
                     for a in 0..self.ndim() {
                         let st = self.stride(a);
-                        if c[a] > 0 {
+                        // Periodic: the wrap neighbour (with two cells both
+                        // neighbours coincide; duplicates are summed).
+                        if c[a] > 0 || self.periodic[a] {
                             let mut nb = c;
-                            nb[a] -= 1;
-                            rows.push(me);
-                            cols.push(idx(nb[0], nb[1], nb[2]));
-                            vals.push(-self.a[a][p]);
+                            nb[a] = if c[a] > 0 { c[a] - 1 } else { self.n[a] - 1 };
+                            emit(me, idx(nb[0], nb[1], nb[2]), -self.a[a][p]);
                         }
-                        if c[a] + 1 < self.n[a] {
+                        if c[a] + 1 < self.n[a] || self.periodic[a] {
                             let mut nb = c;
-                            nb[a] += 1;
-                            rows.push(me);
-                            cols.push(idx(nb[0], nb[1], nb[2]));
-                            vals.push(-self.a[a][p + st]);
+                            nb[a] = if c[a] + 1 < self.n[a] { c[a] + 1 } else { 0 };
+                            emit(me, idx(nb[0], nb[1], nb[2]), -self.a[a][p + st]);
                         }
                     }
                 }
             }
         }
+    }
+
+    /// Assembler of this level's matrix (pattern analysed once) with the
+    /// current values.
+    fn assembler(&self) -> Result<(Assembler, Vec<f64>)> {
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        self.for_each_triplet(|r, c, v| {
+            rows.push(r);
+            cols.push(c);
+            vals.push(v);
+        });
         let n = self.cells();
-        SparsityPattern::new(n, n, &rows, &cols)?.build(&vals)
+        let mut asm = Assembler::new(n, n, &rows, &cols)?;
+        asm.assemble(&vals)?;
+        Ok((asm, vals))
+    }
+
+    /// Current triplet values (order of [`Level::for_each_triplet`]) into
+    /// `out`, without allocation.
+    fn triplet_values(&self, out: &mut [f64]) {
+        let mut t = 0;
+        self.for_each_triplet(|_, _, v| {
+            out[t] = v;
+            t += 1;
+        });
     }
 }
 
@@ -301,6 +374,10 @@ pub struct Multigrid {
     opts: MgOptions,
     levels: Vec<Level>,
     transfers: Vec<Transfer>,
+    /// Matrix of the coarsest level, refreshed in place by `refresh`.
+    coarse_asm: Assembler,
+    /// Triplet values of the coarsest level.
+    coarse_vals: Vec<f64>,
     state: Mutex<State>,
     setup_s: f64,
 }
@@ -422,6 +499,10 @@ fn coarsen_level(fine: &Level, coarse: &mut Level, tr: &mut Transfer) {
         let s = fine.stride(a);
         let af = &fine.a[a];
         let wide = |ci: usize| nf - 2 * ci >= 2;
+        if fine.periodic[a] && co[a] {
+            coarsen_periodic_axis(fine, coarse, tr, a);
+            continue;
+        }
         if !co[a] {
             // Axis not coarsened: faces map one to one (summed transversally).
             let ext = |b: usize| usize::from(a == b);
@@ -492,6 +573,160 @@ fn coarsen_level(fine: &Level, coarse: &mut Level, tr: &mut Transfer) {
     }
 }
 
+/// Coarse coefficients and interpolation weights along a periodic axis `a`
+/// with an even number `nf` of fine cells (see [`coarsen_level`]): every
+/// coarse cell is made of two fine cells, and the coarse face 0 is the wrap
+/// face between coarse cells `nc − 1` and `0` (its fine crossing face is
+/// the fine wrap face; `ρ_left` comes from coarse cell `nc − 1`). The
+/// coarse high-side wrap position gets the same value. With `nc = 1` the
+/// coarse wrap face would link the cell to itself: no coarse coefficient,
+/// and piecewise-constant interpolation.
+fn coarsen_periodic_axis(fine: &Level, coarse: &mut Level, tr: &mut Transfer, a: usize) {
+    let [nx, ny, nz] = fine.n;
+    let nf = fine.n[a];
+    let s = fine.stride(a);
+    let af = &fine.a[a];
+    let wa = &mut tr.w[a];
+    debug_assert!(nf.is_multiple_of(2));
+    if !coarse.periodic[a] {
+        wa.fill(0.0);
+        return;
+    }
+    let co = tr.coarsen;
+    let cmap = |c: usize, b: usize| if co[b] { c / 2 } else { c };
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let c = [i, j, k];
+                let m = c[a];
+                if m % 2 == 1 {
+                    continue;
+                }
+                let p = fine.pidx(i, j, k);
+                // Fine cell right of coarse face F = m / 2; its left
+                // neighbour across that face (wrapping for F = 0).
+                let f = m / 2;
+                let left = if f > 0 { p - s } else { p + (nf - 1) * s };
+                let rho_r = 0.5 * resist(af[p + s]);
+                let rho_l = 0.5 * resist(af[left]);
+                let cross = resist(af[p]);
+                let total = rho_l + cross + rho_r;
+                let mut cc = [cmap(i, 0), cmap(j, 1), cmap(k, 2)];
+                cc[a] = f;
+                let q = coarse.pidx(cc[0], cc[1], cc[2]);
+                if total.is_finite() {
+                    coarse.a[a][q] += 1.0 / total;
+                }
+                wa[p] = share(rho_r, rho_l + cross);
+                wa[left] = share(rho_l, cross + rho_r);
+            }
+        }
+    }
+    // High-side wrap positions repeat the coarse face 0.
+    let [cx, cy, cz] = coarse.n;
+    let cs = coarse.stride(a);
+    let ncl = coarse.n[a];
+    for k in 0..cz {
+        for j in 0..cy {
+            for i in 0..cx {
+                let c = [i, j, k];
+                if c[a] == 0 {
+                    let q = coarse.pidx(i, j, k);
+                    coarse.a[a][q + ncl * cs] = coarse.a[a][q];
+                }
+            }
+        }
+    }
+}
+
+/// Copies, along every periodic axis, the cells next to one side into the
+/// ghost layer beyond the other, axis by axis over the full padded extent of
+/// the previous axes (so edge and corner ghosts are right too).
+fn fill_ghosts(lv: &Level, u: &mut [f64]) {
+    let [nx, ny, nz] = lv.n;
+    if lv.periodic[0] {
+        for k in 0..nz {
+            for j in 0..ny {
+                let p0 = lv.pidx(0, j, k);
+                u[p0 - 1] = u[p0 + nx - 1];
+                u[p0 + nx] = u[p0];
+            }
+        }
+    }
+    if lv.periodic[1] {
+        for k in 0..nz {
+            fill_ghost_rows(lv, u, k);
+        }
+    }
+    if lv.d3 && lv.periodic[2] {
+        fill_ghost_planes(lv, u);
+    }
+}
+
+/// Periodic y ghost rows of plane `k` (whole padded rows).
+#[inline]
+fn fill_ghost_rows(lv: &Level, u: &mut [f64], k: usize) {
+    let (sy, ny) = (lv.sy, lv.n[1]);
+    let base = (k + 1) * lv.sz;
+    let ghost_lo = base;
+    let first = base + sy;
+    let last = base + ny * sy;
+    let ghost_hi = base + (ny + 1) * sy;
+    u.copy_within(last..last + sy, ghost_lo);
+    u.copy_within(first..first + sy, ghost_hi);
+}
+
+/// Periodic z ghost planes (whole padded planes).
+#[inline]
+fn fill_ghost_planes(lv: &Level, u: &mut [f64]) {
+    let (sz, nz) = (lv.sz, lv.n[2]);
+    u.copy_within(nz * sz..(nz + 1) * sz, 0);
+    u.copy_within(sz..2 * sz, (nz + 1) * sz);
+}
+
+/// Transpose of [`fill_ghosts`]: adds what was scattered into the ghost
+/// layers of periodic axes onto the cells they copy (in the reverse axis
+/// order) and clears those ghosts.
+fn fold_ghosts(lv: &Level, v: &mut [f64]) {
+    let [nx, ny, nz] = lv.n;
+    let (sy, sz) = (lv.sy, lv.sz);
+    if lv.d3 && lv.periodic[2] {
+        for t in 0..sz {
+            let lo = v[t];
+            let hi = v[(nz + 1) * sz + t];
+            v[nz * sz + t] += lo;
+            v[sz + t] += hi;
+            v[t] = 0.0;
+            v[(nz + 1) * sz + t] = 0.0;
+        }
+    }
+    if lv.periodic[1] {
+        for k in 0..nz {
+            let base = (k + 1) * sz;
+            for t in 0..sy {
+                let lo = v[base + t];
+                let hi = v[base + (ny + 1) * sy + t];
+                v[base + ny * sy + t] += lo;
+                v[base + sy + t] += hi;
+                v[base + t] = 0.0;
+                v[base + (ny + 1) * sy + t] = 0.0;
+            }
+        }
+    }
+    if lv.periodic[0] {
+        for k in 0..nz {
+            for j in 0..ny {
+                let p0 = lv.pidx(0, j, k);
+                let (lo, hi) = (v[p0 - 1], v[p0 + nx]);
+                v[p0 + nx - 1] += lo;
+                v[p0] += hi;
+                v[p0 - 1] = 0.0;
+                v[p0 + nx] = 0.0;
+            }
+        }
+    }
+}
+
 /// Disjoint views of the padded array `u` around interior row `(j, k)`:
 /// the current row including its two ghost ends (mutable), and the rows
 /// south (j-1), north (j+1), bottom (k-1) and top (k+1) (`nx` entries each;
@@ -538,6 +773,12 @@ fn gs_row<const D3: bool>(
     let p0 = lv.pidx(0, j, k);
     let (sy, sz) = (lv.sy, lv.sz);
     let (cur, south, north, bottom, top) = row_views(lv, u, p0);
+    if lv.periodic[0] {
+        // The colour being updated reads only the other colour, whose
+        // values at the row ends are current.
+        cur[0] = cur[nx];
+        cur[nx + 1] = cur[1];
+    }
     let ax = &lv.a[0][p0..p0 + nx + 1];
     let ays = &lv.a[1][p0..p0 + nx];
     let ayn = &lv.a[1][p0 + sy..p0 + sy + nx];
@@ -580,10 +821,58 @@ fn zero_row(lv: &Level, u: &mut [f64], f: &[f64], j: usize, k: usize, color: usi
     }
 }
 
+/// One colour pass over "unit" `t` of the outermost axis (row `t` in 2D,
+/// plane `t` in 3D, whose periodic y ghost rows are refreshed first).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn colour_pass<const D3: bool>(
+    lv: &Level,
+    u: &mut [f64],
+    f: &[f64],
+    t: usize,
+    color: usize,
+    omega: f64,
+    zero: bool,
+) {
+    if D3 {
+        if lv.periodic[1] {
+            fill_ghost_rows(lv, u, t);
+        }
+        for j in 0..lv.n[1] {
+            if zero {
+                zero_row(lv, u, f, j, t, color, omega);
+            } else {
+                gs_row::<true>(lv, u, f, j, t, color, omega);
+            }
+        }
+    } else if zero {
+        zero_row(lv, u, f, t, 0, color, omega);
+    } else {
+        gs_row::<false>(lv, u, f, t, 0, color, omega);
+    }
+}
+
+/// Periodic ghosts of the outermost axis (rows in 2D, planes in 3D).
+#[inline]
+fn fill_outer_ghosts<const D3: bool>(lv: &Level, u: &mut [f64]) {
+    if D3 {
+        fill_ghost_planes(lv, u);
+    } else {
+        fill_ghost_rows(lv, u, 0);
+    }
+}
+
 /// One red–black sweep (`first` colour, then the other), fused so that the
 /// second colour trails the first by one row (2D) or one plane (3D); this is
 /// exactly equivalent to two full half-sweeps but reads the data once. With
 /// `from_zero` the previous content of `u` is ignored (taken as 0).
+///
+/// Along a periodic outermost axis (`m` rows/planes) the second colour of
+/// unit 0 needs the *updated* first colour of unit `m − 1`, so that unit's
+/// first colour is done before the loop (it reads only the second colour of
+/// units `m − 2` and 0, not yet updated); the ghost units are refreshed
+/// around it and before the last unit's second colour. The order is still
+/// exactly red–black.
 fn rb_sweep<const D3: bool>(
     lv: &Level,
     u: &mut [f64],
@@ -592,37 +881,23 @@ fn rb_sweep<const D3: bool>(
     omega: f64,
     from_zero: bool,
 ) {
-    let [_, ny, nz] = lv.n;
     let second = 1 - first;
-    if D3 {
-        for k in 0..=nz {
-            if k < nz {
-                for j in 0..ny {
-                    if from_zero {
-                        zero_row(lv, u, f, j, k, first, omega);
-                    } else {
-                        gs_row::<true>(lv, u, f, j, k, first, omega);
-                    }
-                }
-            }
-            if k >= 1 {
-                for j in 0..ny {
-                    gs_row::<true>(lv, u, f, j, k - 1, second, omega);
-                }
-            }
+    let m = if D3 { lv.n[2] } else { lv.n[1] };
+    let outer_periodic = lv.periodic[if D3 { 2 } else { 1 }];
+    if outer_periodic {
+        fill_outer_ghosts::<D3>(lv, u);
+        colour_pass::<D3>(lv, u, f, m - 1, first, omega, from_zero);
+        fill_outer_ghosts::<D3>(lv, u);
+    }
+    for t in 0..=m {
+        if t < m && !(outer_periodic && t == m - 1) {
+            colour_pass::<D3>(lv, u, f, t, first, omega, from_zero);
         }
-    } else {
-        for j in 0..=ny {
-            if j < ny {
-                if from_zero {
-                    zero_row(lv, u, f, j, 0, first, omega);
-                } else {
-                    gs_row::<false>(lv, u, f, j, 0, first, omega);
-                }
+        if t >= 1 {
+            if outer_periodic && t == m {
+                fill_outer_ghosts::<D3>(lv, u);
             }
-            if j >= 1 {
-                gs_row::<false>(lv, u, f, j - 1, 0, second, omega);
-            }
+            colour_pass::<D3>(lv, u, f, t - 1, second, omega, false);
         }
     }
 }
@@ -749,7 +1024,9 @@ fn restrict_row(
 }
 
 /// `fc = P^T (f - A u)`, computing the residual row by row without storing
-/// it (ghost entries of `fc` receive contributions that are never read).
+/// it (`u`'s periodic ghosts must be current; ghost entries of `fc` along
+/// non-periodic axes receive contributions that are never read, those along
+/// periodic axes are folded back).
 fn restrict_residual<const D3: bool>(
     tr: &Transfer,
     fine: &Level,
@@ -767,9 +1044,10 @@ fn restrict_residual<const D3: bool>(
             restrict_row(tr, fine, coarse, j, k, row, fc);
         }
     }
+    fold_ghosts(coarse, fc);
 }
 
-/// `u += P uc`.
+/// `u += P uc` (`uc`'s periodic ghosts must be current).
 fn prolong_add(tr: &Transfer, fine: &Level, coarse: &Level, uc: &[f64], u: &mut [f64]) {
     let [nx, ny, nz] = fine.n;
     let (sy, sz) = (coarse.sy, coarse.sz);
@@ -807,6 +1085,20 @@ fn prolong_add(tr: &Transfer, fine: &Level, coarse: &Level, uc: &[f64], u: &mut 
     }
 }
 
+/// Names the coarsest level in a failed factorisation (e.g. an all-periodic
+/// or all-Neumann operator whose tiny `diag_extra` is lost in round-off).
+fn coarse_error(lv: &Level, e: SolverError) -> SolverError {
+    match e {
+        SolverError::Singular { detail } => SolverError::Singular {
+            detail: format!(
+                "multigrid coarsest level {:?} (periodic axes {:?}) is numerically singular: {detail}",
+                lv.n, lv.periodic
+            ),
+        },
+        other => other,
+    }
+}
+
 impl Multigrid {
     /// Builds the hierarchy. Fails with [`SolverError::Singular`] if the
     /// operator is singular (see [`CellStencil::check_nonsingular`]) and
@@ -824,8 +1116,17 @@ impl Multigrid {
             )));
         }
         let d3 = stencil.ndim() == 3;
+        let periodic = std::array::from_fn(|a| stencil.is_periodic(a));
         let mut levels = Vec::new();
-        let mut fine = Level::new(stencil.dims(), d3);
+        let mut fine = Level::new(stencil.dims(), d3, periodic);
+        if let Some(a) = fine.odd_periodic_axis() {
+            if fine.cells() > opts.coarse_max_cells.max(1) && opts.max_levels > 1 {
+                return Err(SolverError::invalid(format!(
+                    "multigrid: periodic axis {a} has an odd number of cells ({}); red–black Gauss–Seidel needs an even count along a periodic axis (cells 0 and n−1 would be neighbours of the same colour); use an even grid or a direct solver",
+                    fine.n[a]
+                )));
+            }
+        }
         fine.fill_from_stencil(stencil);
         fine.compute_diag()?;
         levels.push(fine);
@@ -835,11 +1136,17 @@ impl Multigrid {
             if lv.cells() <= opts.coarse_max_cells.max(1) || levels.len() >= opts.max_levels {
                 break;
             }
+            // A level with an odd periodic axis cannot be smoothed by
+            // red–black Gauss–Seidel: it becomes the (directly solved)
+            // coarsest level.
+            if lv.odd_periodic_axis().is_some() {
+                break;
+            }
             let (nc, co) = coarse_dims(lv.n, d3);
             if !co.iter().any(|&c| c) {
                 break;
             }
-            let mut coarse = Level::new(nc, d3);
+            let mut coarse = Level::new(nc, d3, lv.periodic);
             let mut tr =
                 Transfer::new(lv, &coarse, co, opts.prolongation == Prolongation::Constant);
             coarsen_level(lv, &mut coarse, &mut tr);
@@ -848,7 +1155,9 @@ impl Multigrid {
             levels.push(coarse);
         }
         let last = levels.last().expect("at least one level");
-        let coarse = Cholesky::with_pivot_tol(&last.matrix()?, 0.0)?;
+        let (coarse_asm, coarse_vals) = last.assembler()?;
+        let coarse = Cholesky::with_pivot_tol(coarse_asm.matrix(), 0.0)
+            .map_err(|e| coarse_error(last, e))?;
         let work = levels
             .iter()
             .map(|l| Work {
@@ -862,13 +1171,17 @@ impl Multigrid {
             opts: *opts,
             levels,
             transfers,
+            coarse_asm,
+            coarse_vals,
             state: Mutex::new(State { work, coarse, cbuf }),
             setup_s: t0.elapsed().as_secs_f64(),
         })
     }
 
     /// Recomputes all level operators for new coefficients on the same grid
-    /// (same dimensions), reusing all memory; the coarsest factorisation is
+    /// (same dimensions and boundary kinds), reusing all memory (no
+    /// allocation unless the coefficients disconnect the grid, see
+    /// [`CellStencil::check_nonsingular`]); the coarsest factorisation is
     /// refactorised numerically only.
     pub fn refresh(&mut self, stencil: &CellStencil) -> Result<()> {
         let t0 = Instant::now();
@@ -879,6 +1192,15 @@ impl Multigrid {
                 self.levels[0].n
             )));
         }
+        let fine = &self.levels[0];
+        let periodic: [bool; 3] =
+            std::array::from_fn(|a| a < fine.ndim() && stencil.is_periodic(a) && fine.n[a] >= 2);
+        if periodic != fine.periodic {
+            return Err(SolverError::invalid(format!(
+                "periodic axes {periodic:?} differ from the hierarchy's {:?}",
+                fine.periodic
+            )));
+        }
         stencil.check_nonsingular()?;
         self.levels[0].fill_from_stencil(stencil);
         self.levels[0].compute_diag()?;
@@ -887,8 +1209,17 @@ impl Multigrid {
             coarsen_level(&f[l], &mut c[0], &mut self.transfers[l]);
             c[0].compute_diag()?;
         }
-        let m = self.levels.last().expect("levels").matrix()?;
-        self.lock().coarse.refactor(&m)?;
+        let last = self.levels.last().expect("levels");
+        last.triplet_values(&mut self.coarse_vals);
+        let m = self.coarse_asm.assemble(&self.coarse_vals)?;
+        let state = match self.state.get_mut() {
+            Ok(s) => s,
+            Err(p) => p.into_inner(),
+        };
+        state
+            .coarse
+            .refactor(m)
+            .map_err(|e| coarse_error(last, e))?;
         self.setup_s = t0.elapsed().as_secs_f64();
         Ok(())
     }
@@ -952,6 +1283,7 @@ impl Multigrid {
     /// `||f - A u||` on level `l`.
     fn residual_norm(&self, l: usize, w: &mut Work) -> f64 {
         let lv = &self.levels[l];
+        fill_ghosts(lv, &mut w.u);
         let n2 = if lv.d3 {
             residual_norm2::<true>(lv, &w.u, &w.f, &mut w.row)
         } else {
@@ -997,6 +1329,7 @@ impl Multigrid {
             let w = &mut a[l];
             let (fine, coarse) = (&self.levels[l], &self.levels[l + 1]);
             self.smooth(l, &mut w.u, &w.f, self.opts.pre_smooth, false, zero_guess);
+            fill_ghosts(fine, &mut w.u);
             if fine.d3 {
                 restrict_residual::<true>(
                     &self.transfers[l],
@@ -1027,6 +1360,7 @@ impl Multigrid {
             self.cycle(l + 1, st, v == 0);
         }
         let (a, b) = st.work.split_at_mut(l + 1);
+        fill_ghosts(&self.levels[l + 1], &mut b[0].u);
         prolong_add(
             &self.transfers[l],
             &self.levels[l],

@@ -9,16 +9,23 @@
 //! where `j(f)` is the neighbour across face `f`. On a domain-boundary face
 //! of kind [`BoundaryKind::Neumann`] nothing is added; on a
 //! [`BoundaryKind::Dirichlet`] face the coefficient is added to the diagonal
-//! (ghost value 0). The matrix is symmetric, and positive definite when every
-//! connected component (through faces with `c > 0`) touches a Dirichlet face
-//! with `c > 0` or contains a cell with `diag_extra > 0`.
+//! (ghost value 0). An axis whose boundary faces are all
+//! [`BoundaryKind::Periodic`] (both sides; see [`CellStencil::set_periodic`])
+//! wraps around: its face at position 0, which is the same face as position
+//! `n_a`, links cell `0` and cell `n_a − 1` like an interior face. The
+//! matrix is symmetric, and positive definite when every connected component
+//! (through faces with `c > 0`, wrap faces included) touches a Dirichlet
+//! face with `c > 0` or contains a cell with `diag_extra > 0` (an
+//! all-periodic or all-Neumann operator without `diag_extra` has the
+//! constant in its null space).
 //!
 //! Indexing: cells are numbered `i + nx (j + ny k)`. Face coefficients are
 //! stored per axis, including both boundary layers: along axis `a` with
 //! `n_a` cells there are `n_a + 1` face positions, position `m` being the
 //! face between cells `m − 1` and `m` (positions `0` and `n_a` are boundary
-//! faces). See [`CellStencil::face_index`]. A grid with `nz == 1` is 2D and
-//! has no axis-2 faces.
+//! faces; on a periodic axis position 0 holds the wrap face and position
+//! `n_a` is not read). See [`CellStencil::face_index`]. A grid with
+//! `nz == 1` is 2D and has no axis-2 faces.
 
 use faer::sparse::SparseColMat;
 
@@ -35,6 +42,12 @@ pub enum BoundaryKind {
     /// Homogeneous Dirichlet (ghost value 0): the face coefficient is added
     /// to the diagonal.
     Dirichlet,
+    /// Periodic: the boundary face at the low end of the axis is the one at
+    /// the high end, linking cell `0` and cell `n_a − 1` with the coefficient
+    /// stored at face position 0. Must be set on every face of both sides
+    /// of an axis ([`CellStencil::set_periodic`]); anything else is rejected
+    /// by [`CellStencil::validate`].
+    Periodic,
 }
 
 /// Variable-coefficient cell-centred operator on a 2D or 3D structured grid
@@ -46,6 +59,8 @@ pub struct CellStencil {
     face: [Vec<f64>; 3],
     /// `bc[axis][side][t]`, `t` = transverse index (see `boundary_slot`).
     bc: [[Vec<BoundaryKind>; 2]; 3],
+    /// Axis with [`BoundaryKind::Periodic`] on every face of both sides.
+    periodic: [bool; 3],
     diag_extra: Vec<f64>,
 }
 
@@ -73,6 +88,7 @@ impl CellStencil {
             ndim,
             face,
             bc,
+            periodic: [false; 3],
             diag_extra: vec![0.0; n],
         })
     }
@@ -99,7 +115,9 @@ impl CellStencil {
     /// Face coefficients from a cell field `k` (length = number of cells):
     /// interior face `c = scale · 2 k_a k_b / (k_a + k_b)` (harmonic mean, 0 if
     /// both vanish), boundary face `c = scale · k_cell` (ghost cell with the
-    /// same value), `diag_extra` zero, all boundaries set to `boundary`.
+    /// same value; with [`BoundaryKind::Periodic`] the harmonic mean of the
+    /// two cells the wrap face links, at positions 0 and `n_a`), `diag_extra`
+    /// zero, all boundaries set to `boundary`.
     pub fn from_cell_field(
         dims: [usize; 3],
         k: &[f64],
@@ -125,7 +143,13 @@ impl CellStencil {
                         let m = f[a];
                         let mut lo = f;
                         let hi = f;
-                        let c = if m == 0 {
+                        let c = if (m == 0 || m == na) && boundary == BoundaryKind::Periodic {
+                            let mut a_lo = f;
+                            a_lo[a] = na - 1;
+                            let mut a_hi = f;
+                            a_hi[a] = 0;
+                            harm(k[s.cell_index(a_lo)], k[s.cell_index(a_hi)])
+                        } else if m == 0 {
                             k[s.cell_index(hi)]
                         } else if m == na {
                             lo[a] -= 1;
@@ -179,7 +203,8 @@ impl CellStencil {
 
     /// Face coefficients of `axis` (length `(n_axis + 1) · Π other dims`;
     /// empty for axis 2 of a 2D grid or an invalid axis). Boundary positions
-    /// are used only on Dirichlet faces.
+    /// are used only on Dirichlet faces and, on a periodic axis, position 0
+    /// (the wrap face; position `n_axis` is then not read).
     pub fn face_coeffs(&self, axis: usize) -> &[f64] {
         self.face.get(axis).map_or(&[], |v| &v[..])
     }
@@ -246,7 +271,10 @@ impl CellStencil {
     }
 
     /// Sets the kind of every face on one domain side (`side` 0 = low,
-    /// 1 = high end of `axis`).
+    /// 1 = high end of `axis`). [`BoundaryKind::Periodic`] takes effect once
+    /// both sides of the axis are periodic ([`CellStencil::set_periodic`]
+    /// does both at once); a half-periodic axis fails
+    /// [`CellStencil::validate`].
     pub fn set_boundary_side(
         &mut self,
         axis: usize,
@@ -258,11 +286,44 @@ impl CellStencil {
             return Err(SolverError::invalid("side must be 0 or 1"));
         }
         self.bc[axis][side].fill(kind);
+        self.update_periodic(axis);
         Ok(())
     }
 
+    /// Makes `axis` periodic: every boundary face of both sides becomes
+    /// [`BoundaryKind::Periodic`], and the face at position 0 links cell 0
+    /// and cell `n_axis − 1`.
+    pub fn set_periodic(&mut self, axis: usize) -> Result<()> {
+        self.set_boundary_side(axis, 0, BoundaryKind::Periodic)?;
+        self.set_boundary_side(axis, 1, BoundaryKind::Periodic)
+    }
+
+    /// Whether `axis` is periodic (every face of both sides
+    /// [`BoundaryKind::Periodic`]); `false` for a non-existent axis.
+    pub fn is_periodic(&self, axis: usize) -> bool {
+        self.periodic.get(axis).copied().unwrap_or(false)
+    }
+
+    fn update_periodic(&mut self, axis: usize) {
+        self.periodic[axis] = self.bc[axis]
+            .iter()
+            .all(|side| side.iter().all(|&k| k == BoundaryKind::Periodic));
+    }
+
+    /// Whether `axis` wraps with a real link (periodic and at least two
+    /// cells; with one cell the wrap face links the cell to itself and
+    /// contributes nothing).
+    #[inline]
+    pub(crate) fn wraps(&self, axis: usize) -> bool {
+        self.periodic[axis] && self.dims[axis] >= 2
+    }
+
     /// Sets the kind of the single boundary face of `cell` on the given
-    /// side of `axis` (the cell must touch that side).
+    /// side of `axis` (the cell must touch that side). Periodicity is a
+    /// property of a whole axis: [`BoundaryKind::Periodic`] is rejected here
+    /// (use [`CellStencil::set_periodic`]); setting another kind on a
+    /// periodic axis makes it half-periodic, which
+    /// [`CellStencil::validate`] rejects.
     pub fn set_boundary_face(
         &mut self,
         axis: usize,
@@ -271,6 +332,11 @@ impl CellStencil {
         kind: BoundaryKind,
     ) -> Result<()> {
         self.check_axis(axis)?;
+        if kind == BoundaryKind::Periodic {
+            return Err(SolverError::invalid(format!(
+                "periodic boundaries are set per axis (set_periodic({axis})), not per face"
+            )));
+        }
         let want = if side == 0 { 0 } else { self.dims[axis] - 1 };
         if side > 1 || cell[axis] != want || (0..3).any(|a| cell[a] >= self.dims[a]) {
             return Err(SolverError::invalid(format!(
@@ -279,6 +345,7 @@ impl CellStencil {
         }
         let t = self.boundary_slot(axis, cell);
         self.bc[axis][side][t] = kind;
+        self.update_periodic(axis);
         Ok(())
     }
 
@@ -304,7 +371,8 @@ impl CellStencil {
         self.bc[axis][side][self.boundary_slot(axis, cell)]
     }
 
-    /// Effective coefficient of a boundary face (0 for Neumann).
+    /// Effective coefficient of a boundary face added to the diagonal (0 for
+    /// Neumann and Periodic; the wrap link is handled by the callers).
     #[inline]
     pub(crate) fn boundary_coeff(&self, axis: usize, side: usize, cell: [usize; 3]) -> f64 {
         if self.kind_unchecked(axis, side, cell) == BoundaryKind::Dirichlet {
@@ -316,7 +384,9 @@ impl CellStencil {
         }
     }
 
-    /// Checks array lengths and that all coefficients are finite and `>= 0`.
+    /// Checks array lengths, that all coefficients are finite and `>= 0`,
+    /// and that every axis with a [`BoundaryKind::Periodic`] face is
+    /// periodic on all faces of both sides.
     pub fn validate(&self) -> Result<()> {
         fn first_bad(x: &[f64]) -> Option<(usize, f64)> {
             // Branch-free scan first (vectorisable), then locate.
@@ -334,6 +404,16 @@ impl CellStencil {
         }
         let n = self.num_cells();
         check_len(n, self.diag_extra.len())?;
+        for a in 0..self.ndim {
+            let any_periodic = self.bc[a]
+                .iter()
+                .any(|side| side.contains(&BoundaryKind::Periodic));
+            if any_periodic && !self.periodic[a] {
+                return Err(SolverError::invalid(format!(
+                    "axis {a} is periodic on some boundary faces only; periodic must be set on every face of both sides (set_periodic({a}))"
+                )));
+            }
+        }
         for a in 0..self.ndim {
             check_len(n / self.dims[a] * (self.dims[a] + 1), self.face[a].len())?;
             if let Some((i, c)) = first_bad(&self.face[a]) {
@@ -358,44 +438,33 @@ impl CellStencil {
         self.validate()?;
         let n = self.num_cells();
         let [nx, ny, nz] = self.dims;
-        // Anchored cells: diag_extra > 0 or a Dirichlet face with c > 0.
-        let mut anchored: Vec<bool> = self.diag_extra.iter().map(|&d| d > 0.0).collect();
-        for a in 0..self.ndim {
-            let na = self.dims[a];
-            for k in 0..nz {
-                for j in 0..ny {
-                    for i in 0..nx {
-                        let c = [i, j, k];
-                        if c[a] != 0 && c[a] + 1 != na {
-                            continue;
-                        }
-                        for side in 0..2 {
-                            let on = if side == 0 { c[a] == 0 } else { c[a] + 1 == na };
-                            if on && self.boundary_coeff(a, side, c) > 0.0 {
-                                anchored[self.cell_index(c)] = true;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        // Fast path: every interior face has c > 0, so the grid is connected.
+        // Fast path (no allocation, as every step's multigrid refresh calls
+        // this): every interior face has c > 0, so the grid is connected and
+        // one anchor anywhere suffices.
         let all_connected = (0..self.ndim).all(|a| {
             let na = self.dims[a];
             self.interior_faces(a)
                 .all(|(f, _, _)| self.face[a][f] > 0.0)
                 || na == 1
         });
+        let periodic_axes = (0..self.ndim).filter(|&a| self.periodic[a]).count();
         if all_connected {
-            if anchored.iter().any(|&x| x) {
+            let mut any = self.diag_extra.iter().any(|&d| d > 0.0);
+            if !any {
+                self.for_each_boundary_anchor(|_| any = true);
+            }
+            if any {
                 return Ok(());
             }
             return Err(SolverError::Singular {
                 detail: format!(
-                    "the {nx}x{ny}x{nz} grid has no Dirichlet face with c > 0 and no diag_extra > 0 (constant mode in the null space)"
+                    "the {nx}x{ny}x{nz} grid ({periodic_axes} periodic axes) has no Dirichlet face with c > 0 and no diag_extra > 0 (constant mode in the null space)"
                 ),
             });
         }
+        // Anchored cells: diag_extra > 0 or a Dirichlet face with c > 0.
+        let mut anchored: Vec<bool> = self.diag_extra.iter().map(|&d| d > 0.0).collect();
+        self.for_each_boundary_anchor(|p| anchored[p] = true);
         // General case: union-find over faces with c > 0.
         let mut parent: Vec<usize> = (0..n).collect();
         fn find(parent: &mut [usize], mut x: usize) -> usize {
@@ -406,7 +475,7 @@ impl CellStencil {
             x
         }
         for a in 0..self.ndim {
-            for (f, lo, hi) in self.interior_faces(a) {
+            for (f, lo, hi) in self.interior_faces(a).chain(self.wrap_faces(a)) {
                 if self.face[a][f] > 0.0 {
                     let (ra, rb) = (find(&mut parent, lo), find(&mut parent, hi));
                     if ra != rb {
@@ -438,6 +507,28 @@ impl CellStencil {
         Ok(())
     }
 
+    /// Calls `f(cell)` for every cell with a Dirichlet face with `c > 0`.
+    fn for_each_boundary_anchor(&self, mut f: impl FnMut(usize)) {
+        let [nx, ny, nz] = self.dims;
+        for a in 0..self.ndim {
+            let na = self.dims[a];
+            let ext = |b: usize| if b == a { 1 } else { [nx, ny, nz][b] };
+            for side in 0..2 {
+                for k in 0..ext(2) {
+                    for j in 0..ext(1) {
+                        for i in 0..ext(0) {
+                            let mut c = [i, j, k];
+                            c[a] = if side == 0 { 0 } else { na - 1 };
+                            if self.boundary_coeff(a, side, c) > 0.0 {
+                                f(self.cell_index(c));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Iterator over the interior faces of `axis`: (face index, low cell,
     /// high cell).
     fn interior_faces(&self, axis: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
@@ -459,19 +550,53 @@ impl CellStencil {
         })
     }
 
+    /// Iterator over the wrap faces of a periodic `axis` (none otherwise, or
+    /// with a single cell along it): (face index at position 0, cell
+    /// `n_a − 1`, cell 0).
+    fn wrap_faces(&self, axis: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        let [nx, ny, nz] = self.dims;
+        let wraps = self.wraps(axis);
+        let na = self.dims[axis];
+        (0..nz).flat_map(move |k| {
+            (0..ny).flat_map(move |j| {
+                (0..nx).filter_map(move |i| {
+                    let c = [i, j, k];
+                    if !wraps || c[axis] != 0 {
+                        return None;
+                    }
+                    let mut last = c;
+                    last[axis] = na - 1;
+                    Some((
+                        self.face_index(axis, c),
+                        self.cell_index(last),
+                        self.cell_index(c),
+                    ))
+                })
+            })
+        })
+    }
+
     /// Number of triplets produced by [`CellStencil::triplet_pattern`].
     pub fn num_triplets(&self) -> usize {
         let n = self.num_cells();
         let mut t = n;
         for a in 0..self.ndim {
-            t += 2 * (n / self.dims[a]) * (self.dims[a] - 1);
+            let links = if self.wraps(a) {
+                self.dims[a]
+            } else {
+                self.dims[a] - 1
+            };
+            t += 2 * (n / self.dims[a]) * links;
         }
         t
     }
 
     /// Row and column indices of the matrix triplets, in the fixed order
     /// used by [`CellStencil::triplet_values`]: for each cell, its diagonal,
-    /// then its interior neighbours in the order −z, −y, −x, +x, +y, +z.
+    /// then its neighbours in the order −z, −y, −x, +x, +y, +z (across a
+    /// periodic axis the wrap neighbour; with two cells along a periodic
+    /// axis both neighbours are the same cell and the duplicate triplets are
+    /// summed on assembly).
     /// The pattern depends only on the grid dimensions (zero coefficients
     /// are kept), so the values can be refreshed in place.
     pub fn triplet_pattern(&self) -> (Vec<usize>, Vec<usize>) {
@@ -528,7 +653,13 @@ impl CellStencil {
                         hc[a] += 1;
                         let hi_f = self.face_index(a, hc);
                         let (clo, chi) = (self.face[a][lo_f], self.face[a][hi_f]);
-                        if c[a] == 0 {
+                        let wraps = self.wraps(a);
+                        if c[a] == 0 && wraps {
+                            let mut nb = c;
+                            nb[a] = self.dims[a] - 1;
+                            diag += clo;
+                            off[2 - a] = (self.cell_index(nb), -clo);
+                        } else if c[a] == 0 {
                             diag += self.boundary_coeff(a, 0, c);
                         } else {
                             let mut nb = c;
@@ -536,7 +667,13 @@ impl CellStencil {
                             diag += clo;
                             off[2 - a] = (self.cell_index(nb), -clo);
                         }
-                        if c[a] + 1 == self.dims[a] {
+                        if c[a] + 1 == self.dims[a] && wraps {
+                            let mut f0 = c;
+                            f0[a] = 0;
+                            let cw = self.face[a][self.face_index(a, f0)];
+                            diag += cw;
+                            off[3 + a] = (self.cell_index(f0), -cw);
+                        } else if c[a] + 1 == self.dims[a] {
                             diag += self.boundary_coeff(a, 1, c);
                         } else {
                             diag += chi;
@@ -592,10 +729,16 @@ impl CellStencil {
                     yr[i - 1] += flux;
                     yr[i] -= flux;
                 }
-                let c = [0, j, k];
-                yr[0] += self.boundary_coeff(0, 0, c) * xr[0];
-                let c = [nx - 1, j, k];
-                yr[nx - 1] += self.boundary_coeff(0, 1, c) * xr[nx - 1];
+                if self.wraps(0) {
+                    let flux = cr[0] * (xr[nx - 1] - xr[0]);
+                    yr[nx - 1] += flux;
+                    yr[0] -= flux;
+                } else {
+                    let c = [0, j, k];
+                    yr[0] += self.boundary_coeff(0, 0, c) * xr[0];
+                    let c = [nx - 1, j, k];
+                    yr[nx - 1] += self.boundary_coeff(0, 1, c) * xr[nx - 1];
+                }
             }
         }
         // Axis 1.
@@ -615,11 +758,18 @@ impl CellStencil {
                     yhi[i] -= flux;
                 }
             }
+            let wraps = self.wraps(1);
             for i in 0..nx {
                 let p0 = plane + i;
-                y[p0] += self.boundary_coeff(1, 0, [i, 0, k]) * x[p0];
                 let p1 = plane + nx * (ny - 1) + i;
-                y[p1] += self.boundary_coeff(1, 1, [i, ny - 1, k]) * x[p1];
+                if wraps {
+                    let flux = fy[fplane + i] * (x[p1] - x[p0]);
+                    y[p1] += flux;
+                    y[p0] -= flux;
+                } else {
+                    y[p0] += self.boundary_coeff(1, 0, [i, 0, k]) * x[p0];
+                    y[p1] += self.boundary_coeff(1, 1, [i, ny - 1, k]) * x[p1];
+                }
             }
         }
         // Axis 2.
@@ -638,11 +788,18 @@ impl CellStencil {
                     yhi[t] -= flux;
                 }
             }
+            let wraps = self.wraps(2);
             for t in 0..pl {
                 let (i, j) = (t % nx, t / nx);
-                y[t] += self.boundary_coeff(2, 0, [i, j, 0]) * x[t];
                 let p1 = pl * (nz - 1) + t;
-                y[p1] += self.boundary_coeff(2, 1, [i, j, nz - 1]) * x[p1];
+                if wraps {
+                    let flux = fz[t] * (x[p1] - x[t]);
+                    y[p1] += flux;
+                    y[t] -= flux;
+                } else {
+                    y[t] += self.boundary_coeff(2, 0, [i, j, 0]) * x[t];
+                    y[p1] += self.boundary_coeff(2, 1, [i, j, nz - 1]) * x[p1];
+                }
             }
         }
     }

@@ -53,7 +53,7 @@ pub use advection::{Advection, Limiter};
 pub use boundary::{IceBoundary, InflowState};
 pub use equilibration::EquilibrationSettings;
 pub use exchange::ExchangeCoefficients;
-pub use implicit::{LinearSolver, SemiImplicit};
+pub use implicit::{pressure_mg_options, LinearSolver, SemiImplicit};
 pub use setups::{periodic_vortex, periodic_vortex_exact, shock_tube};
 pub use state::{CellLayout, IceState, MaterialCells, MaterialInit, NGHOST};
 pub use step::{

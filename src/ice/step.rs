@@ -15,7 +15,7 @@ use super::boundary::{fill_scalar, fill_vector, zero_wall_faces, Boundaries, Ice
 use super::equilibration::{equilibrate_cell, min_pressure, EquilibrationSettings};
 use super::exchange::{exchange_heat, exchange_momentum_fixed, ExchangeCoefficients};
 use super::faces::{face_exchange, face_pressure, face_velocities, face_viscosity};
-use super::implicit::SemiImplicit;
+use super::implicit::{pressure_mg_options, LinearSolver, SemiImplicit};
 use super::par::{max_rows, par_face_rows, par_rows, try_rows, Out};
 use super::state::{CellLayout, IceState};
 use super::{invalid, IceError, Site, MAX_MATERIALS};
@@ -333,11 +333,27 @@ impl<const D: usize> IceParams<D> {
                     format!("must be in (0, 1e4] (semi-implicit), got {}", self.cfl),
                 ));
             }
-            let periodic = self
-                .boundaries
-                .iter()
-                .any(|b| b.contains(&IceBoundary::Periodic));
-            sp.validate(periodic)?;
+            sp.validate()?;
+            // Multigrid's red–black smoother needs an even number of cells
+            // along a periodic direction, unless the whole grid is its
+            // directly solved coarsest level.
+            let coarse_max = pressure_mg_options().coarse_max_cells;
+            let cells = state.layout.cells;
+            if sp.linear_solver == LinearSolver::PcgMultigrid
+                && cells.iter().product::<usize>() > coarse_max
+            {
+                for (d, b) in self.boundaries.iter().enumerate() {
+                    if b[0] == IceBoundary::Periodic && cells[d] % 2 == 1 {
+                        return Err(invalid(
+                            "implicit.linear_solver",
+                            format!(
+                                "pcg_multigrid needs an even number of cells along periodic direction {d} (got {}); use direct or pcg_jacobi",
+                                cells[d]
+                            ),
+                        ));
+                    }
+                }
+            }
         } else if !(self.cfl.is_finite() && self.cfl > 0.0 && self.cfl <= 1.0) {
             return Err(invalid(
                 "cfl",

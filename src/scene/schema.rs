@@ -1015,19 +1015,24 @@ impl Scene {
                 format!("must be in [0, 1] (got {b})"),
             ));
         }
-        let periodic = self
-            .grid
-            .boundary
-            .faces()
-            .iter()
-            .flatten()
-            .any(|(bc, _)| *bc == Some(Boundary::Periodic));
-        if periodic && ps.solver == PressureSolverKind::PcgMultigrid {
-            return Err(err(
-                "fluid.pressure.solver",
-                "pcg_multigrid does not support periodic faces yet; allowed here: direct, \
-                 pcg_jacobi",
-            ));
+        // Multigrid's red–black smoother needs an even number of cells along
+        // a periodic axis (unless the whole grid is its directly solved
+        // coarsest level, `ice::pressure_mg_options`).
+        let total: usize = self.grid.cells.iter().product();
+        let coarse_max = crate::ice::pressure_mg_options().coarse_max_cells;
+        if ps.solver == PressureSolverKind::PcgMultigrid && total > coarse_max {
+            let faces = self.grid.boundary.faces();
+            for (d, (f, &n)) in faces.iter().zip(&self.grid.cells).enumerate() {
+                if f[0].0 == Some(Boundary::Periodic) && n % 2 == 1 {
+                    return Err(err(
+                        "fluid.pressure.solver",
+                        format!(
+                            "pcg_multigrid needs an even number of cells along a periodic \
+                             axis (grid.cells[{d}] = {n}); allowed here: direct, pcg_jacobi"
+                        ),
+                    ));
+                }
+            }
         }
         let im = &self.implicit;
         positive("implicit.tolerance_displacement", im.tolerance_displacement)?;
