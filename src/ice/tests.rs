@@ -793,3 +793,56 @@ fn diagonal_density_wave_is_second_order_at_courant_one_half() {
     assert!(u_order >= 1.8, "velocity deviation {dua:e} {dub:e}");
     assert!(dpb < 1e-3 && dub < 1e-6, "p {dpb:e}, u {dub:e}");
 }
+
+/// The normalised equilibration of a coupled scene (Guilkey Sec. 3.3 step
+/// 2) normalises freely where a particle material fills at least
+/// `SOLID_FILL_FOR_NORMALISING` of the cell and keeps a fluid-only cell's
+/// total material volume within `[V/R, R V]`: after equilibration
+/// `Σ_r M_r v_r` equals the reference volume `V_t` exactly.
+#[test]
+fn normalised_equilibration_is_bounded_without_solid() {
+    let layout = CellLayout::<1>::new(SVector::zeros(), SVector::<f64, 1>::new(1.0), [4]).unwrap();
+    let vol = layout.cell_volume();
+    let solid = IceMaterial::new("solid", IdealGas::new(1.4, 717.5).unwrap());
+    let mut st = IceState::new(layout, vec![air(), solid], |_| {
+        let z = SVector::<f64, 1>::zeros();
+        vec![
+            MaterialInit::new(0.5, 1.2, 1.0e5, z),
+            MaterialInit::new(0.5, 1.2, 1.0e5, z),
+        ]
+    })
+    .unwrap();
+    let (r, f) = (
+        step::FLUID_NORMALISING_RANGE,
+        step::SOLID_FILL_FOR_NORMALISING,
+    );
+    // Per cell: (fluid M v, solid M v) as fractions of V, and the expected
+    // V_t / V.
+    let w = 0.5; // the last cell's solid fill is f / 2
+    let cases = [
+        (0.03, 0.0, 1.0 / r),
+        (0.3, 0.5, 0.8),
+        (1.5, 0.0, 1.5),
+        (0.03, 0.5 * f, 1.0 / r + w * (0.03 + 0.5 * f - 1.0 / r)),
+    ];
+    let interior = st.layout.interior.clone();
+    for (&c, &(fluid, sol, _)) in interior.iter().zip(&cases) {
+        for (k, frac) in [(0, fluid), (1, sol)] as [(usize, f64); 2] {
+            let mc = &mut st.cells[k];
+            mc.mass[c] = if frac > 0.0 { 1.2 * vol } else { 1e-15 * vol };
+            mc.sp_vol[c] = frac.max(1e-15) * vol / mc.mass[c];
+        }
+    }
+    let mut params = IceParams::new([[IceBoundary::Wall, IceBoundary::Wall]]);
+    params.frames = vec![Frame::Eulerian, Frame::Rigid];
+    params.normalise_volume = true;
+    equilibrate(&mut st, &params).unwrap();
+    for (&c, &(_, _, vt)) in interior.iter().zip(&cases) {
+        let total: f64 = st.cells.iter().map(|mc| mc.mass[c] * mc.sp_vol[c]).sum();
+        assert!(
+            rel(total, vt * vol) < 1e-9,
+            "cell {c}: {total} vs {}",
+            vt * vol
+        );
+    }
+}
