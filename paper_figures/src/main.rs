@@ -5,8 +5,9 @@
 //! (`mpm_convergence`, from the axis-aligned manufactured solution), and the
 //! Guilkey figures of the MPM-ICE coupling: `guilkey_fig3` (pressurised
 //! cylinder: 3a stresses of the row nearest the x-axis vs Lamé, 3b ln error
-//! vs ln dx with the fitted slope) and `guilkey_fig4` (piston: closed-end
-//! pressure vs compression ratio against P1 (V1/V2)^γ).
+//! vs ln dx with the fitted slope), `guilkey_fig4` (piston: closed-end
+//! pressure vs compression ratio against P1 (V1/V2)^γ) and `guilkey_fig5`
+//! (Mach 3 wedge: pressure field with the exact and measured shock).
 
 use std::path::PathBuf;
 
@@ -37,6 +38,10 @@ const FIGURES: &[(&str, &str)] = &[
         "guilkey_fig4",
         "adiabatic piston, MPM-ICE: closed-end pressure vs compression ratio",
     ),
+    (
+        "guilkey_fig5",
+        "Mach 3 wedge, MPM-ICE: pressure field with the exact and measured shock",
+    ),
 ];
 
 fn main() -> anyhow::Result<()> {
@@ -51,6 +56,7 @@ fn main() -> anyhow::Result<()> {
         "mpm_convergence" => mpm_convergence(args.quick),
         "guilkey_fig3" => guilkey_fig3(args.quick),
         "guilkey_fig4" => guilkey_fig4(args.quick),
+        "guilkey_fig5" => guilkey_fig5(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -162,4 +168,12 @@ fn guilkey_fig4(quick: bool) -> anyhow::Result<()> {
     let out = out_dir()?;
     verification::coupled_studies::piston_adiabatic(quick)?;
     copy_study_plot("piston_adiabatic_fig4.png", quick, &out)
+}
+
+/// Guilkey Fig. 5: the `wedge_mach3` study's pressure field (h = 0.0025;
+/// the quick study's h = 0.005).
+fn guilkey_fig5(quick: bool) -> anyhow::Result<()> {
+    let out = out_dir()?;
+    verification::coupled_studies::wedge_mach3(quick)?;
+    copy_study_plot("wedge_mach3_fig5.png", quick, &out)
 }

@@ -254,6 +254,9 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
 pub struct WedgeMeasured {
     /// Shock angle from a least-squares line through the shock positions.
     pub angle_deg: f64,
+    /// Height of the least-squares shock line at the tip (`d = 0`); the
+    /// exact attached shock passes through the tip (0).
+    pub offset: f64,
     /// Mean post-shock pressure ratio `p2/p1` between wedge and shock.
     pub pressure_ratio: f64,
     /// `(d, y_shock, p2/p1)` per cell column at distance `d` behind the tip.
@@ -327,6 +330,7 @@ pub fn measure_wedge(
         .collect();
     WedgeMeasured {
         angle_deg: slope.atan().to_degrees(),
+        offset: (sy - slope * sx) / n,
         pressure_ratio: ratios.iter().sum::<f64>() / ratios.len().max(1) as f64,
         columns,
     }

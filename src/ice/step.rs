@@ -1386,7 +1386,6 @@ pub fn stage_lagrangian<const D: usize>(
             let mut u = [SVector::<f64, D>::zeros(); MAX_MATERIALS];
             let mut t = [0.0; MAX_MATERIALS];
             let mut t_before = [0.0; MAX_MATERIALS];
-            let mut t_flow = [0.0; MAX_MATERIALS];
             let mut beta = [0.0; MAX_MATERIALS];
             let mut heat = [0.0; MAX_MATERIALS];
             for c in row {
@@ -1432,11 +1431,13 @@ pub fn stage_lagrangian<const D: usize>(
                     }
                     u[r] = mom / m;
                     let me = m * cv[r] * mc.temperature[c];
-                    // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
-                    let f_theta = theta[r] * kappa[r][c] / stk[c];
-                    t_flow[r] =
-                        (me - dt * vol * f_theta * press[c] * div_sum[c] + heat[r]) / (m * cv[r]);
-                    t[r] = if !cons { t_flow[r] } else { me / (m * cv[r]) };
+                    t[r] = if !cons {
+                        // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
+                        let f_theta = theta[r] * kappa[r][c] / stk[c];
+                        (me - dt * vol * f_theta * press[c] * div_sum[c] + heat[r]) / (m * cv[r])
+                    } else {
+                        me / (m * cv[r])
+                    };
                     // Heat sources: internal energy added at a rate per unit
                     // volume over a time window.
                     for src in sources.iter().filter(|s| s.material == r) {
@@ -1545,15 +1546,6 @@ pub fn stage_lagrangian<const D: usize>(
                             o_v[r].set(c, v[r]);
                         }
                         continue;
-                    }
-                    if cons && !(t[r].is_finite() && t[r] > 0.0) && t_flow[r] > 0.0 {
-                        // Where the kinetic energy dwarfs the internal
-                        // energy (gas rushing into a near-vacuum wake) the
-                        // total-energy form's internal part can go
-                        // negative: take the flow-work form of Eq. 34 in
-                        // that cell, as the advection does for its
-                        // total-energy flux (a dual-energy switch).
-                        t[r] = t_flow[r];
                     }
                     if !(t[r].is_finite() && t[r] > 0.0) {
                         return Err(IceError::NonPhysical {

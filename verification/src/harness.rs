@@ -357,6 +357,7 @@ pub fn plot_xy(
         x_range,
         y_range,
         series: &cleaned,
+        field: None,
     };
 
     let tmp = tmp_sibling(path, ".png")?;
@@ -516,6 +517,101 @@ struct Plot<'a> {
     x_range: (f64, f64),
     y_range: (f64, f64),
     series: &'a [PlotSeries],
+    /// A cell field drawn under the series (linear axes only).
+    field: Option<&'a CellField>,
+}
+
+/// A scalar field on a uniform grid of cells for [`plot_field`]: cell
+/// `(i, j)` spans `[x0 + i dx, x0 + (i + 1) dx] × [y0 + j dy, …]` and holds
+/// `values[i + nx j]`.
+#[derive(Debug, Clone)]
+pub struct CellField {
+    /// Lower corner of the grid.
+    pub lower: (f64, f64),
+    /// Cell size.
+    pub h: (f64, f64),
+    /// Cells per direction.
+    pub cells: (usize, usize),
+    /// Values, x fastest.
+    pub values: Vec<f64>,
+}
+
+impl CellField {
+    /// Blue (min) → white → red (max) for `v` on `[lo, hi]`.
+    fn color(v: f64, lo: f64, hi: f64) -> RGBColor {
+        let t = if hi > lo {
+            ((v - lo) / (hi - lo)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let mix = |a: f64, b: f64, t: f64| (a + (b - a) * t).round() as u8;
+        if t < 0.5 {
+            let u = 2.0 * t;
+            RGBColor(
+                mix(40.0, 255.0, u),
+                mix(70.0, 255.0, u),
+                mix(200.0, 255.0, u),
+            )
+        } else {
+            let u = 2.0 * t - 1.0;
+            RGBColor(
+                mix(255.0, 200.0, u),
+                mix(255.0, 30.0, u),
+                mix(255.0, 30.0, u),
+            )
+        }
+    }
+}
+
+/// Draws a 1000×750 PNG of a cell field (colour scale blue → white → red
+/// from its smallest to its largest finite value, appended to the title as
+/// `[min, max]`) with
+/// line/marker series on top, at `path` (written atomically, as
+/// [`plot_xy`]).
+///
+/// # Errors
+/// Any I/O or drawing error other than a text-rendering failure.
+pub fn plot_field(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    field: &CellField,
+    series: &[PlotSeries],
+) -> Result<()> {
+    let (nx, ny) = field.cells;
+    let x_range = (field.lower.0, field.lower.0 + nx as f64 * field.h.0);
+    let y_range = (field.lower.1, field.lower.1 + ny as f64 * field.h.1);
+    let (lo, hi) = field
+        .values
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let title = format!("{title} [{lo:.2e}, {hi:.2e}]");
+    let plot = Plot {
+        title: &title,
+        x_label,
+        y_label,
+        log_x: false,
+        log_y: false,
+        x_range,
+        y_range,
+        series,
+        field: Some(field),
+    };
+    let tmp = tmp_sibling(path, ".png")?;
+    let result = plot.render_with_fallback(&tmp).and_then(|()| {
+        File::open(&tmp)
+            .and_then(|f| f.sync_all())
+            .with_context(|| format!("syncing {}", tmp.display()))?;
+        fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+    });
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
 }
 
 impl Plot<'_> {
@@ -590,6 +686,26 @@ impl Plot<'_> {
                 .axis_desc_style(("sans-serif", 22))
                 .draw()
                 .map_err(|e| draw_err(&e))?;
+        }
+        if let (Some(f), false, false) = (self.field, self.log_x, self.log_y) {
+            let (lo, hi) = f
+                .values
+                .iter()
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let (nx, ny) = f.cells;
+            let cells = (0..nx * ny).map(|k| {
+                let (i, j) = ((k % nx) as f64, (k / nx) as f64);
+                let x = f.lower.0 + i * f.h.0;
+                let y = f.lower.1 + j * f.h.1;
+                Rectangle::new(
+                    [(x, y), (x + f.h.0, y + f.h.1)],
+                    CellField::color(f.values[k], lo, hi).filled(),
+                )
+            });
+            chart.draw_series(cells).map_err(|e| draw_err(&e))?;
         }
         for (i, s) in self.series.iter().enumerate() {
             let color = COLORS[i % COLORS.len()];
@@ -1069,6 +1185,23 @@ mod tests {
     }
 
     #[test]
+    fn field_plot_is_a_png_with_a_diverging_scale() {
+        let dir = test_dir("field");
+        let field = CellField {
+            lower: (0.0, 0.0),
+            h: (0.5, 0.25),
+            cells: (2, 4),
+            values: (0..8).map(f64::from).collect(),
+        };
+        let path = dir.join("field.png");
+        plot_field(&path, "field", "x", "y", &field, &[]).unwrap();
+        assert_png(&path);
+        assert_eq!(CellField::color(0.0, 0.0, 7.0), RGBColor(40, 70, 200));
+        assert_eq!(CellField::color(3.5, 0.0, 7.0), RGBColor(255, 255, 255));
+        assert_eq!(CellField::color(7.0, 0.0, 7.0), RGBColor(200, 30, 30));
+    }
+
+    #[test]
     fn text_rendering_and_textless_fallback() {
         let dir = test_dir("text");
         let series = [PlotSeries {
@@ -1085,6 +1218,7 @@ mod tests {
             x_range: (0.04, 0.2),
             y_range: (0.005, 0.05),
             series: &series,
+            field: None,
         };
         let with_text = dir.join("with_text.png");
         let text_ok = plot.render(&with_text, true);
