@@ -72,12 +72,14 @@ pub struct IceParams<const D: usize> {
     /// `Δp ≤ 0` (expansion) only.
     pub pressure_weight: f64,
     /// Weight of `Δp` in cells where `Δp > 0` (compression), `0 ≤ w_c ≤ 1`;
-    /// `None` uses `pressure_weight` everywhere. `Some(1.0)` is Guilkey
-    /// Eq. 30 as written wherever the cell is compressed, so that the full
-    /// `Δp = −Δt K ∇·u*` acts as the bulk viscosity of a shock, while
-    /// expansions keep the time-centred (or smaller) weight. The switch on
-    /// the sign of `Δp` makes the step first order in time for smooth
-    /// compressions (acoustic waves).
+    /// `None` uses `pressure_weight` everywhere. With `Some(w_c)` both
+    /// weights are switched ([`Self::source_weight`]): `w_c` in compression
+    /// and `pressure_weight` in expansion where the step changes the
+    /// pressure by `|Δp|/p_eq ≥ 1e-3` (shocks, start-up discontinuities),
+    /// tending linearly to the time-centred `1/2` as `|Δp|/p_eq → 0`, so
+    /// that smooth flow stays second order. `Some(1.0)` is Guilkey Eq. 30
+    /// as written in a shock, so that the full `Δp = −Δt K ∇·u*` acts as
+    /// its bulk viscosity.
     pub pressure_weight_compression: Option<f64>,
     /// Acoustic dissipation of Guilkey Eq. 28: `Some(λ)` takes the jump
     /// (dissipation) part of the face velocity over the time
@@ -87,7 +89,10 @@ pub struct IceParams<const D: usize> {
     /// term is then `λ [p]/(2ρc)`: `λ = 1` is the acoustic Riemann (Godunov)
     /// value at every face, whatever the local Courant number (with
     /// `face_dt_factor` it holds only where `c Δt/h` is largest).
-    /// `0 < λ ≤ 1`.
+    /// `λ < 1` applies where the reconstructed pressures of the face differ
+    /// by `≳ 1e-2` of the pressure; below that it tends to 1 (see
+    /// [`super::faces::face_velocities`]), so that acoustic waves are not
+    /// under-damped. `0 < λ ≤ 1`.
     pub acoustic_jump: Option<f64>,
     /// Linear artificial viscosity in the face pressure of Guilkey Eq. 31
     /// at compressive faces: `Some(μ)` adds
@@ -95,9 +100,11 @@ pub struct IceParams<const D: usize> {
     /// (the mixture impedance, see `acoustic_jump`) and `u_L`, `u_R` the
     /// mixture normal velocities of the two cells: the pressure term of the
     /// acoustic Riemann solver (`μ = 1/2`), kept in compression only, so
-    /// expansions and contacts are untouched (a smooth compression sees an
-    /// `O(h)` viscosity). The energy stays conservative (the same `p*`
-    /// does the work). `0 ≤ μ ≤ 1`.
+    /// expansions and contacts are untouched, and scaled by a pressure
+    /// shock sensor (Jameson, Schmidt & Turkel 1981; see
+    /// [`super::faces::face_viscosity`]) that is `O(h²)` on smooth flow, so
+    /// that a smooth compression sees an `O(h³)` viscosity. The energy
+    /// stays conservative (the same `p*` does the work). `0 ≤ μ ≤ 1`.
     pub face_viscosity: Option<f64>,
     /// Semi-implicit (implicit-pressure) ICE: `Some` replaces the explicit
     /// `Δp` of Guilkey Eq. 29 by the pressure equation solved with an outer
@@ -186,6 +193,12 @@ pub enum EnergyForm {
     Conservative,
 }
 
+/// Relative pressure change `|Δp|/p_eq` of a step (Eq. 29) at which the
+/// switched `Δp` weight of [`IceParams::source_weight`] reaches its
+/// shock values; below it the weight tends linearly to the time-centred
+/// `1/2`.
+pub const WEIGHT_SWITCH_SCALE: f64 = 1.0e-3;
+
 impl<const D: usize> IceParams<D> {
     /// Defaults: `cfl = 0.5`, second order with van Leer, no gravity, no
     /// exchange, conservative energy, forward Euler, `face_dt_factor = 1`
@@ -272,19 +285,30 @@ impl<const D: usize> IceParams<D> {
     /// [`Self::hancock`] with shock-capturing dissipation from the acoustic
     /// Riemann problem, tuned on Sod (the MUSCL–Hancock ICE step, Guilkey
     /// Eqs. 28–41, with three changes to its numerical dissipation):
-    /// the jump part of Eq. 28 at half the acoustic (Godunov) value at every
-    /// face (`acoustic_jump = 0.5`, replacing `face_dt_factor`); `Δp` of
+    /// the jump part of Eq. 28 at half the acoustic (Godunov) value
+    /// (`acoustic_jump = 0.5`, replacing `face_dt_factor`) at faces whose
+    /// reconstructed pressures jump by `≳ 1e-2 p`, tending to the Godunov
+    /// value below (see [`super::faces::face_velocities`]); `Δp` of
     /// Eq. 30 at full weight where a cell is compressed and at `0.4` where
     /// it expands weakly (`pressure_weight_compression = 1`,
-    /// `pressure_weight = 0.4`; see [`Self::source_weight`]), which damps
-    /// the post-shock oscillations and reduces the start-up error of the
-    /// rarefaction, the largest part of the Sod error; a linear face
-    /// viscosity `μ = 0.25` at compressive faces (`face_viscosity`); and
-    /// `cfl = 0.9`. Sod L1(ρ) 5.40e-4 at N = 800 in 403 steps (Hancock:
-    /// 7.96e-4 in 481 steps), 2.99e-4 at N = 1600 in 805 steps, 8.0e-5 at
-    /// N = 6400. First order in time on smooth compressions (the switch on
-    /// the sign of `Δp`); expansion weights below 0.4 were more accurate at
-    /// N ≤ 1600 but stalled the convergence at N = 6400.
+    /// `pressure_weight = 0.4`), both only where the step changes the
+    /// pressure by `|Δp|/p_eq ≳ 1e-3` and tending to the time-centred `1/2`
+    /// below (see [`Self::source_weight`]), which damps the post-shock
+    /// oscillations and reduces the start-up error of the rarefaction, the
+    /// largest part of the Sod error; a linear face viscosity `μ = 0.25` at
+    /// compressive faces (`face_viscosity`), scaled by a pressure shock
+    /// sensor (Jameson, Schmidt & Turkel 1981); and `cfl = 0.9`. The
+    /// switches are `O(h)`-small perturbations on smooth flow (the weight,
+    /// `σ ∝ Δp ∝ Δt`; the jump factor, `∝ |p_R − p_L| = O(h²)`) or vanish
+    /// as `O(h²)` (the viscosity), so that the step is second order there:
+    /// linear acoustic wave order 1.96 at N = 512, error 8.1e-5 (Hancock:
+    /// 8.7e-5; the unswitched rules: order 0.81, 1.14e-2). Sod L1(ρ)
+    /// 5.42e-4 at N = 800 in 403 steps (Hancock: 7.96e-4 in 481 steps),
+    /// 2.97e-4 at N = 1600 in 805 steps (unswitched: 5.40e-4, 2.99e-4).
+    /// Expansion weights below 0.4 were more accurate at N ≤ 1600 but
+    /// stalled the convergence at N = 6400; switching the weight, or the
+    /// jump factor, with the pressure shock sensor instead cost 18–27 % on
+    /// Sod (the rarefaction then runs at the smooth values).
     pub fn hancock_acoustic(boundaries: Boundaries<D>) -> Self {
         Self {
             cfl: 0.9,
@@ -298,23 +322,40 @@ impl<const D: usize> IceParams<D> {
 
     /// The weight of `Δp` in the pressure of the sources (Guilkey Eq. 30,
     /// `p = p_eq + w Δp`): `pressure_weight` without
-    /// `pressure_weight_compression`; with it, `w_c` where `Δp > 0` and,
-    /// where `Δp < 0`, `w + (1 − w) x²` with the relative expansion
-    /// `x = min(1, −Δp/p_eq)`: a strong expansion (towards vacuum) is
-    /// weighted towards the end-of-step pressure, so that the flow work
-    /// `p ΔV` it does stays within the internal energy of the cell (the
-    /// "123" problem), while a weak one keeps `w`.
+    /// `pressure_weight_compression`. With it, the weight is switched by
+    /// the relative pressure change of the step,
+    /// `σ = min(1, |Δp|/(s p_eq))` with `s = ` [`WEIGHT_SWITCH_SCALE`]
+    /// (`1e-3`): `1/2 + σ (w_c − 1/2)` where `Δp > 0` (compression) and,
+    /// where `Δp < 0`, `w_b + (1 − w_b) x²` with `w_b = 1/2 + σ (w − 1/2)`
+    /// and the relative expansion `x = min(1, −Δp/p_eq)`. A shock or a
+    /// start-up discontinuity (`σ = 1`) gets `w_c` in compression and `w`
+    /// in weak expansion; a strong expansion (towards vacuum) is weighted
+    /// towards the end-of-step pressure, so that the flow work `p ΔV` it
+    /// does stays within the internal energy of the cell (the "123"
+    /// problem). On smooth flow `Δp = O(Δt)`, so `σ = O(Δt)` (and
+    /// `x² = O(Δt²)`): the weight is the time-centred `1/2 + O(Δt)`, a
+    /// pressure error `O(Δt²)` per step, and the step stays second order;
+    /// for acoustic amplitudes (`|Δp|/p_eq ≪ 1e-3`) the switch is off.
+    /// (The former rule switched on the sign of `Δp` alone, `w_c` for any
+    /// compression, and was first order on smooth compressions: acoustic
+    /// wave order 0.81.) Cells with `p_eq ≤ 0` keep the switch on.
     #[inline]
     pub fn source_weight(&self, dp: f64, p_eq: f64) -> f64 {
         let w = self.pressure_weight;
-        match self.pressure_weight_compression {
-            None => w,
-            Some(wc) if dp > 0.0 => wc,
-            Some(_) if p_eq > 0.0 => {
-                let x = (-dp / p_eq).clamp(0.0, 1.0);
-                w + (1.0 - w) * x * x
-            }
-            Some(_) => w,
+        let Some(wc) = self.pressure_weight_compression else {
+            return w;
+        };
+        if p_eq <= 0.0 || p_eq.is_nan() {
+            return if dp > 0.0 { wc } else { w };
+        }
+        // The switch σ = min(1, |Δp|/(s p_eq)), s = WEIGHT_SWITCH_SCALE.
+        let sigma = (dp.abs() / (WEIGHT_SWITCH_SCALE * p_eq)).min(1.0);
+        if dp > 0.0 {
+            0.5 + sigma * (wc - 0.5)
+        } else {
+            let wb = 0.5 + sigma * (w - 0.5);
+            let x = (-dp / p_eq).min(1.0);
+            wb + (1.0 - wb) * x * x
         }
     }
 
@@ -1252,8 +1293,9 @@ pub fn stage_pressure<const D: usize>(
                         value: p,
                     });
                 }
+                let w = params.source_weight(dp, st.p_eq[c]);
                 // SAFETY: cell c is written by this task only.
-                unsafe { press.set(c, st.p_eq[c] + params.source_weight(dp, st.p_eq[c]) * dp) };
+                unsafe { press.set(c, st.p_eq[c] + w * dp) };
             }
             Ok(())
         })?;
@@ -1274,6 +1316,7 @@ pub fn stage_pressure<const D: usize>(
                 &state.cells,
                 &ws.mix_mass,
                 &ws.bulk,
+                &state.p_eq,
                 mu,
                 &mut ws.pstar[d],
             );

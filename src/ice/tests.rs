@@ -70,8 +70,11 @@ fn hancock_sod_n400_matches_exact_solution_at_cfl_08() {
 /// The acoustic Hancock variant ([`IceParams::hancock_acoustic`]) on Sod
 /// at N = 800 and 1600; at N = 1600 it is below the error of a Roe/MC
 /// finite-volume code at the same resolution (3.1e-4). Measured L1(ρ)
-/// 5.401e-4 in 403 steps and 2.992e-4 in 805 steps (Hancock at cfl 0.8:
-/// 7.96e-4 in 481 steps, 4.48e-4 in 961).
+/// 5.423e-4 in 403 steps and 2.972e-4 in 805 steps with the switched
+/// weight and jump factor and the shock-sensed face viscosity (the
+/// unswitched rules:
+/// 5.401e-4, 2.992e-4; Hancock at cfl 0.8: 7.96e-4 in 481 steps, 4.48e-4
+/// in 961).
 #[test]
 fn hancock_acoustic_sod_matches_roe_mc_at_n1600() {
     for (n, bound, max_steps) in [(800, 5.5e-4, 410), (1600, 3.1e-4, 815)] {

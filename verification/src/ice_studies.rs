@@ -226,7 +226,7 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
         ),
         (
             IceParams::hancock_acoustic(bcs.clone()),
-            "acoustic Hancock (acoustic jump λ 0.5, Δp weight 1 in compression / 0.4 in expansion, face viscosity 0.25, cfl 0.9)".into(),
+            "acoustic Hancock (switched: acoustic jump λ 0.5, Δp weight 1 in compression / 0.4 in expansion, shock-sensed face viscosity 0.25, cfl 0.9)".into(),
         ),
     ];
     let mut series = Vec::new();
@@ -408,7 +408,7 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
         ),
         (
             IceParams::hancock_acoustic(periodic1()),
-            "acoustic Hancock (Δp weight switched on its sign, face viscosity, cfl 0.9)",
+            "acoustic Hancock (switched Δp weight and jump, shock-sensed face viscosity, cfl 0.9)",
         ),
     ] {
         let mut points = Vec::new();
