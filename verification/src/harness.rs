@@ -360,17 +360,7 @@ pub fn plot_xy(
         field: None,
     };
 
-    let tmp = tmp_sibling(path, ".png")?;
-    let result = plot.render_with_fallback(&tmp).and_then(|()| {
-        File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .with_context(|| format!("syncing {}", tmp.display()))?;
-        fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-    });
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+    plot.write_atomically(path)
 }
 
 /// Padded `(min, max)` of the values (already filtered for the axis type).
@@ -601,20 +591,25 @@ pub fn plot_field(
         series,
         field: Some(field),
     };
-    let tmp = tmp_sibling(path, ".png")?;
-    let result = plot.render_with_fallback(&tmp).and_then(|()| {
-        File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .with_context(|| format!("syncing {}", tmp.display()))?;
-        fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
-    });
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+    plot.write_atomically(path)
 }
 
 impl Plot<'_> {
+    /// Renders to a temporary sibling of `path` and renames it into place.
+    fn write_atomically(&self, path: &Path) -> Result<()> {
+        let tmp = tmp_sibling(path, ".png")?;
+        let result = self.render_with_fallback(&tmp).and_then(|()| {
+            File::open(&tmp)
+                .and_then(|f| f.sync_all())
+                .with_context(|| format!("syncing {}", tmp.display()))?;
+            fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+        });
+        if result.is_err() {
+            let _ = fs::remove_file(&tmp);
+        }
+        result
+    }
+
     /// Renders with text; on failure (error or panic inside the font
     /// machinery) renders again without any text.
     fn render_with_fallback(&self, path: &Path) -> Result<()> {
