@@ -1,6 +1,8 @@
 //! Probe: the Mach 3 wedge (Guilkey Sec. 4.3) at a refinement factor, on
-//! the case's domain or a cropped one.
+//! the case's domain or a cropped one (the study's crop: `0.0 0.2`; the tip
+//! reaches x = 0.1 at the case's end, so X_LO must stay below about 0.05).
 //! `cargo run --release --example wedge_probe -- FACTOR [X_LO Y_HI]`
+//! (`WEDGE_CASE=other.toml` runs a copy of the case, e.g. with another end).
 use mpmice::diagnostics::coupled::measure_wedge;
 
 fn main() {
