@@ -3,7 +3,7 @@
 //! reaches x = 0.1 at the case's end, so X_LO must stay below about 0.05).
 //! `cargo run --release --example wedge_probe -- FACTOR [X_LO Y_HI]`
 //! (`WEDGE_CASE=other.toml` runs a copy of the case, e.g. with another end).
-use mpmice::diagnostics::coupled::measure_wedge;
+use mpmice::diagnostics::coupled::measure_wedge_mach3;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -27,15 +27,7 @@ fn main() {
         run.step(sc.time.end - run.fluid.time).unwrap();
     }
     let wall = start.elapsed().as_secs_f64();
-    let tip = 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]);
-    let m = measure_wedge(
-        &run.fluid,
-        tip,
-        20.0,
-        101_325.0,
-        3.771 * 101_325.0,
-        (0.05, 0.15),
-    );
+    let m = measure_wedge_mach3(&run);
     println!(
         "h {h:.5} cells {:?} angle {:.3} ratio {:.4} steps {} wall {:.1} s",
         sc.grid.cells, m.angle_deg, m.pressure_ratio, run.steps, wall

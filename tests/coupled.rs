@@ -223,7 +223,7 @@ fn pressurized_cylinder_eq43_converges() {
 /// `wedge_mach3` study refines to 0.25° and 0.63 % at h = 0.00125).
 #[test]
 fn wedge_mach3_case_gives_the_oblique_shock() {
-    use mpmice::diagnostics::coupled::measure_wedge;
+    use mpmice::diagnostics::coupled::measure_wedge_mach3;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3.toml");
     let mut sc = mpmice::scene::load(&path).unwrap();
     sc.grid.upper[1] = 0.2;
@@ -232,15 +232,7 @@ fn wedge_mach3_case_gives_the_oblique_shock() {
     while run.fluid.time < sc.time.end * (1.0 - 1e-12) {
         run.step(sc.time.end - run.fluid.time).unwrap();
     }
-    let tip = 0.6 + run.rigid_displacement(run.fluid.time).unwrap()[0];
-    let m = measure_wedge(
-        &run.fluid,
-        tip,
-        20.0,
-        101_325.0,
-        3.771 * 101_325.0,
-        (0.05, 0.15),
-    );
+    let m = measure_wedge_mach3(&run);
     eprintln!("angle {:.3}, p2/p1 {:.4}", m.angle_deg, m.pressure_ratio);
     assert!((m.angle_deg - 37.76).abs() < 2.15, "angle {}", m.angle_deg);
     assert!(

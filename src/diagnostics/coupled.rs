@@ -248,12 +248,31 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
     }
 }
 
+/// [`measure_wedge`] for `cases/wedge_mach3.toml` (Guilkey Sec. 4.3): the
+/// tip starts at x = 0.6 and moves with the rigid field, half-angle 20°,
+/// p1 = 101 325 Pa, exact p2/p1 = 3.771, the shock measured 0.05–0.15 m
+/// behind the tip (0.25–0.75 wedge lengths: clear of the tip's smeared
+/// cells and the base's expansion).
+pub fn measure_wedge_mach3(run: &CoupledRun<2>) -> WedgeMeasured {
+    let tip = 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]);
+    measure_wedge(
+        &run.fluid,
+        tip,
+        20.0,
+        101_325.0,
+        3.771 * 101_325.0,
+        (0.05, 0.15),
+    )
+}
+
 /// What [`measure_wedge`] reports for the Mach 3 wedge of Guilkey
 /// Sec. 4.3.
 #[derive(Debug, Clone)]
 pub struct WedgeMeasured {
     /// Shock angle from a least-squares line through the shock positions.
     pub angle_deg: f64,
+    /// The tip's x (the input).
+    pub tip_x: f64,
     /// Height of the least-squares shock line at the tip (`d = 0`); the
     /// exact attached shock passes through the tip (0).
     pub offset: f64,
@@ -330,6 +349,7 @@ pub fn measure_wedge(
         .collect();
     WedgeMeasured {
         angle_deg: slope.atan().to_degrees(),
+        tip_x,
         offset: (sy - slope * sx) / n,
         pressure_ratio: ratios.iter().sum::<f64>() / ratios.len().max(1) as f64,
         columns,

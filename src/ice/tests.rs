@@ -351,21 +351,28 @@ fn assert_positive_or_clean(r: Result<(f64, FluidRun<1>), IceError>, name: &str)
     }
 }
 
-/// (d) The "123" double rarefaction and a 1e4 pressure-ratio shock tube.
-#[test]
-fn strong_rarefaction_and_shock_stay_positive() {
-    let p = IceParams::new(walls1());
+/// The "123" double rarefaction and the 1e4 pressure-ratio shock tube run
+/// with `p`: both must reach the end with positive states; their L1(ρ).
+fn hard_cases(p: &IceParams<1>) -> (f64, f64) {
     let e123 = assert_positive_or_clean(
-        strong_run((1.0, -2.0, 0.4), (1.0, 2.0, 0.4), 0.15, &p),
+        strong_run((1.0, -2.0, 0.4), (1.0, 2.0, 0.4), 0.15, p),
         "123",
     );
     let e_ratio = assert_positive_or_clean(
-        strong_run((1.0, 0.0, 1000.0), (1.0, 0.0, 0.1), 0.012, &p),
+        strong_run((1.0, 0.0, 1000.0), (1.0, 0.0, 0.1), 0.012, p),
         "1e4 ratio",
     );
+    (
+        e123.expect("123 runs to the end"),
+        e_ratio.expect("1e4 ratio runs to the end"),
+    )
+}
+
+/// (d) The "123" double rarefaction and a 1e4 pressure-ratio shock tube.
+#[test]
+fn strong_rarefaction_and_shock_stay_positive() {
+    let (e123, e_ratio) = hard_cases(&IceParams::new(walls1()));
     // Measured (N = 200, L1 of ρ): 123 6.79e-3, 1e4 ratio 3.86e-2.
-    let e123 = e123.expect("123 runs to the end");
-    let e_ratio = e_ratio.expect("1e4 ratio runs to the end");
     assert!(e123 < 7.5e-3, "123 L1 = {e123}");
     assert!(e_ratio < 4.2e-2, "1e4 ratio L1 = {e_ratio}");
 }
@@ -377,17 +384,7 @@ fn strong_rarefaction_and_shock_stay_positive() {
 /// 1e4 ratio 3.288e-2 (literal: 6.79e-3, 3.86e-2).
 #[test]
 fn hancock_acoustic_hard_cases_stay_positive() {
-    let p = IceParams::hancock_acoustic(walls1());
-    let e123 = assert_positive_or_clean(
-        strong_run((1.0, -2.0, 0.4), (1.0, 2.0, 0.4), 0.15, &p),
-        "123",
-    );
-    let e_ratio = assert_positive_or_clean(
-        strong_run((1.0, 0.0, 1000.0), (1.0, 0.0, 0.1), 0.012, &p),
-        "1e4 ratio",
-    );
-    let e123 = e123.expect("123 runs to the end");
-    let e_ratio = e_ratio.expect("1e4 ratio runs to the end");
+    let (e123, e_ratio) = hard_cases(&IceParams::hancock_acoustic(walls1()));
     eprintln!("hancock_acoustic: 123 L1 {e123:e}, 1e4 ratio L1 {e_ratio:e}");
     assert!(e123 < 5.0e-3, "123 L1 = {e123}");
     assert!(e_ratio < 3.5e-2, "1e4 ratio L1 = {e_ratio}");

@@ -210,8 +210,6 @@ struct WedgeRun {
     steps: u64,
     /// The cell pressure at the last time.
     pressure: CellField,
-    /// The tip's x at the last time.
-    tip: f64,
 }
 
 /// The Mach 3 wedge case on the domain cropped to `[x_lo, 0.8] × [0, y_hi]`
@@ -232,18 +230,7 @@ fn wedge_run(factor: usize, crop: (f64, f64), times: &[f64]) -> anyhow::Result<W
         while run.fluid.time < t * (1.0 - 1e-12) {
             run.step(t - run.fluid.time)?;
         }
-        let tip = 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]);
-        // The part of the shock between 0.25 and 0.75 wedge lengths behind
-        // the tip (clear of the tip's smeared cells and the base's
-        // expansion).
-        out.push(mpmice::diagnostics::coupled::measure_wedge(
-            &run.fluid,
-            tip,
-            20.0,
-            101_325.0,
-            3.771 * 101_325.0,
-            (0.05, 0.15),
-        ));
+        out.push(mpmice::diagnostics::coupled::measure_wedge_mach3(&run));
     }
     let wall = start.elapsed().as_secs_f64();
     let layout = &run.fluid.layout;
@@ -263,7 +250,6 @@ fn wedge_run(factor: usize, crop: (f64, f64), times: &[f64]) -> anyhow::Result<W
         cells: layout.num_interior(),
         steps: run.steps,
         pressure,
-        tip: 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]),
     })
 }
 
@@ -273,12 +259,11 @@ fn wedge_run(factor: usize, crop: (f64, f64), times: &[f64]) -> anyhow::Result<W
 fn wedge_fig5(
     quick: bool,
     h: f64,
-    tip: f64,
     m: &mpmice::diagnostics::coupled::WedgeMeasured,
     pressure: &CellField,
 ) -> anyhow::Result<()> {
     let (ta, tb) = (20f64.to_radians().tan(), 37.76f64.to_radians().tan());
-    let len = 0.2;
+    let (len, tip) = (0.2, m.tip_x);
     let series = vec![
         PlotSeries {
             label: "exact shock, 37.76°".into(),
@@ -338,11 +323,10 @@ pub fn wedge_mach3(quick: bool) -> anyhow::Result<StudyResult> {
             cells,
             steps,
             pressure,
-            tip,
         } = wedge_run(f, WEDGE_CROP, &[end])?;
         let m = &measured[0];
         if f == 2 || quick {
-            wedge_fig5(quick, h, tip, m, &pressure)?;
+            wedge_fig5(quick, h, m, &pressure)?;
         }
         let ups = cells as f64 * steps as f64 / wall.max(1e-12);
         angle_pts.push(
