@@ -56,6 +56,8 @@ fn bench(c: &mut Criterion) {
         ("literal", IceParams::new(bcs.clone())),
         ("literal_dbd", dbd),
         ("high_resolution", IceParams::high_resolution(bcs.clone())),
+        ("hancock", IceParams::hancock(bcs.clone())),
+        ("hancock_acoustic", IceParams::hancock_acoustic(bcs.clone())),
     ] {
         params.exchange = Some(ExchangeCoefficients::uniform(2, 1e15, 0.0));
         for threads in [1, 2] {
