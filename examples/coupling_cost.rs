@@ -2,7 +2,9 @@
 //! the same particles and cells (the pressurised cylinder, Guilkey 4.1):
 //! `cargo run --release --example coupling_cost -- [CELLS] [STEPS] [REPEATS]`.
 //! Prints the median wall time per step of each and the ratio
-//! coupled / (MPM-only + ICE-only).
+//! coupled / (MPM-only + ICE-only). `HEAT=H` turns on the solid–fluid heat
+//! exchange with coefficient `H` (the steel's `c_v` 450 J/(kg K)), to
+//! measure what the temperature transfer costs.
 use std::time::Instant;
 
 use mpmice::ice::{step_with_dt, IceWorkspace};
@@ -22,6 +24,14 @@ fn main() -> anyhow::Result<()> {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
     let mut sc = scene::load(&path)?;
     sc.grid.cells = vec![n, n];
+    if let Ok(h) = std::env::var("HEAT") {
+        sc.coupling.heat_exchange = h.parse()?;
+        for m in &mut sc.materials {
+            if m.kind == scene::MaterialKind::Solid {
+                m.cv = Some(450.0);
+            }
+        }
+    }
     let (mut tc, mut tm, mut tf) = (Vec::new(), Vec::new(), Vec::new());
     let mut dt = 0.0;
     for _ in 0..repeats {

@@ -295,6 +295,7 @@ pub(crate) fn write_particles_vtu<const D: usize>(
             Field::scalar("volume", &p.vol),
             Field::scalar("J", &j),
             Field::scalar("material", &mat),
+            Field::scalar("temperature", &p.temperature),
         ],
     )
 }
@@ -336,6 +337,8 @@ pub(crate) fn write_particles_csv<const D: usize>(
     cols.push(p.f.iter().map(|f| f.determinant()).collect());
     header.push("material [-]".into());
     cols.push(p.material.iter().map(|&m| m as f64).collect());
+    header.push("temperature [K]".into());
+    cols.push(p.temperature.clone());
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
     let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
     write_columns(path, &h, &c)

@@ -241,3 +241,199 @@ fn wedge_mach3_case_gives_the_oblique_shock() {
         m.pressure_ratio
     );
 }
+
+/// Steel particles at half their density filling a closed box `n × n`
+/// (θ_s = 1/2 in every cell) with air at 300 K; the steel at 400 K and
+/// exchanging heat with the air at the coefficient `h`.
+fn heated_mixture(h: f64) -> mpmice::coupling::CoupledRun<2> {
+    use mpmice::coupling::{CoupledRun, CouplingParams};
+    use mpmice::diagnostics::coupled::{air, solid_eos, steel};
+    use mpmice::diagnostics::mms::fill_box;
+    use mpmice::grid::{Boundary, Grid};
+    use mpmice::ice::MaterialInit;
+    use mpmice::ice::{CellLayout, ExchangeCoefficients, IceBoundary, IceParams, IceState};
+    use mpmice::mpm::{ExplicitParams, UpdateScheme};
+    use mpmice::shape::ShapeKind;
+    use nalgebra::SVector;
+
+    let n = 8;
+    let grid = Grid::<2>::new(
+        SVector::zeros(),
+        SVector::repeat(1.0),
+        [n, n],
+        [[Boundary::Symmetry; 2]; 2],
+    );
+    let layout = CellLayout::from_grid(&grid).unwrap();
+    let fluid = IceState::new(layout, vec![air()], |_| {
+        vec![MaterialInit::new(1.0, 1.1768, 101_325.0, SVector::zeros())]
+    })
+    .unwrap();
+    let wall = IceBoundary::Wall;
+    let mut params = IceParams::new([[wall.clone(), wall.clone()], [wall.clone(), wall]]);
+    params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
+    let m = steel();
+    let mut particles = fill_box(
+        &grid,
+        &SVector::zeros(),
+        &SVector::repeat(1.0),
+        2,
+        m.density,
+        |_| true,
+    );
+    for mp in &mut particles.mass {
+        *mp *= 0.5;
+    }
+    let min_mass = particles.mass.iter().copied().fold(f64::INFINITY, f64::min);
+    let mpm = ExplicitParams {
+        shape: ShapeKind::Linear,
+        scheme: UpdateScheme::Usf,
+        mass_floor: 1e-12 * min_mass,
+        damping: 0.0,
+    };
+    let eos = solid_eos(&m, 101_325.0);
+    let coupling = CouplingParams {
+        solid_temperature: 400.0,
+        heat_exchange: h,
+        ..CouplingParams::default()
+    };
+    CoupledRun::new(
+        grid,
+        vec![m],
+        particles,
+        mpm,
+        fluid,
+        params,
+        "steel",
+        eos,
+        None,
+        coupling,
+        0.5,
+    )
+    .unwrap()
+}
+
+/// (thermal energy, mean temperature) of the air and (thermal energy,
+/// lowest, highest particle temperature) of the steel.
+fn thermal(run: &mpmice::coupling::CoupledRun<2>) -> ((f64, f64), (f64, f64, f64)) {
+    use mpmice::material::eos::EquationOfState;
+    let (c_g, c_s) = (717.5, run.solid_eos.specific_heat_cv());
+    let cells = &run.fluid.cells[0];
+    let int = &run.fluid.layout.interior;
+    let e_g: f64 = int
+        .iter()
+        .map(|&c| cells.mass[c] * c_g * cells.temperature[c])
+        .sum();
+    let t_g = int.iter().map(|&c| cells.temperature[c]).sum::<f64>() / int.len() as f64;
+    let p = &run.particles;
+    let e_s: f64 = (0..p.len())
+        .map(|i| p.mass[i] * c_s * p.temperature[i])
+        .sum();
+    let (lo, hi) = p
+        .temperature
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
+    ((e_g, t_g), (e_s, lo, hi))
+}
+
+/// Solid–fluid heat exchange (Guilkey Eq. 39, Sec. 3.3 step 10) in the
+/// uniform mixture of [`heated_mixture`]. Nothing moves, so the exchange is
+/// all that happens. Exact: the thermal energy `Σ_p m_p c_s T_p + Σ_c M_g
+/// c_g T_g` is conserved, every particle keeps one temperature (the cell →
+/// node → particle transfer at the walls included), and the difference
+/// `T_g − T_s` falls by the backward-Euler factor
+/// `1/(1 + Δt H (θ_s v_g/c_g + θ_g v_s/c_s))` per step.
+#[test]
+fn uniform_mixture_relaxes_at_the_discrete_heat_exchange_rate() {
+    use mpmice::material::eos::EquationOfState;
+    let h = 1e7;
+    let mut run = heated_mixture(h);
+    let (c_g, c_s) = (717.5, run.solid_eos.specific_heat_cv());
+    let c0 = run.fluid.layout.interior[0];
+    // The exchange rate of the current cell state (θ and v change by
+    // O(Δp/K) as the heated gas squeezes the steel).
+    let rate = |run: &mpmice::coupling::CoupledRun<2>| {
+        let (g, s) = (&run.fluid.cells[0], &run.fluid.cells[1]);
+        h * (s.vol_frac[c0] * g.sp_vol[c0] / c_g + g.vol_frac[c0] * s.sp_vol[c0] / c_s)
+    };
+    let theta_s = run.fluid.cells[1].vol_frac[c0];
+    let ((e_g0, t_g0), (e_s0, t_s0, _)) = thermal(&run);
+    let e0 = e_g0 + e_s0;
+    let mut factor = 1.0;
+    let mut worst_rate: f64 = 0.0;
+    let mut worst_energy: f64 = 0.0;
+    let mut worst_spread: f64 = 0.0;
+    for step in 0..150 {
+        let r = rate(&run);
+        let info = run.step(f64::INFINITY).unwrap();
+        factor /= 1.0 + info.dt * r;
+        let ((e_g, t_g), (e_s, lo, hi)) = thermal(&run);
+        let t_s = 0.5 * (lo + hi);
+        let diff = (t_g - t_s) / (t_g0 - t_s0);
+        worst_rate = worst_rate.max((diff / factor - 1.0).abs());
+        worst_energy = worst_energy.max(((e_g + e_s) / e0 - 1.0).abs());
+        worst_spread = worst_spread.max(hi - lo);
+        if step == 149 {
+            eprintln!(
+                "θ_s {theta_s:.6}, Δt·rate {:.3e}, T_g {t_g:.4}, T_s {t_s:.6}, \
+                 diff/exact − 1 ≤ {worst_rate:.2e}, energy ≤ {worst_energy:.2e}, \
+                 particle spread ≤ {worst_spread:.2e} K, remaining {factor:.3e}",
+                info.dt * r
+            );
+        }
+    }
+    let (uf, up) = speeds(&run);
+    assert!((theta_s - 0.5).abs() < 1e-3, "θ_s = {theta_s}");
+    assert!(factor < 1e-2, "the test must relax: {factor:e} left");
+    assert!(
+        worst_rate < 1e-7,
+        "relaxation off the exact rate by {worst_rate:e}"
+    );
+    assert!(
+        worst_energy < 1e-13,
+        "thermal energy drift {worst_energy:e}"
+    );
+    assert!(
+        worst_spread < 1e-9,
+        "particle temperatures spread by {worst_spread:e} K"
+    );
+    assert!(
+        uf < 1e-9 && up < 1e-9,
+        "spurious motion: fluid {uf:e}, particles {up:e}"
+    );
+}
+
+/// The exchange is implicit: at `H = 1e15` (`Δt · rate ≈ 5e6`) one step
+/// brings air and steel to the heat-capacity-weighted mean temperature, up
+/// to the backward-Euler remainder `(T_g − T_s)/(1 + Δt · rate)`, and
+/// conserves the energy.
+#[test]
+fn stiff_heat_exchange_equalises_in_one_step() {
+    use mpmice::material::eos::EquationOfState;
+    let h = 1e15;
+    let mut run = heated_mixture(h);
+    let ((e_g0, t_g0), (e_s0, t_s0, _)) = thermal(&run);
+    let cap_s = run.particles.mass.iter().sum::<f64>() * run.solid_eos.specific_heat_cv();
+    let mean = (e_g0 + e_s0) / (e_g0 / t_g0 + cap_s);
+    let c0 = run.fluid.layout.interior[0];
+    let (g, s) = (&run.fluid.cells[0], &run.fluid.cells[1]);
+    let rate = h
+        * (s.vol_frac[c0] * g.sp_vol[c0] / 717.5
+            + g.vol_frac[c0] * s.sp_vol[c0] / run.solid_eos.specific_heat_cv());
+    let dt = run.step(f64::INFINITY).unwrap().dt;
+    let ((e_g, t_g), (e_s, lo, hi)) = thermal(&run);
+    let remainder = (t_g0 - t_s0) / (1.0 + dt * rate);
+    eprintln!(
+        "mean {mean:.9}, air {t_g:.9}, steel {lo:.9}…{hi:.9}, Δt·rate {:.3e}, \
+         T_g − T_s {:.6e} (backward Euler {remainder:.6e})",
+        dt * rate,
+        t_g - lo
+    );
+    assert!(dt * rate > 1e6);
+    assert!(((e_g + e_s) / (e_g0 + e_s0) - 1.0).abs() < 1e-13);
+    assert!(((t_g - lo) / remainder - 1.0).abs() < 1e-6);
+    for t in [t_g, lo, hi] {
+        assert!((t - mean).abs() < 1e-4, "{t} vs the mean {mean}");
+    }
+}

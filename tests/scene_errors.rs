@@ -462,6 +462,21 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             ">= 0",
         ),
         (
+            format!("{good}\n[coupling]\nheat_exchange = -1.0\n"),
+            "coupling.heat_exchange",
+            ">= 0",
+        ),
+        (
+            format!("{good}\n[coupling]\nheat_exchange = 1e3\n"),
+            "materials[0].cv",
+            "cv > 0",
+        ),
+        (
+            GOOD.replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\ncv = -450.0"),
+            "materials[0].cv",
+            "> 0",
+        ),
+        (
             format!("{good}\n[coupling]\nrigid_ramp = -0.1\n"),
             "coupling.rigid_ramp",
             ">= 0",
@@ -490,6 +505,17 @@ fn coupled_scene_bad_inputs_name_their_keys() {
         ),
     ];
     assert_each_names_its_key(&cases);
+    // A heat exchange with the solid's c_v: built into the run, every
+    // particle at the initial temperature.
+    let hot = format!("{good}\n[coupling]\nheat_exchange = 1e6\nsolid_temperature = 350.0\n")
+        .replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\ncv = 460.0");
+    let scene = mpmice::scene::parse(&hot).expect("the heated scene is valid");
+    let run = mpmice::scene::build_coupled_run::<2>(&scene).expect("build");
+    use mpmice::material::eos::EquationOfState;
+    assert_eq!(run.coupling.heat_exchange, 1e6);
+    assert_eq!(run.solid_eos.specific_heat_cv(), 460.0);
+    assert!(!run.particles.is_empty());
+    assert!(run.particles.temperature.iter().all(|&t| t == 350.0));
 }
 
 /// The fluid scene with an inflow face on x = 0 (air entering at 10 m/s).

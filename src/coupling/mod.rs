@@ -27,15 +27,24 @@
 //!    velocity.
 //! 10. Exchange among all materials at the cells (Eqs. 38–39,
 //!     [`ice::stage_lagrangian`]); the solid's velocity change goes back to
-//!     the nodes as the average of the surrounding cells.
+//!     the nodes as the average of the surrounding cells. With a heat
+//!     exchange (`CouplingParams::heat_exchange > 0`) the particles carry
+//!     a temperature: P2G maps it mass-weighted to the nodes, node → cell as
+//!     the velocity, and the exchange's temperature change returns cells →
+//!     nodes → particles the same way (conserving `Σ m c_v T` exactly). The
+//!     solid has no thermal expansion and no heating by its own
+//!     deformation; without a heat exchange it is isothermal and none of
+//!     this is computed.
 //! 11. Specific volumes (Eqs. 40–41); 12. fluid advection
 //!     ([`ice::stage_advect`]); 13. G2P (Eqs. 26–27).
+
+use std::ops::Mul;
 
 use nalgebra::SVector;
 use rayon::prelude::*;
 
 use crate::error::{Error, FailureSite, Result};
-use crate::grid::Grid;
+use crate::grid::{Grid, Reflect};
 use crate::ice::{self, Frame, IceParams, IceState, IceWorkspace, StepInfo};
 use crate::material::eos::{EquationOfState, SolidEos};
 use crate::material::SolidMaterial;
@@ -66,9 +75,9 @@ pub struct CouplingParams {
     /// Reference pressure `p_ref`: the pressure at which the solid is
     /// stress-free (Guilkey Sec. 3.3 step 7).
     pub p_ref: f64,
-    /// Temperature of the solid field in the cells (the solid is
-    /// isothermal; its `c_v` only matters in a heat exchange, which is off
-    /// for solids).
+    /// Initial temperature of the solid: every particle starts at it. With
+    /// `heat_exchange = 0` the solid stays at it (isothermal, and no
+    /// temperature transfer is computed).
     pub solid_temperature: f64,
     /// Volume-fraction floor: empty cells hold this fraction of solid (at
     /// the solid's density), fully solid cells this fraction of fluid. It
@@ -78,6 +87,11 @@ pub struct CouplingParams {
     /// fluid (Guilkey Eq. 38; `1e15` drives them to one velocity where they
     /// share a cell: no slip, no interpenetration, Sec. 4.2).
     pub momentum_exchange: f64,
+    /// Heat exchange coefficient `H` between the solid field and every
+    /// fluid (Guilkey Eq. 39, `dT_r/dt = Σ_s H θ_s v_r (T_s − T_r)/c_v,r`;
+    /// 0: none, the solid isothermal). The solid's change goes from the
+    /// cells to the nodes and then to the particles' temperatures.
+    pub heat_exchange: f64,
 }
 
 impl Default for CouplingParams {
@@ -87,6 +101,7 @@ impl Default for CouplingParams {
             solid_temperature: 300.0,
             floor_fraction: 1e-15,
             momentum_exchange: 1e15,
+            heat_exchange: 0.0,
         }
     }
 }
@@ -160,6 +175,15 @@ pub struct CoupledRun<const D: usize> {
     solid_l: Vec<SVector<f64, D>>,
     /// Per interior cell: (mass, momentum) of the solid from the nodes.
     cell_mass: Vec<f64>,
+    /// Whether the solid exchanges heat (`coupling.heat_exchange > 0`):
+    /// only then are temperatures transferred.
+    heat_on: bool,
+    /// Per node: the solid's temperature, then its exchange change.
+    node_scalar: Vec<f64>,
+    /// Per cell: the solid's exchange temperature change.
+    cell_scalar: Vec<f64>,
+    /// Per interior cell: the solid's temperature from the nodes.
+    cell_temp: Vec<f64>,
 }
 
 impl<const D: usize> CoupledRun<D> {
@@ -205,8 +229,7 @@ impl<const D: usize> CoupledRun<D> {
         ice.normalise_volume = true;
         {
             // Grow the coefficient matrices by the solid's row and column
-            // (`coupling.momentum_exchange`; no heat exchange with the
-            // isothermal solid).
+            // (`coupling.momentum_exchange`, `coupling.heat_exchange`).
             let ex = ice
                 .exchange
                 .get_or_insert_with(|| ice::ExchangeCoefficients::uniform(solid, 0.0, 0.0));
@@ -220,6 +243,8 @@ impl<const D: usize> CoupledRun<D> {
                 }
                 momentum[r * nm + solid] = k;
                 momentum[solid * nm + r] = k;
+                heat[r * nm + solid] = coupling.heat_exchange;
+                heat[solid * nm + r] = coupling.heat_exchange;
             }
             ex.momentum = momentum;
             ex.heat = heat;
@@ -230,7 +255,26 @@ impl<const D: usize> CoupledRun<D> {
         let n_cells = fluid.layout.len();
         let map = NodeCellMap::new(&grid, &fluid.layout);
         let n_int = fluid.layout.num_interior();
+        let heat_on = coupling.heat_exchange > 0.0;
+        let mut particles = particles;
+        particles.temperature.fill(coupling.solid_temperature);
         let mut run = Self {
+            heat_on,
+            node_scalar: if heat_on {
+                vec![0.0; n_nodes]
+            } else {
+                Vec::new()
+            },
+            cell_scalar: if heat_on {
+                vec![0.0; n_cells]
+            } else {
+                Vec::new()
+            },
+            cell_temp: if heat_on {
+                vec![0.0; n_int]
+            } else {
+                Vec::new()
+            },
             gs: GridState::new(n_nodes),
             scratch: StepScratch::default(),
             map,
@@ -269,17 +313,30 @@ impl<const D: usize> CoupledRun<D> {
         Ok(run)
     }
 
-    /// Step 1: P2G and node → cell of the solid's mass and velocity.
+    /// Step 1: P2G and node → cell of the solid's mass and velocity (and
+    /// temperature, with a heat exchange).
     fn p2g_to_cells(&mut self, dt: f64) -> Result<()> {
         let phases = phases!(self, dt);
         phases.p2g(&self.particles, &mut self.gs, &mut self.scratch)?;
+        let gs = &self.gs;
         nodes_to_cells(
-            &self.gs,
+            &gs.mass,
+            &gs.velocity,
             &self.map,
-            false,
             &mut self.cell_mass,
             &mut self.solid_l,
         );
+        if self.heat_on {
+            let p = &self.particles;
+            phases.p2g_scalar(p, &p.temperature, gs, &self.scratch, &mut self.node_scalar);
+            nodes_to_cells(
+                &gs.mass,
+                &self.node_scalar,
+                &self.map,
+                &mut self.cell_mass,
+                &mut self.cell_temp,
+            );
+        }
         Ok(())
     }
 
@@ -311,20 +368,23 @@ impl<const D: usize> CoupledRun<D> {
         })
     }
 
-    /// Mixture velocity of the fluids in interior cell `c` (the velocity an
-    /// empty solid cell takes).
-    fn fluid_velocity(&self, c: usize) -> SVector<f64, D> {
+    /// Mass-weighted velocity and temperature of the fluids in interior
+    /// cell `c` (what an empty solid cell takes, so that its exchange
+    /// changes nothing).
+    fn fluid_mixture(&self, c: usize) -> (SVector<f64, D>, f64) {
         let mut m = 0.0;
         let mut p = SVector::<f64, D>::zeros();
+        let mut mt = 0.0;
         for r in 0..self.solid {
             let mc = &self.fluid.cells[r];
             m += mc.mass[c];
             p += mc.velocity[c] * mc.mass[c];
+            mt += mc.temperature[c] * mc.mass[c];
         }
         if m > 0.0 {
-            p / m
+            (p / m, mt / m)
         } else {
-            SVector::zeros()
+            (SVector::zeros(), self.coupling.solid_temperature)
         }
     }
 
@@ -338,21 +398,23 @@ impl<const D: usize> CoupledRun<D> {
             let m = self.cell_mass[k];
             // An empty cell's floor moves with the fluid (even for a rigid
             // field): its exchange then changes nothing.
-            let (mass, u) = if m > floor {
-                (m, rigid.unwrap_or(self.solid_l[k]))
+            let (mass, u, t) = if m > floor {
+                let t = if self.heat_on { self.cell_temp[k] } else { t_s };
+                (m, rigid.unwrap_or(self.solid_l[k]), t)
             } else {
-                (floor, self.fluid_velocity(c))
+                let (u, t) = self.fluid_mixture(c);
+                (floor, u, if self.heat_on { t } else { t_s })
             };
             let p = self.fluid.pressure[c];
             let p = if p > 0.0 { p } else { self.coupling.p_ref };
             let rho = self
                 .solid_eos
-                .density(p, t_s)
+                .density(p, t)
                 .unwrap_or(self.solid_eos.reference_density());
             let sc = &mut self.fluid.cells[self.solid];
             sc.mass[c] = mass;
             sc.velocity[c] = u;
-            sc.temperature[c] = t_s;
+            sc.temperature[c] = t;
             sc.sp_vol[c] = 1.0 / rho;
         }
     }
@@ -447,6 +509,37 @@ impl<const D: usize> CoupledRun<D> {
         }
     }
 
+    /// The solid's temperature change of the exchange (Guilkey Eq. 39),
+    /// cells → nodes → particles (Sec. 3.3 step 10), before the particles
+    /// move. Empty cells contribute nothing. The transfer conserves the
+    /// solid's thermal energy: `Σ_p m_p ΔT_p = Σ_i m_i ΔT_i = Σ_c m_c ΔT_c`.
+    fn heat_to_particles(&mut self, dt: f64) {
+        let layout = &self.fluid.layout;
+        let floor = self.coupling.floor_fraction
+            * self.solid_eos.reference_density()
+            * layout.cell_volume();
+        let tl = self.ws.lagrangian_temperature(self.solid);
+        let t0 = &self.fluid.cells[self.solid].temperature;
+        for (k, &c) in layout.interior.iter().enumerate() {
+            self.cell_scalar[c] = if self.cell_mass[k] > floor {
+                tl[c] - t0[c]
+            } else {
+                0.0
+            };
+        }
+        cells_to_nodes(&self.grid, layout, &self.cell_scalar, &mut self.node_scalar);
+        self.grid.mirror_ghosts(&mut self.node_scalar);
+        let mut temperature = std::mem::take(&mut self.particles.temperature);
+        let phases = phases!(self, dt);
+        phases.g2p_scalar_add(
+            &self.particles,
+            &self.node_scalar,
+            &self.scratch,
+            &mut temperature,
+        );
+        self.particles.temperature = temperature;
+    }
+
     fn step_inner(&mut self, dt_try: f64) -> Result<StepInfo> {
         let mut dt = dt_try;
         // Step 1: P2G and node → cell (does not change the particles).
@@ -533,9 +626,9 @@ impl<const D: usize> CoupledRun<D> {
         }
         // Node → cell: the solid's Lagrangian cell velocity.
         nodes_to_cells(
-            &self.gs,
+            &self.gs.mass,
+            &self.gs.velocity_new,
             &self.map,
-            true,
             &mut self.cell_mass,
             &mut self.solid_l,
         );
@@ -588,6 +681,9 @@ impl<const D: usize> CoupledRun<D> {
             self.grid.mirror_ghosts(&mut gs.velocity_new);
             self.grid.mirror_ghosts(&mut gs.accel);
         }
+        if self.heat_on {
+            self.heat_to_particles(dt);
+        }
         // Step 13: G2P.
         if let Some(v) = self.rigid_now {
             self.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
@@ -603,56 +699,57 @@ impl<const D: usize> CoupledRun<D> {
 }
 
 /// Node → cell (Guilkey Sec. 3.3 step 1): per interior cell the mass, the
-/// average of its `2^D` corner nodes' masses, and the mass-weighted velocity
-/// (`vᴸ` with `velocity_new`, else the P2G velocity).
-fn nodes_to_cells<const D: usize>(
-    gs: &GridState<D>,
+/// average of its `2^D` corner nodes' masses, and the mass-weighted average
+/// of a nodal field (velocity, temperature; zero where the corners are
+/// massless).
+fn nodes_to_cells<const D: usize, T>(
+    node_mass: &[f64],
+    node_value: &[T],
     map: &NodeCellMap<D>,
-    velocity_new: bool,
     cell_mass: &mut [f64],
-    cell_vel: &mut [SVector<f64, D>],
-) {
+    cell_value: &mut [T],
+) where
+    T: Reflect<D> + Mul<f64, Output = T> + Send + Sync,
+{
     let inv = 1.0 / (1usize << D) as f64;
-    let vel = if velocity_new {
-        &gs.velocity_new
-    } else {
-        &gs.velocity
-    };
     cell_mass
         .par_iter_mut()
-        .zip(cell_vel.par_iter_mut())
+        .zip(cell_value.par_iter_mut())
         .zip(map.base.par_iter())
         .for_each(|((m, u), &b)| {
             let mut mass = 0.0;
-            let mut mom = SVector::<f64, D>::zeros();
+            let mut sum = T::zero();
             for &o in &map.corners {
-                mass += gs.mass[b + o];
-                mom += vel[b + o] * gs.mass[b + o];
+                mass += node_mass[b + o];
+                sum = sum.add(&(node_value[b + o] * node_mass[b + o]));
             }
             *m = mass * inv;
             *u = if mass > 0.0 {
-                mom / mass
+                sum * (1.0 / mass)
             } else {
-                SVector::zeros()
+                T::zero()
             };
         });
 }
 
 /// Cell values (interior cells) to nodes: each node gets `1/2^D` of every
 /// adjacent interior cell's value; then the wall folding of the MPM grid
-/// (a boundary node on a symmetry plane gets its own reflection: tangential
-/// components doubled, the normal one cancelled — Guilkey's doubled
-/// boundary weights).
-fn cells_to_nodes<const D: usize>(
+/// (a boundary node on a symmetry plane gets its own reflection: scalars
+/// and tangential components doubled, the normal one cancelled — Guilkey's
+/// doubled boundary weights). With the mass average of [`nodes_to_cells`]
+/// this conserves: `Σ_i m_i q_i = Σ_c m_c q_c` over the folded nodal masses.
+fn cells_to_nodes<const D: usize, T>(
     grid: &Grid<D>,
     layout: &ice::CellLayout<D>,
-    cell: &[SVector<f64, D>],
-    node: &mut [SVector<f64, D>],
-) {
+    cell: &[T],
+    node: &mut [T],
+) where
+    T: Reflect<D> + Mul<f64, Output = T> + Send + Sync,
+{
     let inv = 1.0 / (1usize << D) as f64;
     node.par_iter_mut().enumerate().for_each(|(i, q)| {
         let ijk = grid.node_coords(i);
-        let mut sum = SVector::<f64, D>::zeros();
+        let mut sum = T::zero();
         'corner: for bits in 0..1usize << D {
             let mut cc = [0isize; D];
             for d in 0..D {
@@ -661,7 +758,7 @@ fn cells_to_nodes<const D: usize>(
                     continue 'corner;
                 }
             }
-            sum += cell[layout.index(cc)];
+            sum = sum.add(&cell[layout.index(cc)]);
         }
         *q = sum * inv;
     });

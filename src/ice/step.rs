@@ -627,6 +627,12 @@ impl<const D: usize> IceWorkspace<D> {
         &self.vel_l[r]
     }
 
+    /// Per cell, material `r`'s Lagrangian temperature after the exchange
+    /// (Guilkey Eqs. 37 and 39), after [`stage_lagrangian`].
+    pub fn lagrangian_temperature(&self, r: usize) -> &[f64] {
+        &self.temp_l[r]
+    }
+
     /// Per material and direction, the face velocities `u*` after the face
     /// exchange (Guilkey Eq. 28), after [`stage_pressure`].
     pub fn face_velocities(&self) -> &[[Vec<f64>; D]] {

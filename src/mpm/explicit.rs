@@ -498,6 +498,114 @@ impl<const D: usize> CoupledMpm<'_, D> {
     }
 }
 
+impl<const D: usize> CoupledMpm<'_, D> {
+    /// Mass-weighted map of a particle scalar to the nodes (the solid's
+    /// temperature in Guilkey Sec. 3.3 step 1): `q_i = Σ_p S_ip m_p q_p /
+    /// m_i`, the numerator folded at walls like the mass, with the bins and
+    /// particle domains of this step's [`Self::p2g`] (call it first;
+    /// `gs.mass` is its nodal mass). Nodes at or below the mass floor get 0.
+    pub fn p2g_scalar(
+        &self,
+        particles: &Particles<D>,
+        values: &[f64],
+        gs: &GridState<D>,
+        scratch: &StepScratch<D>,
+        node: &mut [f64],
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            values: &[f64],
+            gs: &GridState<D>,
+            scratch: &StepScratch<D>,
+            node: &mut [f64],
+        ) {
+            let grid = ctx.grid;
+            let (strides, inv_h) = (grid.strides(), grid.inv_h);
+            node.par_iter_mut().for_each(|q| *q = 0.0);
+            {
+                let out = SharedMut::new(node);
+                scratch.bins.for_each_colored(|p| {
+                    let xi = grid.to_grid_units(&particles.x[p]);
+                    let hw = half_width(&scratch.lp, p);
+                    let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &hw, &inv_h);
+                    let base = grid.node_index(pw.base());
+                    let mq = particles.mass[p] * values[p];
+                    pw.for_each(|m, w, _| {
+                        // SAFETY: slab colouring gives concurrent tasks
+                        // disjoint nodes.
+                        unsafe { *out.get(base + offset(m, &strides)) += w * mq };
+                    });
+                });
+            }
+            grid.fold_ghosts(node);
+            let floor = ctx.params.mass_floor;
+            node.par_iter_mut()
+                .zip(gs.mass.par_iter())
+                .for_each(|(q, &m)| *q = if m > floor { *q / m } else { 0.0 });
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(
+            self.params.shape,
+            run,
+            &ctx,
+            particles,
+            values,
+            gs,
+            scratch,
+            node
+        )
+    }
+
+    /// Adds a nodal increment to a particle scalar: `q_p += Σ_i S_ip Δq_i`
+    /// (Guilkey Sec. 3.3 step 10's exchange change, nodes → particles), at
+    /// the positions and domains of this step's [`Self::p2g`] (call it before
+    /// the particles move). `node` must have its ghosts mirrored.
+    pub fn g2p_scalar_add(
+        &self,
+        particles: &Particles<D>,
+        node: &[f64],
+        scratch: &StepScratch<D>,
+        values: &mut [f64],
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            node: &[f64],
+            scratch: &StepScratch<D>,
+            values: &mut [f64],
+        ) {
+            let grid = ctx.grid;
+            let (strides, inv_h) = (grid.strides(), grid.inv_h);
+            values
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(512)
+                .for_each(|(p, q)| {
+                    let xi = grid.to_grid_units(&particles.x[p]);
+                    let hw = half_width(&scratch.lp, p);
+                    let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &hw, &inv_h);
+                    let base = grid.node_index(pw.base());
+                    let mut dq = 0.0;
+                    pw.for_each(|m, w, _| dq += w * node[base + offset(m, &strides)]);
+                    *q += dq;
+                });
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(
+            self.params.shape,
+            run,
+            &ctx,
+            particles,
+            node,
+            scratch,
+            values
+        )
+    }
+}
+
 /// Start of a step: bins the particles into slabs and freezes the GIMP
 /// half-widths (l = l⁰|F_dd|) for every transfer of the step.
 fn prepare<const D: usize>(

@@ -611,7 +611,9 @@ pub fn build_coupled_run<const D: usize>(
         solid.elastic.bulk(),
         cs.reference_pressure,
         cs.reference_pressure,
-        450.0,
+        // c_v only enters the heat exchange, which requires it; otherwise
+        // steel's value stands in.
+        spec.cv.unwrap_or(450.0),
     )
     .map_err(|e| SceneError::new(format!("materials[{spec_index}]"), e.to_string()))?;
     let rigid_velocity = if spec.rigid {
@@ -662,6 +664,7 @@ pub fn build_coupled_run<const D: usize>(
         p_ref: cs.reference_pressure,
         solid_temperature: cs.solid_temperature,
         momentum_exchange: cs.momentum_exchange,
+        heat_exchange: cs.heat_exchange,
         ..Default::default()
     };
     let SolidRun {

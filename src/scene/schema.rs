@@ -230,7 +230,9 @@ pub struct MaterialSpec {
     pub eos: Option<EosKind>,
     /// Ratio of specific heats γ > 1 (fluids).
     pub gamma: Option<f64>,
-    /// Specific heat at constant volume c_v > 0 (fluids).
+    /// Specific heat at constant volume c_v > 0 (fluids; solids in a
+    /// coupled scene with `coupling.heat_exchange > 0`, where it is
+    /// required).
     pub cv: Option<f64>,
     /// Stiffening pressure p_inf ≥ 0 (stiffened gas).
     pub p_inf: Option<f64>,
@@ -254,9 +256,15 @@ pub struct CouplingSpec {
     /// (≥ 0; Guilkey uses 1e15).
     #[serde(default = "default_k_solid")]
     pub momentum_exchange: f64,
-    /// Temperature of the (isothermal) solid in the cells (> 0).
+    /// Initial temperature of the solid (> 0; every particle starts at
+    /// it). Without a heat exchange the solid stays at it (isothermal).
     #[serde(default = "default_solid_t")]
     pub solid_temperature: f64,
+    /// Heat exchange coefficient H between the solid and each fluid
+    /// (Guilkey Eq. 39; ≥ 0, default 0: no heat exchange, isothermal
+    /// solid). With H > 0 the solid material needs `cv`.
+    #[serde(default)]
+    pub heat_exchange: f64,
     /// Time over which a rigid solid's prescribed velocity rises smoothly
     /// from zero, `V (1 − cos(π t/T))/2` (≥ 0; 0: impulsive start).
     #[serde(default)]
@@ -279,6 +287,7 @@ impl Default for CouplingSpec {
             reference_pressure: default_p_ref(),
             momentum_exchange: default_k_solid(),
             solid_temperature: default_solid_t(),
+            heat_exchange: 0.0,
             rigid_ramp: 0.0,
         }
     }
@@ -842,13 +851,15 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     for (v, k) in [
         (m.eos.is_some(), "eos"),
         (m.gamma.is_some(), "gamma"),
-        (m.cv.is_some(), "cv"),
         (m.p_inf.is_some(), "p_inf"),
         (m.viscosity.is_some(), "viscosity"),
     ] {
         if v {
             return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
         }
+    }
+    if let Some(c) = m.cv {
+        positive(&p("cv"), c)?;
     }
     match m.density {
         Some(d) => positive(&p("density"), d)?,
@@ -1357,7 +1368,19 @@ impl Scene {
                 format!("must be finite and >= 0, got {}", c.momentum_exchange),
             ));
         }
+        if !(c.heat_exchange.is_finite() && c.heat_exchange >= 0.0) {
+            return Err(err(
+                "coupling.heat_exchange",
+                format!("must be finite and >= 0, got {}", c.heat_exchange),
+            ));
+        }
         let s = solids[0];
+        if c.heat_exchange > 0.0 && self.materials[s].cv.is_none() {
+            return Err(err(
+                format!("materials[{s}].cv"),
+                "missing; the solid needs a specific heat cv > 0 when coupling.heat_exchange > 0",
+            ));
+        }
         if self.materials[s].rigid {
             let name = &self.materials[s].name;
             let mut vel: Option<&Option<Vec<f64>>> = None;
