@@ -1351,6 +1351,11 @@ pub fn stage_pressure<const D: usize>(
 ///
 /// # Errors
 /// [`IceError::NonPhysical`] naming the cell.
+/// Volume fraction above which a particle-borne material makes a cell (and
+/// its face neighbours) use Guilkey Eq. 34's flow work instead of the
+/// total-energy form.
+const SOLID_FRACTION_FOR_FLOW_WORK: f64 = 1e-9;
+
 pub fn stage_lagrangian<const D: usize>(
     state: &IceState<D>,
     params: &IceParams<D>,
@@ -1428,6 +1433,15 @@ pub fn stage_lagrangian<const D: usize>(
         for (o, a) in o_v.iter_mut().zip(v_l.iter_mut()) {
             *o = Out::new(a);
         }
+        let any_lagr = lagr[..nm].iter().any(|&l| l);
+        let solid_in = |k: usize| {
+            (0..nm).any(|r| lagr[r] && st.cells[r].vol_frac[k] > SOLID_FRACTION_FOR_FLOW_WORK)
+        };
+        let solid_near = |c: usize| {
+            solid_in(c)
+                || (0..D)
+                    .any(|d| solid_in(c - layout.strides[d]) || solid_in(c + layout.strides[d]))
+        };
         try_rows(layout, |row| {
             let mut theta = [0.0; MAX_MATERIALS];
             let mut v = [0.0; MAX_MATERIALS];
@@ -1443,13 +1457,18 @@ pub fn stage_lagrangian<const D: usize>(
                     grad[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
                 }
                 let mut dke_src = 0.0;
-                // Cells a solid occupies use Guilkey Eq. 34 as written: the
-                // total-energy form would hand the fluid the work done on
-                // the solid's volume change (which a fluid floor cannot
-                // absorb); Eq. 34 gives each material the work of its own
+                // Cells a solid occupies, and their face neighbours, use
+                // Guilkey Eq. 34 as written. In the total-energy form the
+                // face work `p* θ_s u*_s` of the solid's volume flux goes
+                // into the fluid's energy, but the solid does not pay for
+                // it (its force is `−θ_s ∇p` on the nodes): in the solid's
+                // own cells the fluid floor cannot absorb it, and in a
+                // fluid cell beside the solid it is a steady source (the
+                // held pressurised cylinder heated the air beside its
+                // outer surface from 300 to 326 K by 8 ms and blew up at
+                // 15 ms). Eq. 34 gives each material the work of its own
                 // compression, `p κ_r θ_r Δp`.
-                let solid_here = (0..nm).any(|r| lagr[r] && st.cells[r].vol_frac[c] > 1e-9);
-                let cons = conservative && !solid_here;
+                let cons = conservative && !(any_lagr && solid_near(c));
                 for r in 0..nm {
                     let mc = &st.cells[r];
                     theta[r] = mc.vol_frac[c];
