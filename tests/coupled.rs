@@ -219,7 +219,7 @@ fn pressurized_cylinder_eq43_converges() {
 /// Guilkey Sec. 4.3 through the scene file at its own resolution
 /// (h = 0.005) on the study's cropped domain [0, 0.8] × [0, 0.2]: at the
 /// case's end (0.48 ms) the attached shock is within 2.15° of the exact
-/// 37.76° and p2/p1 within 2.5 % of 3.771 (measured 35.85°, 3.693; the
+/// 37.76° and p2/p1 within 2.5 % of 3.771 (measured 36.03°, 3.701; the
 /// `wedge_mach3` study refines to 0.25° and 0.63 % at h = 0.00125).
 #[test]
 fn wedge_mach3_case_gives_the_oblique_shock() {
