@@ -780,7 +780,9 @@ pub(super) fn implicit_pressure<const D: usize>(
                 retryable: true,
             });
         }
-        let w = params.source_weight(iw.dp[c], state.p_eq[c]);
+        let w = params.source_weight(iw.dp[c], state.p_eq[c], || {
+            super::step::cell_shock_sensor(layout, &state.p_eq, c)
+        });
         ws.press[c] = state.p_eq[c] + w * iw.dp[c];
     }
     Ok((outer, linear))

@@ -196,8 +196,40 @@ pub enum EnergyForm {
 /// Relative pressure change `|Δp|/p_eq` of a step (Eq. 29) at which the
 /// switched `Δp` weight of [`IceParams::source_weight`] reaches its
 /// shock values; below it the weight tends linearly to the time-centred
-/// `1/2`.
-pub const WEIGHT_SWITCH_SCALE: f64 = 1.0e-3;
+/// `1/2`. (`1e-3` before the compression weight was shock-sensed: the
+/// simple wave `ε = 0.1` then ran at `w_c`/`w` at every `N ≤ 512`; `3e-3`
+/// measured best on the simple wave for Sod within 1 %.)
+pub const WEIGHT_SWITCH_SCALE: f64 = 3.0e-3;
+
+/// Value of the cell pressure shock sensor ([`cell_shock_sensor`]) at
+/// which the compression weight of [`IceParams::source_weight`] is fully
+/// on (below it, it is scaled by `ψ/ψ_c`).
+pub const COMPRESSION_SENSOR_SCALE: f64 = 3.0e-4;
+
+/// Pressure shock sensor of cell `c` (Jameson, Schmidt & Turkel 1981):
+/// the largest, over the directions and the cells `c − s, c, c + s`, of
+/// `|p_{i+s} − 2 p_i + p_{i−s}|/(p_{i+s} + 2 p_i + p_{i−s})`: `O(h²)`
+/// where `p` is smooth, `O(1)` within a cell or two of a shock (taking the
+/// neighbours' values catches the middle of a shock spread over three
+/// cells, where the second difference vanishes). Needs two ghost layers
+/// of `p` filled; a non-positive denominator counts as a shock.
+#[inline]
+pub fn cell_shock_sensor<const D: usize>(layout: &CellLayout<D>, p: &[f64], c: usize) -> f64 {
+    let sens = |i: usize, s: usize| {
+        let den = p[i + s] + 2.0 * p[i] + p[i - s];
+        if den > 0.0 {
+            (p[i + s] - 2.0 * p[i] + p[i - s]).abs() / den
+        } else {
+            1.0
+        }
+    };
+    let mut psi: f64 = 0.0;
+    for d in 0..D {
+        let s = layout.strides[d];
+        psi = psi.max(sens(c - s, s)).max(sens(c, s)).max(sens(c + s, s));
+    }
+    psi
+}
 
 impl<const D: usize> IceParams<D> {
     /// Defaults: `cfl = 0.5`, second order with van Leer, no gravity, no
@@ -304,7 +336,9 @@ impl<const D: usize> IceParams<D> {
     /// linear acoustic wave order 1.96 at N = 512, error 8.1e-5 (Hancock:
     /// 8.7e-5; the unswitched rules: order 0.81, 1.14e-2). Sod L1(ρ)
     /// 5.42e-4 at N = 800 in 403 steps (Hancock: 7.96e-4 in 481 steps),
-    /// 2.97e-4 at N = 1600 in 805 steps (unswitched: 5.40e-4, 2.99e-4).
+    /// 2.99e-4 at N = 1600 in 805 steps (unswitched: 5.40e-4, 2.99e-4;
+    /// compression weight not shock-sensed: 5.42e-4, 2.97e-4, and
+    /// 1.57e-4 at N = 3200 against 1.65e-4 now).
     /// Expansion weights below 0.4 were more accurate at N ≤ 1600 but
     /// stalled the convergence at N = 6400; switching the weight, or the
     /// jump factor, with the pressure shock sensor instead cost 18–27 % on
@@ -325,7 +359,10 @@ impl<const D: usize> IceParams<D> {
     /// `pressure_weight_compression`. With it, the weight is switched by
     /// the relative pressure change of the step,
     /// `σ = min(1, |Δp|/(s p_eq))` with `s = ` [`WEIGHT_SWITCH_SCALE`]
-    /// (`1e-3`): `1/2 + σ (w_c − 1/2)` where `Δp > 0` (compression) and,
+    /// (`3e-3`): `1/2 + σ φ (w_c − 1/2)` where `Δp > 0` (compression),
+    /// `φ = min(1, ψ/ψ_c)` the value of `shock()` — the cell pressure shock
+    /// sensor [`cell_shock_sensor`] — over `ψ_c = `
+    /// [`COMPRESSION_SENSOR_SCALE`] (`3e-4`), and,
     /// where `Δp < 0`, `w_b + (1 − w_b) x²` with `w_b = 1/2 + σ (w − 1/2)`
     /// and the relative expansion `x = min(1, −Δp/p_eq)`. A shock or a
     /// start-up discontinuity (`σ = 1`) gets `w_c` in compression and `w`
@@ -335,12 +372,19 @@ impl<const D: usize> IceParams<D> {
     /// problem). On smooth flow `Δp = O(Δt)`, so `σ = O(Δt)` (and
     /// `x² = O(Δt²)`): the weight is the time-centred `1/2 + O(Δt)`, a
     /// pressure error `O(Δt²)` per step, and the step stays second order;
-    /// for acoustic amplitudes (`|Δp|/p_eq ≪ 1e-3`) the switch is off.
+    /// for acoustic amplitudes (`|Δp|/p_eq ≪ 3e-3`) the switch is off.
+    /// The amplitude switch alone (`s = 1e-3`, no `φ`) saturated on a
+    /// smooth wave of finite amplitude (the simple wave of the
+    /// `ice_simple_wave` study, `ε = 0.1`: `|Δp|/p_eq ≈ 0.8 h`), which then
+    /// ran at `w_c` and `w`, first order and 14× Hancock's error at
+    /// `N = 1024`; sensing the compression weight and `s = 3e-3` give
+    /// 1.3× Hancock's error there. The expansion weight stays an amplitude
+    /// switch: the Sod rarefaction (smooth) owes its accuracy to it.
     /// (The former rule switched on the sign of `Δp` alone, `w_c` for any
     /// compression, and was first order on smooth compressions: acoustic
     /// wave order 0.81.) Cells with `p_eq ≤ 0` keep the switch on.
     #[inline]
-    pub fn source_weight(&self, dp: f64, p_eq: f64) -> f64 {
+    pub fn source_weight(&self, dp: f64, p_eq: f64, shock: impl FnOnce() -> f64) -> f64 {
         let w = self.pressure_weight;
         let Some(wc) = self.pressure_weight_compression else {
             return w;
@@ -351,7 +395,14 @@ impl<const D: usize> IceParams<D> {
         // The switch σ = min(1, |Δp|/(s p_eq)), s = WEIGHT_SWITCH_SCALE.
         let sigma = (dp.abs() / (WEIGHT_SWITCH_SCALE * p_eq)).min(1.0);
         if dp > 0.0 {
-            0.5 + sigma * (wc - 0.5)
+            // Compression: only at a shock (the pressure shock sensor).
+            let psi = shock();
+            let sensed = if psi.is_nan() {
+                1.0
+            } else {
+                (psi / COMPRESSION_SENSOR_SCALE).min(1.0)
+            };
+            0.5 + sigma * sensed * (wc - 0.5)
         } else {
             let wb = 0.5 + sigma * (w - 0.5);
             let x = (-dp / p_eq).min(1.0);
@@ -1299,7 +1350,8 @@ pub fn stage_pressure<const D: usize>(
                         value: p,
                     });
                 }
-                let w = params.source_weight(dp, st.p_eq[c]);
+                let w =
+                    params.source_weight(dp, st.p_eq[c], || cell_shock_sensor(layout, &st.p_eq, c));
                 // SAFETY: cell c is written by this task only.
                 unsafe { press.set(c, st.p_eq[c] + w * dp) };
             }

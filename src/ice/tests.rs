@@ -70,8 +70,10 @@ fn hancock_sod_n400_matches_exact_solution_at_cfl_08() {
 /// The acoustic Hancock variant ([`IceParams::hancock_acoustic`]) on Sod
 /// at N = 800 and 1600; at N = 1600 it is below the error of a Roe/MC
 /// finite-volume code at the same resolution (3.1e-4). Measured L1(ρ)
-/// 5.423e-4 in 403 steps and 2.972e-4 in 805 steps with the switched
-/// weight and jump factor and the shock-sensed face viscosity (the
+/// 5.418e-4 in 403 steps and 2.993e-4 in 805 steps with the switched
+/// weight (compression weight shock-sensed) and jump factor and the
+/// shock-sensed face viscosity (amplitude-switched compression weight:
+/// 5.423e-4, 2.972e-4; the
 /// unswitched rules:
 /// 5.401e-4, 2.992e-4; Hancock at cfl 0.8: 7.96e-4 in 481 steps, 4.48e-4
 /// in 961).
@@ -381,7 +383,7 @@ fn strong_rarefaction_and_shock_stay_positive() {
 /// weight and face viscosity act hardest there): they run to the end with
 /// positive density, pressure and temperature, and the errors stay at the
 /// literal scheme's level or below. Measured (N = 200): 123 4.631e-3,
-/// 1e4 ratio 3.288e-2 (literal: 6.79e-3, 3.86e-2).
+/// 1e4 ratio 3.282e-2 (literal: 6.79e-3, 3.86e-2).
 #[test]
 fn hancock_acoustic_hard_cases_stay_positive() {
     let (e123, e_ratio) = hard_cases(&IceParams::hancock_acoustic(walls1()));

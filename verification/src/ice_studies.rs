@@ -448,6 +448,241 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
     })
 }
 
+/// Ratio of specific heats of the [`ice_simple_wave`] gas.
+const SW_GAMMA: f64 = 1.4;
+
+/// The isentropic right-running simple wave of [`ice_simple_wave`]:
+/// `u₀(ξ) = ε sin 2πξ` (`c₀ = 1`), with `J₋ = u − 2c/(γ−1) = −2/(γ−1)`
+/// and `p/ρ^γ = 1/γ` (`ρ₀ = 1`, `p₀ = 1/γ`), so that `c = 1 + (γ−1)u/2`,
+/// `ρ = c^{2/(γ−1)}`, `p = ρ^γ/γ`.
+#[derive(Clone, Copy, Debug)]
+pub struct SimpleWave {
+    /// Velocity amplitude relative to `c₀ = 1`.
+    pub eps: f64,
+}
+
+impl SimpleWave {
+    /// `(ρ, u, p)` of the state with velocity `u` on the wave.
+    pub fn state_of_u(&self, u: f64) -> (f64, f64, f64) {
+        let g = SW_GAMMA;
+        let c = 1.0 + 0.5 * (g - 1.0) * u;
+        let rho = c.powf(2.0 / (g - 1.0));
+        (rho, u, rho.powf(g) / g)
+    }
+
+    /// Shock-formation time `1/max_ξ(−d(u₀ + c)/dξ) = 1/(π (γ+1) ε)`.
+    pub fn shock_time(&self) -> f64 {
+        1.0 / (PI * (SW_GAMMA + 1.0) * self.eps)
+    }
+
+    /// Exact velocity at `(x, t)`, `t` below [`Self::shock_time`]: `u₀(ξ)`
+    /// with `x = ξ + (1 + (γ+1)u₀(ξ)/2) t`, the foot `ξ` found by Newton's
+    /// method safeguarded by bisection (the map is increasing).
+    pub fn velocity(&self, x: f64, t: f64) -> f64 {
+        let a = 0.5 * (SW_GAMMA + 1.0) * t * self.eps;
+        let y = x - t;
+        // ξ + a sin 2πξ = y; the root lies in [y − a, y + a].
+        let f = |xi: f64| xi + a * (2.0 * PI * xi).sin() - y;
+        let (mut lo, mut hi) = (y - a - 1e-14, y + a + 1e-14);
+        let mut xi = y;
+        for _ in 0..100 {
+            let fx = f(xi);
+            if fx.abs() <= 1e-15 {
+                break;
+            }
+            if fx > 0.0 {
+                hi = xi;
+            } else {
+                lo = xi;
+            }
+            let d = 1.0 + 2.0 * PI * a * (2.0 * PI * xi).cos();
+            let next = xi - fx / d;
+            xi = if next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo < 1e-15 {
+                break;
+            }
+        }
+        self.eps * (2.0 * PI * xi).sin()
+    }
+
+    /// Exact `(ρ, u, p)` at `(x, t)`.
+    pub fn state(&self, x: f64, t: f64) -> (f64, f64, f64) {
+        self.state_of_u(self.velocity(x, t))
+    }
+}
+
+/// 4-point Gauss–Legendre nodes and weights on `[−1, 1]` (exact for
+/// degree 7: the cell averages below are `O(h⁸)` accurate).
+const GAUSS4: [(f64, f64); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+    (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+];
+
+/// Cell average over `[xc − h/2, xc + h/2]` of `f`, 4-point Gauss.
+fn cell_average(xc: f64, h: f64, f: impl Fn(f64) -> f64) -> f64 {
+    GAUSS4
+        .iter()
+        .map(|&(s, w)| 0.5 * w * f(xc + 0.5 * h * s))
+        .sum()
+}
+
+/// One run of the simple wave: `N` cells on the periodic `[0, 1]`,
+/// initialised from the cell averages of the conserved mass, momentum and
+/// total energy (`ρ̄`, `ū = (ρu)‾/ρ̄`, `p̄ = (γ−1)(Ē − ρ̄ū²/2)`), run to
+/// `t_end` (below the shock time); returns `(L1/ε, steps, wall_s)` with
+/// `L1 = mean over cells of |ρ_cell − ρ̄_exact|`, the exact cell averages
+/// by the 4-point Gauss rule.
+///
+/// # Errors
+/// Any solver error, or `t_end` not below the shock-formation time.
+pub fn simple_wave_run(
+    params: &IceParams<1>,
+    eps: f64,
+    t_end: f64,
+    n: usize,
+) -> Result<(f64, u64, f64)> {
+    let wave = SimpleWave { eps };
+    anyhow::ensure!(
+        t_end < wave.shock_time(),
+        "t_end = {t_end} is not below the shock time {}",
+        wave.shock_time()
+    );
+    let g = SW_GAMMA;
+    let h = 1.0 / n as f64;
+    let layout = CellLayout::<1>::new(SVector::<f64, 1>::zeros(), SVector::<f64, 1>::new(h), [n])?;
+    let st = IceState::new(layout, vec![gas(g)?], |x| {
+        let at = |y: f64| wave.state_of_u(wave.eps * (2.0 * PI * y).sin());
+        let rho = cell_average(x[0], h, |y| at(y).0);
+        let mom = cell_average(x[0], h, |y| {
+            let (r, u, _) = at(y);
+            r * u
+        });
+        let energy = cell_average(x[0], h, |y| {
+            let (r, u, p) = at(y);
+            p / (g - 1.0) + 0.5 * r * u * u
+        });
+        let u = mom / rho;
+        let p = (g - 1.0) * (energy - 0.5 * rho * u * u);
+        vec![MaterialInit::new(1.0, rho, p, SVector::<f64, 1>::new(u))]
+    })?;
+    let run = run_fluid(st, params, t_end, 10_000_000)?;
+    let s = &run.state;
+    let err = s
+        .layout
+        .interior
+        .iter()
+        .map(|&c| {
+            let xc = s.layout.centre(c)[0];
+            let exact = cell_average(xc, h, |y| wave.state(y, s.time).0);
+            (s.mixture_density(c) - exact).abs()
+        })
+        .sum::<f64>()
+        / (n as f64 * eps);
+    Ok((err, run.steps, run.wall_s))
+}
+
+/// A finite-amplitude right-running simple wave of an ideal gas
+/// (`γ = 1.4`), periodic on `[0, 1]`: `u₀ = ε sin 2πx` (`c₀ = 1`), `ρ` and
+/// `p` from the Riemann invariant `J₋ = −2c₀/(γ−1)` and isentropy
+/// (`ρ₀ = 1`, `p₀ = 1/γ`) — see [`SimpleWave`]; exact solution by
+/// characteristics before the shock forms. `ε = 1e-2` to `t = 1` and
+/// `ε = 0.1` to `t = 0.5` (shock times 13.3 and 1.33), Hancock, acoustic
+/// Hancock and high resolution: L1 of density relative to `ε` against
+/// exact cell averages (see [`simple_wave_run`]). Unlike
+/// [`ice_acoustic`] (`ε = 1e-5`), the amplitudes reach the thresholds of
+/// the amplitude switches of [`IceParams::hancock_acoustic`].
+///
+/// # Errors
+/// Any solver error.
+pub fn ice_simple_wave(quick: bool) -> Result<StudyResult> {
+    let ns: &[usize] = if quick {
+        &[32, 64, 128]
+    } else {
+        &[32, 64, 128, 256, 512, 1024]
+    };
+    let mut series = Vec::new();
+    let mut notes = vec![
+        "the last two series per amplitude are diagnostics: acoustic Hancock without its Δp weight switch (weight 1/2 everywhere) and without its jump switch (Hancock's face_dt_factor 0.625 instead of the switched acoustic jump)".to_string(),
+        "isentropic simple wave, gamma = 1.4, u0 = eps sin 2 pi x, c0 = 1, rho0 = 1, p0 = 1/gamma, J- = u - 2c/(gamma-1) constant, periodic; exact by characteristics (safeguarded Newton for the foot); initial state = cell averages of mass, momentum, total energy (4-point Gauss); error = mean |rho - exact cell average (4-point Gauss)| / eps".to_string(),
+    ];
+    for (eps, t_end) in [(1e-2, 1.0), (0.1, 0.5)] {
+        let ts = SimpleWave { eps }.shock_time();
+        notes.push(format!("eps = {eps}: t = {t_end}, shock time {ts:.4}"));
+        for (params, tag) in [
+            (
+                IceParams::hancock(periodic1()),
+                "Hancock (superbee, cfl 0.8)",
+            ),
+            (
+                IceParams::hancock_acoustic(periodic1()),
+                "acoustic Hancock (cfl 0.9)",
+            ),
+            (
+                IceParams::high_resolution(periodic1()),
+                "high resolution (superbee, cfl 0.4)",
+            ),
+            // Diagnostics: acoustic Hancock with one amplitude switch
+            // removed each.
+            (
+                IceParams {
+                    pressure_weight: 0.5,
+                    pressure_weight_compression: None,
+                    ..IceParams::hancock_acoustic(periodic1())
+                },
+                "acoustic Hancock, Δp weight 1/2 unswitched",
+            ),
+            (
+                IceParams {
+                    acoustic_jump: None,
+                    ..IceParams::hancock_acoustic(periodic1())
+                },
+                "acoustic Hancock, Eq. 28 jump unswitched (α 0.625)",
+            ),
+        ] {
+            let mut points: Vec<Point> = Vec::new();
+            for &n in ns {
+                let (err, steps, wall) = simple_wave_run(&params, eps, t_end, n)
+                    .with_context(|| format!("simple wave eps = {eps}, N = {n}, {tag}"))?;
+                let ups = (n as f64 * steps as f64) / wall.max(1e-12);
+                points.push(
+                    Point::new(1.0 / n as f64, err, wall, ups).with_extra("steps", steps as f64),
+                );
+            }
+            let orders: Vec<String> = points
+                .windows(2)
+                .map(|w| {
+                    format!(
+                        "{:.3}",
+                        (w[0].error / w[1].error).ln() / (w[0].h / w[1].h).ln()
+                    )
+                })
+                .collect();
+            let label = format!("{tag}, eps {eps}");
+            notes.push(format!(
+                "{label}: L1/eps {}; orders per refinement {}",
+                points
+                    .iter()
+                    .map(|p| format!("{:.4e}", p.error))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                orders.join(", ")
+            ));
+            series.push(Series::new(label, "L1/eps", points));
+        }
+    }
+    Ok(StudyResult {
+        study: "ice_simple_wave".into(),
+        series,
+        notes,
+    })
+}
+
 /// Directory of the study outputs (as the `verification` binary's default).
 fn results_dir(quick: bool) -> std::path::PathBuf {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");

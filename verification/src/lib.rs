@@ -82,6 +82,11 @@ pub const STUDIES: &[Study] = &[
         ice_studies::ice_acoustic,
     ),
     (
+        "ice_simple_wave",
+        "finite-amplitude isentropic simple wave (eps 1e-2 and 0.1) vs characteristics: Hancock, acoustic Hancock, high resolution",
+        ice_studies::ice_simple_wave,
+    ),
+    (
         "ice_sod_semi_implicit",
         "Sod shock tube, explicit vs semi-implicit (implicit pressure) ICE, both vs exact Riemann",
         ice_studies::ice_sod_semi_implicit,
