@@ -449,6 +449,17 @@ impl<const D: usize> CoupledRun<D> {
         Ok(())
     }
 
+    /// Steps until time `t_end` (the last step shortened to land on it).
+    ///
+    /// # Errors
+    /// As [`Self::step`].
+    pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
+        while self.fluid.time < t_end * (1.0 - 1e-12) {
+            self.step(t_end - self.fluid.time)?;
+        }
+        Ok(())
+    }
+
     /// Largest stable time step: the ICE limit over all materials (the
     /// solid's sound speed included) and the MPM limit.
     pub fn stable_dt(&self) -> f64 {

@@ -54,6 +54,53 @@ pub fn block_in_air(
     u_solid: [f64; 2],
     rigid: bool,
 ) -> Result<CoupledRun<2>> {
+    steel_in_air(
+        n,
+        (lo, hi),
+        u_air,
+        u_solid,
+        rigid,
+        1.0,
+        CouplingParams::default(),
+    )
+}
+
+/// Steel particles at `fill` of the steel's density filling the closed box
+/// `[0, 1]²` of `n × n` cells (so the steel's volume fraction is `fill` in
+/// every cell) with air at rest at `(ρ, p) = (1.1768, 101325)`, about
+/// 300 K; the steel starts at `t_solid` and exchanges heat with the air at
+/// the coefficient `h` (Guilkey Eq. 39). Symmetry walls, `K = 1e15`.
+///
+/// # Errors
+/// As [`CoupledRun::new`].
+pub fn heated_mixture(n: usize, fill: f64, h: f64, t_solid: f64) -> Result<CoupledRun<2>> {
+    let coupling = CouplingParams {
+        solid_temperature: t_solid,
+        heat_exchange: h,
+        ..CouplingParams::default()
+    };
+    steel_in_air(
+        n,
+        ([0.0; 2], [1.0; 2]),
+        [0.0; 2],
+        [0.0; 2],
+        false,
+        fill,
+        coupling,
+    )
+}
+
+/// [`block_in_air`] with the particle masses scaled by `mass_scale` and
+/// the coupling settings given.
+fn steel_in_air(
+    n: usize,
+    (lo, hi): ([f64; 2], [f64; 2]),
+    u_air: [f64; 2],
+    u_solid: [f64; 2],
+    rigid: bool,
+    mass_scale: f64,
+    coupling: CouplingParams,
+) -> Result<CoupledRun<2>> {
     let moving = u_air != [0.0, 0.0] || u_solid != [0.0, 0.0];
     let (gbc, fbc) = if moving {
         (Boundary::Free, IceBoundary::Outflow)
@@ -74,7 +121,7 @@ pub fn block_in_air(
     let mut params = IceParams::new([[fbc.clone(), fbc.clone()], [fbc.clone(), fbc]]);
     params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
     let m = steel();
-    let particles = fill_box(
+    let mut particles = fill_box(
         &grid,
         &SVector::from(lo),
         &SVector::from(hi),
@@ -82,12 +129,15 @@ pub fn block_in_air(
         m.density,
         |_| true,
     );
+    for mp in &mut particles.mass {
+        *mp *= mass_scale;
+    }
     let us = SVector::<f64, 2>::from(u_solid);
-    steel_run(grid, particles, us, rigid, fluid, params)
+    steel_run(grid, particles, us, rigid, fluid, params, coupling)
 }
 
 /// A coupled run of steel particles moving at `v` (prescribed if `rigid`)
-/// with the linear hat, USF, `p_ref = 101325` and the default coupling.
+/// with the linear hat, USF, `p_ref = 101325` and the coupling given.
 fn steel_run<const D: usize>(
     grid: Grid<D>,
     mut particles: crate::mpm::Particles<D>,
@@ -95,6 +145,7 @@ fn steel_run<const D: usize>(
     rigid: bool,
     fluid: IceState<D>,
     params: IceParams<D>,
+    coupling: CouplingParams,
 ) -> Result<CoupledRun<D>> {
     let m = steel();
     for u in &mut particles.v {
@@ -118,7 +169,7 @@ fn steel_run<const D: usize>(
         "steel",
         eos,
         rigid.then_some(v),
-        CouplingParams::default(),
+        coupling,
         0.5,
     )
 }
@@ -156,7 +207,15 @@ pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
         m.density,
         |_| true,
     );
-    let mut run = steel_run(grid, particles, v, true, fluid, params)?;
+    let mut run = steel_run(
+        grid,
+        particles,
+        v,
+        true,
+        fluid,
+        params,
+        CouplingParams::default(),
+    )?;
     run.rigid_ramp = ramp;
     Ok(run)
 }
@@ -211,6 +270,12 @@ pub struct CylinderMeasured {
     pub row: Vec<(f64, f64, f64)>,
 }
 
+/// One particle's term of Guilkey Eq. 43, `||σ_r + σ_θ| − T| / T` with
+/// `T = 2P/3` (in plane strain `σ_r + σ_θ = σ_xx + σ_yy`).
+pub fn eq43_particle_error(stress: &nalgebra::Matrix3<f64>, target: f64) -> f64 {
+    (((stress[(0, 0)] + stress[(1, 1)]).abs() - target) / target).abs()
+}
+
 /// Guilkey Eq. 43 and the Fig. 3a row of a coupled cylinder run (inner
 /// radius `r_i`, reference pressure `p_ref`).
 pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> CylinderMeasured {
@@ -230,7 +295,7 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
     let mut row = Vec::new();
     for i in 0..p.len() {
         let s = &p.stress[i];
-        e43 += (((s[(0, 0)] + s[(1, 1)]).abs() - target) / target).abs();
+        e43 += eq43_particle_error(s, target);
         if p.x0[i][1] <= y_min * (1.0 + 1e-9) {
             let x = p.x[i];
             let r = x.norm();

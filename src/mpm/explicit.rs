@@ -522,15 +522,12 @@ impl<const D: usize> CoupledMpm<'_, D> {
             node: &mut [f64],
         ) {
             let grid = ctx.grid;
-            let (strides, inv_h) = (grid.strides(), grid.inv_h);
+            let strides = grid.strides();
             node.par_iter_mut().for_each(|q| *q = 0.0);
             {
                 let out = SharedMut::new(node);
                 scratch.bins.for_each_colored(|p| {
-                    let xi = grid.to_grid_units(&particles.x[p]);
-                    let hw = half_width(&scratch.lp, p);
-                    let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &hw, &inv_h);
-                    let base = grid.node_index(pw.base());
+                    let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
                     let mq = particles.mass[p] * values[p];
                     pw.for_each(|m, w, _| {
                         // SAFETY: slab colouring gives concurrent tasks
@@ -578,16 +575,13 @@ impl<const D: usize> CoupledMpm<'_, D> {
             values: &mut [f64],
         ) {
             let grid = ctx.grid;
-            let (strides, inv_h) = (grid.strides(), grid.inv_h);
+            let strides = grid.strides();
             values
                 .par_iter_mut()
                 .enumerate()
                 .with_min_len(512)
                 .for_each(|(p, q)| {
-                    let xi = grid.to_grid_units(&particles.x[p]);
-                    let hw = half_width(&scratch.lp, p);
-                    let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &hw, &inv_h);
-                    let base = grid.node_index(pw.base());
+                    let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
                     let mut dq = 0.0;
                     pw.for_each(|m, w, _| dq += w * node[base + offset(m, &strides)]);
                     *q += dq;
@@ -674,6 +668,23 @@ fn half_width<const D: usize>(lp: &[SVector<f64, D>], p: usize) -> SVector<f64, 
     lp.get(p).copied().unwrap_or_else(SVector::zeros)
 }
 
+/// Shape-function weights of particle `p` at the position `x` with the
+/// step's frozen domains `lp`, and the flat index of its stencil's base
+/// node.
+#[inline(always)]
+fn weights_at<const D: usize, const S: usize, K: Stencil<S>>(
+    grid: &Grid<D>,
+    kernel: K,
+    x: &SVector<f64, D>,
+    lp: &[SVector<f64, D>],
+    p: usize,
+) -> (ParticleWeights<D, S>, usize) {
+    let xi = grid.to_grid_units(x);
+    let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &half_width(lp, p), &grid.inv_h);
+    let base = grid.node_index(pw.base());
+    (pw, base)
+}
+
 /// Determinant of a D×D matrix, D ≤ 3, in closed form.
 #[inline(always)]
 fn det_small<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
@@ -712,15 +723,12 @@ fn p2g<
 ) {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let inv_h = grid.inv_h;
     let mass = SharedMut::new(&mut gs.mass);
     let momentum = SharedMut::new(&mut gs.momentum);
     let force = SharedMut::new(&mut gs.force);
     let (t, body) = (ctx.t, ctx.body);
     bins.for_each_colored(|p| {
-        let xi = grid.to_grid_units(&particles.x[p]);
-        let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &half_width(lp, p), &inv_h);
-        let base = grid.node_index(pw.base());
+        let (pw, base) = weights_at(grid, kernel, &particles.x[p], lp, p);
         let mp = particles.mass[p];
         let mv = particles.v[p] * mp;
         let mut fb = SVector::<f64, D>::zeros();
@@ -838,7 +846,6 @@ fn g2p<
 ) -> Result<()> {
     let grid = ctx.grid;
     let strides = grid.strides();
-    let inv_h = grid.inv_h;
     let dt = ctx.dt;
     let np = particles.len();
     if POS == POS_STORE {
@@ -862,9 +869,7 @@ fn g2p<
         (0..np).into_par_iter().with_min_len(512).for_each(|p| {
             // SAFETY: each task touches only particle p's entries.
             let (xp, vp) = unsafe { (x.get(p), v.get(p)) };
-            let xi = grid.to_grid_units(xp);
-            let pw = ParticleWeights::<D, S>::new_physical(kernel, &xi, &half_width(lp, p), &inv_h);
-            let base = grid.node_index(pw.base());
+            let (pw, base) = weights_at(grid, kernel, xp, lp, p);
             let mut acc = SVector::<f64, D>::zeros();
             let mut vel = SVector::<f64, D>::zeros();
             let mut l = SMatrix::<f64, D, D>::zeros();

@@ -507,8 +507,9 @@ struct Plot<'a> {
     x_range: (f64, f64),
     y_range: (f64, f64),
     series: &'a [PlotSeries],
-    /// A cell field drawn under the series (linear axes only).
-    field: Option<&'a CellField>,
+    /// A cell field drawn under the series (linear axes only), with the
+    /// range of its finite values (the colour scale).
+    field: Option<(&'a CellField, (f64, f64))>,
 }
 
 /// A scalar field on a uniform grid of cells for [`plot_field`]: cell
@@ -589,7 +590,7 @@ pub fn plot_field(
         x_range,
         y_range,
         series,
-        field: Some(field),
+        field: Some((field, (lo, hi))),
     };
     plot.write_atomically(path)
 }
@@ -682,14 +683,7 @@ impl Plot<'_> {
                 .draw()
                 .map_err(|e| draw_err(&e))?;
         }
-        if let (Some(f), false, false) = (self.field, self.log_x, self.log_y) {
-            let (lo, hi) = f
-                .values
-                .iter()
-                .filter(|v| v.is_finite())
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
+        if let (Some((f, (lo, hi))), false, false) = (self.field, self.log_x, self.log_y) {
             let (nx, ny) = f.cells;
             let cells = (0..nx * ny).map(|k| {
                 let (i, j) = ((k % nx) as f64, (k / nx) as f64);

@@ -108,13 +108,7 @@ pub fn ice_diagonal_wave(quick: bool) -> Result<StudyResult> {
                     }
                 };
                 let s = &run.state;
-                let err = s
-                    .layout
-                    .interior
-                    .iter()
-                    .map(|&c| (s.mixture_density(c) - rho(&s.layout.centre(c))).abs())
-                    .sum::<f64>()
-                    / (n * n) as f64;
+                let err = density_l1(s, |x| rho(x));
                 nu = n as f64 / run.steps as f64;
                 let ups = ((n * n) as f64 * run.steps as f64) / run.wall_s.max(1e-12);
                 points.push(
@@ -341,13 +335,7 @@ pub fn ice_entropy_wave(quick: bool) -> Result<StudyResult> {
             })?;
             let run = run_fluid(st, &params, 1.0, 10_000_000)?;
             let s = &run.state;
-            let err = s
-                .layout
-                .interior
-                .iter()
-                .map(|&c| (s.mixture_density(c) - rho(s.layout.centre(c)[0] - 1.0)).abs())
-                .sum::<f64>()
-                / n as f64;
+            let err = density_l1(s, |x| rho(x[0] - 1.0));
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups));
         }
@@ -427,15 +415,7 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
             })?;
             let run = run_fluid(st, &params, 1.0, 10_000_000)?;
             let s = &run.state;
-            let err = s
-                .layout
-                .interior
-                .iter()
-                .map(|&c| {
-                    (s.mixture_density(c) - 1.0 - eps * wave(s.layout.centre(c)[0] - 1.0)).abs()
-                })
-                .sum::<f64>()
-                / (n as f64 * eps);
+            let err = density_l1(s, |x| 1.0 + eps * wave(x[0] - 1.0)) / eps;
             let ups = (n as f64 * run.steps as f64) / run.wall_s.max(1e-12);
             points.push(Point::new(h, err, run.wall_s, ups));
         }
@@ -573,17 +553,7 @@ pub fn simple_wave_run(
     })?;
     let run = run_fluid(st, params, t_end, 10_000_000)?;
     let s = &run.state;
-    let err = s
-        .layout
-        .interior
-        .iter()
-        .map(|&c| {
-            let xc = s.layout.centre(c)[0];
-            let exact = cell_average(xc, h, |y| wave.state(y, s.time).0);
-            (s.mixture_density(c) - exact).abs()
-        })
-        .sum::<f64>()
-        / (n as f64 * eps);
+    let err = density_l1(s, |x| cell_average(x[0], h, |y| wave.state(y, s.time).0)) / eps;
     Ok((err, run.steps, run.wall_s))
 }
 
@@ -681,6 +651,16 @@ pub fn ice_simple_wave(quick: bool) -> Result<StudyResult> {
         series,
         notes,
     })
+}
+
+/// L1 density error averaged over the interior cells: mean of
+/// `|ρ_mix − exact(x_c)|`, `x_c` the cell centre.
+fn density_l1<const D: usize>(s: &IceState<D>, exact: impl Fn(&SVector<f64, D>) -> f64) -> f64 {
+    let int = &s.layout.interior;
+    int.iter()
+        .map(|&c| (s.mixture_density(c) - exact(&s.layout.centre(c))).abs())
+        .sum::<f64>()
+        / int.len() as f64
 }
 
 /// Directory of the study outputs (as the `verification` binary's default).
