@@ -59,6 +59,10 @@ fn main() {
     if let Some(a) = env("VISC") {
         p.face_viscosity = opt(a);
     }
+    // REMAP=0/1 (lagrangian_remap).
+    if let Some(a) = env("REMAP") {
+        p.lagrangian_remap = a > 0.5;
+    }
     if std::env::var("PRED").is_ok() {
         p.face_predictor = true;
     }

@@ -117,10 +117,14 @@ fn a_supersonic_inflow_drives_the_exact_shock() {
         eprintln!("inflow shock N = {n}: {} steps, L1(rho) {l1:.4e}", r.steps);
         errors.push(l1);
     }
-    // Measured (high_resolution, cfl 0.4): L1(ρ) 6.419e-3 at N = 200 (478
-    // steps) and 3.268e-3 at N = 400 (957 steps), ratio 0.51.
-    assert!(errors[0] < 6.6e-3, "N = 200: L1 {:e}", errors[0]);
-    assert!(errors[1] < 3.4e-3, "N = 400: L1 {:e}", errors[1]);
+    // Measured (high_resolution, cfl 0.4): L1(ρ) 6.721e-3 at N = 200 and
+    // 3.207e-3 at N = 400 (948 steps), ratio 0.48. Before the Lagrangian
+    // remap (`lagrangian_remap`): 6.419e-3 (478 steps) and 3.268e-3 (957
+    // steps) against bounds 6.6e-3 and 3.4e-3; the remap moves the
+    // captured shock's first-order error by +4.7 % / −1.9 %, and the
+    // bounds moved with it (N = 200 up, N = 400 down).
+    assert!(errors[0] < 6.9e-3, "N = 200: L1 {:e}", errors[0]);
+    assert!(errors[1] < 3.3e-3, "N = 400: L1 {:e}", errors[1]);
     // A captured shock converges at first order: the error halves with h.
     assert!(errors[1] < 0.6 * errors[0], "no convergence: {errors:?}");
 }

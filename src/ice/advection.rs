@@ -10,6 +10,14 @@
 //! fluxes): a uniform `φ` stays exactly uniform, so a material interface
 //! moving at uniform velocity and pressure keeps both.
 //!
+//! With the Lagrangian remap (`IceParams::lagrangian_remap`) the swept
+//! mass is that of the donor's *Lagrangian* cell, whose volume the
+//! Lagrangian phase changed to `V^L = V(1 + ε)`: `F_M` is scaled by
+//! `1/(1 + ε)` (and taken over the swept width `ν/(1 + ε)`), `ε` limited
+//! across the face ([`remap_strain`]). Without it the step remaps the
+//! Lagrangian contents as if the cell had kept its volume, an `O(Δt² ∇·u)`
+//! error per step that makes smooth flow of finite amplitude first order.
+//!
 //! Reconstruction: first order `φ_f = φ_donor`; second order
 //! `φ_f = φ_donor ± ½ (1 − ν) σ_d`, `ν = |u*| Δt / h_d`, with the limited
 //! slope `σ_d` per cell (van Leer, monotonised central, superbee, minmod),
@@ -118,6 +126,31 @@ pub fn limited_slope(a: f64, b: f64, limiter: Limiter) -> f64 {
 fn slope_at(q: &impl Fn(usize) -> f64, c: usize, s: usize, lim: Limiter) -> f64 {
     let qc = q(c);
     limited_slope(qc - q(c - s), q(c + s) - qc, lim)
+}
+
+/// The strain `ε` of the donor's Lagrangian cell that scales the mass it
+/// sends across a face: the minmod of the strains of the donor `c` and of
+/// the cell `across` the face (zero unless they have one sign). The remap
+/// assumes the donor's material stretched uniformly, which holds where the
+/// velocity is smooth (there the minmod changes `ε` by `O(Δt h)`, a
+/// smooth flux change of `O(Δt² h)`). At a velocity jump (a shock, the
+/// first steps of a rarefaction from a discontinuity) the stretch sits at
+/// one face and the material crossing the other one is not stretched: with
+/// the donor's own strain the 123 problem's L1(ρ) at N = 200 (acoustic
+/// Hancock) was 8.4e-3 against 4.6e-3 without the remap, and the minmod
+/// over all face neighbours of the donor left post-shock oscillations on
+/// Sod (L1 5.9e-4 at N = 3200). With this rule: 123 5.2e-3, Sod 4.60e-4 at
+/// N = 800 (5.42e-4 without the remap).
+#[inline]
+pub fn remap_strain(strain: &[f64], c: usize, across: usize) -> f64 {
+    let (a, b) = (strain[c], strain[across]);
+    if a * b <= 0.0 {
+        0.0
+    } else if a.abs() < b.abs() {
+        a
+    } else {
+        b
+    }
 }
 
 /// Value at the centroid of the region swept out of `donor` across its face
@@ -328,6 +361,13 @@ pub struct AdvectedFields<'a, const D: usize> {
     pub sp_vol: &'a [f64],
     /// Specific kinetic energy `|u^L|²/2`, advected when present.
     pub kinetic: Option<&'a [f64]>,
+    /// The volumetric strain of the Lagrangian cell over the step,
+    /// `V^L/V − 1`, per cell (ghosts filled): the swept mass of a donor is
+    /// scaled by `1/(1 + ε)` (the remap of the Lagrangian cells, see
+    /// `IceParams::lagrangian_remap`), `ε` limited by [`remap_strain`].
+    /// `None` takes the fixed cell's swept mass (Guilkey step 12 as
+    /// written).
+    pub remap: Option<&'a [f64]>,
 }
 
 /// Computes the compatible fluxes of one material (Guilkey step 12).
@@ -355,10 +395,19 @@ pub fn material_fluxes<const D: usize>(
             for f in row {
                 let u = us[f];
                 let (c, sign, nu) = donor(f, s, u, dt, h);
+                // The Lagrangian cell's material beyond the fixed face: the
+                // fixed cell's swept mass times V/V^L of the donor, taken
+                // from the region of that width at the face.
+                let across = if sign > 0.0 { c + s } else { c - s };
+                let g = q
+                    .remap
+                    .map_or(1.0, |e| 1.0 / (1.0 + remap_strain(e, c, across)));
+                let nu = g * nu;
                 let mu = courants(&q.velocity[c], dt, &layout.h);
                 let value =
                     |field: &[f64]| centroid_value(|i| field[i], c, d, st, sign, nu, &mu, scheme);
-                let m_flux = u * dt / h * extensive_value(q.mass, c, d, st, sign, nu, &mu, scheme);
+                let m_flux =
+                    g * u * dt / h * extensive_value(q.mass, c, d, st, sign, nu, &mu, scheme);
                 let vel = SVector::<f64, D>::from_fn(|k, _| {
                     centroid_value(|i| q.velocity[i][k], c, d, st, sign, nu, &mu, scheme)
                 });
@@ -463,6 +512,7 @@ mod tests {
             fill_scalar(&layout, &bcs, &mut mass, |_| 0.0);
             fill_scalar(&layout, &bcs, &mut phi, |_| 0.0);
             let fields = AdvectedFields {
+                remap: None,
                 mass: &mass,
                 velocity: &vel,
                 energy: &phi,

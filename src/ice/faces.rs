@@ -9,6 +9,19 @@ use super::par::{par_face_rows, Out};
 use super::state::{CellLayout, MaterialCells};
 use super::MAX_MATERIALS;
 
+/// The MUSCL–Hancock half-step predictor of the face states of
+/// [`face_velocities`].
+#[derive(Debug, Clone, Copy)]
+pub struct FacePredictor<'a> {
+    /// The half step `τ = Δt/2`.
+    pub tau: f64,
+    /// Mixture bulk modulus `K = 1/Σ_s θ_s κ_s` per cell, ghosts included.
+    pub bulk: &'a [f64],
+    /// Whether the predicted velocity includes the convective term
+    /// `u ∂u/∂x` (Eulerian face velocity) or not (Lagrangian).
+    pub velocity_convection: bool,
+}
+
 /// Face velocities of one material normal to direction `d`
 /// (Guilkey Eq. 28):
 ///
@@ -29,22 +42,27 @@ use super::MAX_MATERIALS;
 /// jump at a discontinuity (the way a MUSCL–Riemann scheme limits its
 /// dissipation); a uniform state stays uniform. `None` is Eq. 28 as written.
 ///
-/// With `predictor = Some((τ, K))` (needs `reconstruct`) the reconstructed
-/// face states are advanced by the half step `τ = Δt/2` with the
-/// primitive-variable equations of the normal direction and the limited
-/// slopes of the cell (the MUSCL–Hancock predictor, van Leer 1984; Toro,
-/// *Riemann Solvers*, Sec. 14.4):
+/// With `predictor = Some(`[`FacePredictor`]`)` (needs `reconstruct`) the
+/// reconstructed face states are advanced by the half step `τ = Δt/2`
+/// with the primitive-variable equations of the normal direction and the
+/// limited slopes of the cell (the MUSCL–Hancock predictor, van Leer 1984;
+/// Toro, *Riemann Solvers*, Sec. 14.4):
 ///
 /// ```text
-/// u_L = u_l + σ^u_l/2 − (τ/h)(u_l σ^u_l + v_l σ^p_l)
+/// u_L = u_l + σ^u_l/2 − (τ/h)(a u_l σ^u_l + v_l σ^p_l)
 /// p_L = p_l + σ^p_l/2 − (τ/h)(u_l σ^p_l + K_l σ^u_l)
 /// ```
 ///
 /// (and the mirror image for the right cell), `K = 1/Σ_s θ_s κ_s` the
 /// mixture bulk modulus of Guilkey Eq. 29 per cell. The pressure gradient
 /// then enters the face velocity through the predicted states (so
-/// `smooth_dt` should be zero) and the convective term `u ∂u/∂x`, absent
-/// from Eq. 28, is time-centred as well; a uniform state stays uniform.
+/// `smooth_dt` should be zero); a uniform state stays uniform. With
+/// `a = 1` (`velocity_convection`) the face velocity is the Eulerian one
+/// at `(x_f, t + Δt/2)`; with `a = 0` it is the Lagrangian (material)
+/// velocity of the face at `t + Δt/2`, the one that moves the faces of the
+/// Lagrangian cells whose contents the advection remaps (see
+/// [`super::IceParams::lagrangian_remap`]). The predicted pressures, which
+/// only enter the jump (dissipation) term, keep their convective term.
 ///
 /// With `acoustic = Some((λ, c))` the jump part is taken over the time
 /// `λ_f h_d/(c_L + c_R)` (`c` the mixture sound speed per cell) instead of
@@ -70,7 +88,7 @@ pub fn face_velocities<const D: usize>(
     gravity_d: f64,
     reconstruct: Option<Limiter>,
     smooth_dt: f64,
-    predictor: Option<(f64, &[f64])>,
+    predictor: Option<FacePredictor<'_>>,
     acoustic: Option<(f64, &[f64])>,
     out: &mut [f64],
 ) {
@@ -95,10 +113,16 @@ pub fn face_velocities<const D: usize>(
                 ur -= 0.5 * su_r;
                 pl += 0.5 * sp_l;
                 pr -= 0.5 * sp_r;
-                if let Some((tau, bulk)) = predictor {
+                if let Some(FacePredictor {
+                    tau,
+                    bulk,
+                    velocity_convection,
+                }) = predictor
+                {
                     let k = tau * inv_h;
-                    ul -= k * (u0l * su_l + sp_vol[l] * sp_l);
-                    ur -= k * (u0r * su_r + sp_vol[r] * sp_r);
+                    let a = if velocity_convection { 1.0 } else { 0.0 };
+                    ul -= k * (a * u0l * su_l + sp_vol[l] * sp_l);
+                    ur -= k * (a * u0r * su_r + sp_vol[r] * sp_r);
                     pl -= k * (u0l * sp_l + bulk[l] * su_l);
                     pr -= k * (u0r * sp_r + bulk[r] * su_r);
                 }

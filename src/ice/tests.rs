@@ -55,31 +55,29 @@ fn sod_n200_matches_exact_solution() {
 }
 
 /// The Hancock variant ([`IceParams::hancock`]: MUSCL–Hancock face states,
-/// cfl 0.8) on Sod at N = 400. Measured L1(ρ) 1.607e-3 in 240 steps (high
-/// resolution at cfl 0.4: 1.467e-3 in 467 steps; without the predictor at
-/// cfl 0.8 the error is 2.39e-3 and it grows with N).
+/// cfl 0.8) on Sod at N = 400. Measured L1(ρ) 1.511e-3 in 240 steps
+/// (1.607e-3 before the Lagrangian remap, when the bound was 1.65e-3; high
+/// resolution at cfl 0.4 then: 1.467e-3 in 467 steps; without the
+/// predictor at cfl 0.8 the error is 2.39e-3 and it grows with N).
 #[test]
 fn hancock_sod_n400_matches_exact_solution_at_cfl_08() {
     let st = shock_tube(gas(1.4), 400, SOD_L, SOD_R, 0.5).unwrap();
     let run = run_fluid(st, &IceParams::hancock(walls1()), 0.2, 100_000).unwrap();
     let e = shock_tube_l1(&run.state, SOD_L, SOD_R, 1.4, 0.5);
-    assert!(e < 1.65e-3, "L1 = {e:e}");
+    assert!(e < 1.6e-3, "L1 = {e:e}");
     assert!(run.steps <= 245, "{} steps", run.steps);
 }
 
 /// The acoustic Hancock variant ([`IceParams::hancock_acoustic`]) on Sod
 /// at N = 800 and 1600; at N = 1600 it is below the error of a Roe/MC
 /// finite-volume code at the same resolution (3.1e-4). Measured L1(ρ)
-/// 5.418e-4 in 403 steps and 2.993e-4 in 805 steps with the switched
-/// weight (compression weight shock-sensed) and jump factor and the
-/// shock-sensed face viscosity (amplitude-switched compression weight:
-/// 5.423e-4, 2.972e-4; the
-/// unswitched rules:
-/// 5.401e-4, 2.992e-4; Hancock at cfl 0.8: 7.96e-4 in 481 steps, 4.48e-4
-/// in 961).
+/// 4.601e-4 in 403 steps and 2.632e-4 in 804 steps with the Lagrangian
+/// remap (`lagrangian_remap`; without it 5.418e-4 in 403 and 2.993e-4 in
+/// 805 steps, when the bounds were 5.5e-4 and 3.1e-4; Hancock at cfl 0.8
+/// then: 7.96e-4 in 481 steps, 4.48e-4 in 961).
 #[test]
 fn hancock_acoustic_sod_matches_roe_mc_at_n1600() {
-    for (n, bound, max_steps) in [(800, 5.5e-4, 410), (1600, 3.1e-4, 815)] {
+    for (n, bound, max_steps) in [(800, 4.8e-4, 410), (1600, 2.8e-4, 815)] {
         let st = shock_tube(gas(1.4), n, SOD_L, SOD_R, 0.5).unwrap();
         let run = run_fluid(st, &IceParams::hancock_acoustic(walls1()), 0.2, 100_000).unwrap();
         let e = shock_tube_l1(&run.state, SOD_L, SOD_R, 1.4, 0.5);
@@ -382,13 +380,20 @@ fn strong_rarefaction_and_shock_stay_positive() {
 /// The hard cases with the acoustic Hancock variant (its compression
 /// weight and face viscosity act hardest there): they run to the end with
 /// positive density, pressure and temperature, and the errors stay at the
-/// literal scheme's level or below. Measured (N = 200): 123 4.631e-3,
-/// 1e4 ratio 3.282e-2 (literal: 6.79e-3, 3.86e-2).
+/// literal scheme's level or below. Measured (N = 200): 123 5.229e-3,
+/// 1e4 ratio 3.265e-2 (literal: 6.79e-3, 3.86e-2). Before the Lagrangian
+/// remap (`lagrangian_remap`): 4.631e-3 and 3.282e-2, with bounds 5.0e-3
+/// and 3.5e-2. The 123 bound was moved to 5.5e-3 with the remap, a
+/// deliberate trade: the remap is second order on smooth flow of finite
+/// amplitude (simple wave ε = 0.1: L1 7.6× lower at N = 1024) and lowers
+/// Sod's error by 15 % at N = 800, but in the 123 problem's first steps,
+/// where the fan is narrower than a cell, its uniform-stretch assumption
+/// does not hold (see `advection::remap_strain`).
 #[test]
 fn hancock_acoustic_hard_cases_stay_positive() {
     let (e123, e_ratio) = hard_cases(&IceParams::hancock_acoustic(walls1()));
     eprintln!("hancock_acoustic: 123 L1 {e123:e}, 1e4 ratio L1 {e_ratio:e}");
-    assert!(e123 < 5.0e-3, "123 L1 = {e123}");
+    assert!(e123 < 5.5e-3, "123 L1 = {e123}");
     assert!(e_ratio < 3.5e-2, "1e4 ratio L1 = {e_ratio}");
 }
 
