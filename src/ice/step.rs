@@ -231,6 +231,16 @@ pub const WEIGHT_SWITCH_SCALE: f64 = 3.0e-3;
 /// on (below it, it is scaled by `ψ/ψ_c`).
 pub const COMPRESSION_SENSOR_SCALE: f64 = 3.0e-4;
 
+/// Value of the cell pressure shock sensor ([`cell_shock_sensor`]) at
+/// which the expansion weight of [`IceParams::source_weight`] is fully on.
+/// Ten times below the compression's: a rarefaction is smooth after its
+/// first steps, and the weight must stay on there (Sod: L1(ρ) 4.601e-4 at
+/// N = 800 with it, 4.613e-4 at `3e-5`, 5.02e-4 at `3e-4`), while on a
+/// smooth wave (`ψ = O(h²)`) it lets the weight tend to 1/2 (simple wave
+/// `ε = 0.1`, acoustic Hancock at N = 1024: L1/ε 1.61e-5 against 5.10e-5
+/// with the amplitude switch alone).
+pub const EXPANSION_SENSOR_SCALE: f64 = 1.0e-5;
+
 /// Pressure shock sensor of cell `c` (Jameson, Schmidt & Turkel 1981):
 /// the largest, over the directions and the cells `c − s, c, c + s`, of
 /// `|p_{i+s} − 2 p_i + p_{i−s}|/(p_{i+s} + 2 p_i + p_{i−s})`: `O(h²)`
@@ -393,8 +403,10 @@ impl<const D: usize> IceParams<D> {
     /// `φ = min(1, ψ/ψ_c)` the value of `shock()` — the cell pressure shock
     /// sensor [`cell_shock_sensor`] — over `ψ_c = `
     /// [`COMPRESSION_SENSOR_SCALE`] (`3e-4`), and,
-    /// where `Δp < 0`, `w_b + (1 − w_b) x²` with `w_b = 1/2 + σ (w − 1/2)`
-    /// and the relative expansion `x = min(1, −Δp/p_eq)`. A shock or a
+    /// where `Δp < 0`, `w_b + (1 − w_b) x²` with `w_b = 1/2 + σ φ_e (w −
+    /// 1/2)`, `φ_e = min(1, ψ/ψ_e)` over `ψ_e = `
+    /// [`EXPANSION_SENSOR_SCALE`] (`1e-5`), and the relative expansion
+    /// `x = min(1, −Δp/p_eq)`. A shock or a
     /// start-up discontinuity (`σ = 1`) gets `w_c` in compression and `w`
     /// in weak expansion; a strong expansion (towards vacuum) is weighted
     /// towards the end-of-step pressure, so that the flow work `p ΔV` it
@@ -408,9 +420,12 @@ impl<const D: usize> IceParams<D> {
     /// `ice_simple_wave` study, `ε = 0.1`: `|Δp|/p_eq ≈ 0.8 h`), which then
     /// ran at `w_c` and `w`, first order and 14× Hancock's error at
     /// `N = 1024`; sensing the compression weight and `s = 3e-3` give
-    /// 1.3× Hancock's error there. The expansion weight stays an amplitude
-    /// switch: the Sod rarefaction (smooth) owes its accuracy to it.
-    /// (The former rule switched on the sign of `Δp` alone, `w_c` for any
+    /// 1.3× Hancock's error there. The expansion weight was an amplitude
+    /// switch only until the Lagrangian remap: with the remap, acoustic
+    /// Hancock on that wave was 3.9× Hancock's error at `N = 1024` (L1/ε
+    /// 5.10e-5), and sensing the expansion weight too (at a ten times
+    /// smaller scale, so that the Sod rarefaction keeps it) gives 1.61e-5
+    /// (Hancock 1.30e-5), Sod within 1.4 %. (The former rule switched on the sign of `Δp` alone, `w_c` for any
     /// compression, and was first order on smooth compressions: acoustic
     /// wave order 0.81.) Cells with `p_eq ≤ 0` keep the switch on.
     #[inline]
@@ -424,17 +439,22 @@ impl<const D: usize> IceParams<D> {
         }
         // The switch σ = min(1, |Δp|/(s p_eq)), s = WEIGHT_SWITCH_SCALE.
         let sigma = (dp.abs() / (WEIGHT_SWITCH_SCALE * p_eq)).min(1.0);
-        if dp > 0.0 {
-            // Compression: only at a shock (the pressure shock sensor).
-            let psi = shock();
-            let sensed = if psi.is_nan() {
+        // The pressure shock sensor over a scale (a NaN counts as a shock).
+        let psi = shock();
+        let sensed = |scale: f64| {
+            if psi.is_nan() {
                 1.0
             } else {
-                (psi / COMPRESSION_SENSOR_SCALE).min(1.0)
-            };
-            0.5 + sigma * sensed * (wc - 0.5)
+                (psi / scale).min(1.0)
+            }
+        };
+        if dp > 0.0 {
+            // Compression: only at a shock.
+            0.5 + sigma * sensed(COMPRESSION_SENSOR_SCALE) * (wc - 0.5)
         } else {
-            let wb = 0.5 + sigma * (w - 0.5);
+            // Expansion: where the pressure is not smooth on the grid
+            // scale (a shock, a rarefaction's start or its edges).
+            let wb = 0.5 + sigma * sensed(EXPANSION_SENSOR_SCALE) * (w - 0.5);
             let x = (-dp / p_eq).min(1.0);
             wb + (1.0 - wb) * x * x
         }

@@ -71,8 +71,9 @@ fn hancock_sod_n400_matches_exact_solution_at_cfl_08() {
 /// The acoustic Hancock variant ([`IceParams::hancock_acoustic`]) on Sod
 /// at N = 800 and 1600; at N = 1600 it is below the error of a Roe/MC
 /// finite-volume code at the same resolution (3.1e-4). Measured L1(ρ)
-/// 4.601e-4 in 403 steps and 2.632e-4 in 804 steps with the Lagrangian
-/// remap (`lagrangian_remap`; without it 5.418e-4 in 403 and 2.993e-4 in
+/// 4.601e-4 in 403 steps and 2.635e-4 in 804 steps with the Lagrangian
+/// remap (`lagrangian_remap`) and the shock-sensed expansion weight
+/// (`EXPANSION_SENSOR_SCALE`; without either 5.418e-4 in 403 and 2.993e-4 in
 /// 805 steps, when the bounds were 5.5e-4 and 3.1e-4; Hancock at cfl 0.8
 /// then: 7.96e-4 in 481 steps, 4.48e-4 in 961).
 #[test]
@@ -380,7 +381,7 @@ fn strong_rarefaction_and_shock_stay_positive() {
 /// The hard cases with the acoustic Hancock variant (its compression
 /// weight and face viscosity act hardest there): they run to the end with
 /// positive density, pressure and temperature, and the errors stay at the
-/// literal scheme's level or below. Measured (N = 200): 123 5.229e-3,
+/// literal scheme's level or below. Measured (N = 200): 123 5.253e-3,
 /// 1e4 ratio 3.265e-2 (literal: 6.79e-3, 3.86e-2). Before the Lagrangian
 /// remap (`lagrangian_remap`): 4.631e-3 and 3.282e-2, with bounds 5.0e-3
 /// and 3.5e-2. The 123 bound was moved to 5.5e-3 with the remap, a
