@@ -45,7 +45,7 @@ fn main() -> anyhow::Result<()> {
         let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
         // Eq. 43 per particle, split by the reference radius.
         let target = 2.0 * m.pressure / 3.0;
-        let p = &run.particles;
+        let p = &run.fields[0].particles;
         let mut bands = [(0.0, 0usize); 3];
         for i in 0..p.len() {
             let e = eq43_particle_error(&p.stress[i], target);

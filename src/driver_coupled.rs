@@ -30,17 +30,25 @@ impl ParticleWriter {
     ) -> Result<f64> {
         let start = Instant::now();
         let k = self.k;
+        // One field: its particles; several: all of them, field by field.
+        let merged;
+        let particles = if run.fields.len() == 1 {
+            &run.fields[0].particles
+        } else {
+            merged = run.all_particles();
+            &merged
+        };
         if formats.contains(&Format::Vtk) {
             let name = format!("particles_{k:04}.vtu");
             let path = dir.join(&name);
-            write_particles_vtu(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+            write_particles_vtu(&path, particles).map_err(|e| Error::io(&path, e))?;
             self.pvd
                 .push(run.fluid.time, &name)
                 .map_err(|e| Error::io(self.pvd.path().to_path_buf(), e))?;
         }
         if formats.contains(&Format::Csv) {
             let path = dir.join(format!("particles_{k:04}.csv"));
-            write_particles_csv(&path, &run.particles).map_err(|e| Error::io(&path, e))?;
+            write_particles_csv(&path, particles).map_err(|e| Error::io(&path, e))?;
         }
         self.k += 1;
         Ok(start.elapsed().as_secs_f64())
@@ -52,21 +60,23 @@ impl ParticleWriter {
 /// strain energy.
 fn total_energies<const D: usize>(run: &CoupledRun<D>) -> Energies {
     let mut e = energies(&run.fluid);
-    // The solid field's cells are a copy of the particles: count those.
-    let sc = &run.fluid.cells[run.solid];
-    let cv = run.solid_eos.specific_heat_cv();
-    for &c in &run.fluid.layout.interior {
-        e.kinetic -= 0.5 * sc.mass[c] * sc.velocity[c].norm_squared();
-        e.strain -= sc.mass[c] * cv * sc.temperature[c];
+    // The solid fields' cells are a copy of the particles: count those.
+    for f in &run.fields {
+        let sc = &run.fluid.cells[f.ice_material];
+        let cv = f.eos.specific_heat_cv();
+        for &c in &run.fluid.layout.interior {
+            e.kinetic -= 0.5 * sc.mass[c] * sc.velocity[c].norm_squared();
+            e.strain -= sc.mass[c] * cv * sc.temperature[c];
+        }
+        e.kinetic += f.particles.kinetic_energy();
+        e.strain += f.particles.strain_energy(&run.materials);
     }
-    e.kinetic += run.particles.kinetic_energy();
-    e.strain += run.particles.strain_energy(&run.materials);
     e
 }
 
-/// Fluid mass (the solid field's cells excluded) and particle mass.
+/// Fluid mass (the solid fields' cells excluded) and particle mass.
 fn masses<const D: usize>(run: &CoupledRun<D>) -> (f64, f64) {
-    let fluid: f64 = (0..run.solid)
+    let fluid: f64 = (0..run.num_fluids())
         .map(|r| {
             run.fluid
                 .layout
@@ -76,7 +86,8 @@ fn masses<const D: usize>(run: &CoupledRun<D>) -> (f64, f64) {
                 .sum::<f64>()
         })
         .sum();
-    (fluid, run.particles.total_mass())
+    let solid = run.fields.iter().map(|f| f.particles.total_mass()).sum();
+    (fluid, solid)
 }
 
 /// Runs a validated coupled scene.
@@ -156,6 +167,7 @@ pub(crate) fn run_coupled_dim<const D: usize>(
     let e1 = total_energies(&run);
     let (mf1, ms1) = masses(&run);
     let n_cells = run.fluid.layout.num_interior();
+    let n_particles: usize = run.fields.iter().map(|f| f.particles.len()).sum();
     let per_step = |n: usize| {
         if step_s > 0.0 {
             n as f64 * steps as f64 / step_s
@@ -173,11 +185,11 @@ pub(crate) fn run_coupled_dim<const D: usize>(
         final_time: run.fluid.time,
         wall_s,
         output_s: output_s + cells.output_s,
-        n_particles: run.particles.len(),
+        n_particles,
         n_cells,
-        particle_steps_per_s: per_step(run.particles.len()),
+        particle_steps_per_s: per_step(n_particles),
         cell_steps_per_s: per_step(n_cells),
-        n_fluid_materials: run.solid,
+        n_fluid_materials: run.num_fluids(),
         retries: 0,
         threads,
         dt_min: if steps > 0 { dt_min } else { 0.0 },

@@ -495,8 +495,8 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             format!(
                 "{good}\n[[materials]]\nname = \"brass\"\ntype = \"solid\"\nmodel = \"neo_hookean\"\ndensity = 8500.0\nbulk_modulus = 1e11\nshear_modulus = 4e10\n"
             ),
-            "materials",
-            "exactly one solid",
+            "materials[2]",
+            "used by no object",
         ),
         (
             GOOD.replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\nrigid = true"),
@@ -513,9 +513,78 @@ fn coupled_scene_bad_inputs_name_their_keys() {
     let run = mpmice::scene::build_coupled_run::<2>(&scene).expect("build");
     use mpmice::material::eos::EquationOfState;
     assert_eq!(run.coupling.heat_exchange, 1e6);
-    assert_eq!(run.solid_eos.specific_heat_cv(), 460.0);
-    assert!(!run.particles.is_empty());
-    assert!(run.particles.temperature.iter().all(|&t| t == 350.0));
+    assert_eq!(run.fields[0].eos.specific_heat_cv(), 460.0);
+    assert!(!run.fields[0].particles.is_empty());
+    assert!(run.fields[0]
+        .particles
+        .temperature
+        .iter()
+        .all(|&t| t == 350.0));
+}
+
+/// Two solid materials in a coupled scene: accepted, and built as two solid
+/// fields (ICE materials after the fluid, named after the materials, the
+/// rigid one with its objects' velocity), each with the particles of its
+/// own objects — together exactly the particles of the scene.
+#[test]
+fn coupled_scene_with_two_solid_materials_builds_two_fields() {
+    let two = format!(
+        "{GOOD}{COUPLED_EXTRA}\n[[materials]]\nname = \"brass\"\ntype = \"solid\"\n\
+         model = \"neo_hookean\"\nrigid = true\ndensity = 8500.0\nbulk_modulus = 1e11\n\
+         shear_modulus = 4e10\n\n[[objects]]\nmaterial = \"brass\"\n\
+         geometry = {{ type = \"box\", lower = [0.0, 0.9], upper = [0.3, 1.0] }}\n\
+         velocity = [0.0, -2.0]\n"
+    )
+    .replace("upper = [0.8, 0.8]", "upper = [0.8, 0.6]");
+    let scene = mpmice::scene::parse(&two).expect("two solid materials are accepted");
+    let solid = mpmice::scene::build_solid_run::<2>(&scene).expect("solid build");
+    let run = mpmice::scene::build_coupled_run::<2>(&scene).expect("coupled build");
+    assert_eq!(run.fields.len(), 2);
+    assert_eq!(run.num_fluids(), 1);
+    let names: Vec<&str> = run
+        .fluid
+        .materials
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect();
+    assert_eq!(names, ["air", "steel", "brass"]);
+    assert_eq!(
+        run.ice.frames,
+        [
+            mpmice::ice::Frame::Eulerian,
+            mpmice::ice::Frame::Particles,
+            mpmice::ice::Frame::Rigid
+        ]
+    );
+    assert_eq!(run.fields[0].rigid_velocity, None);
+    assert_eq!(
+        run.fields[1].rigid_velocity,
+        Some(nalgebra::SVector::<f64, 2>::new(0.0, -2.0))
+    );
+    for (k, f) in run.fields.iter().enumerate() {
+        assert_eq!(f.ice_material, 1 + k);
+        assert!(!f.particles.is_empty());
+        assert!(f.particles.material.iter().all(|&m| m as usize == k));
+    }
+    let (n0, n1) = (run.fields[0].particles.len(), run.fields[1].particles.len());
+    assert_eq!(n0 + n1, solid.particles.len());
+    // 6 × 4 cells of steel and 3 × 1 of brass, 2 × 2 particles per cell.
+    assert_eq!((n0, n1), (96, 12));
+    // Every pair with a solid field exchanges at K (solid–solid too).
+    let k = run.ice.exchange.as_ref().unwrap().momentum.clone();
+    assert_eq!(k, [0.0, 1e15, 1e15, 1e15, 0.0, 1e15, 1e15, 1e15, 0.0]);
+}
+
+/// A coupled run needs a solid material: building one from a scene
+/// without (a fluid scene) is rejected naming `materials`.
+#[test]
+fn coupled_run_without_a_solid_material_names_materials() {
+    let scene = mpmice::scene::parse(FLUID).expect("the fluid scene is valid");
+    let e = mpmice::scene::build_coupled_run::<1>(&scene)
+        .err()
+        .expect("no solid material: rejected");
+    assert_eq!(e.path, "materials", "{e}");
+    assert!(e.message.contains("at least one solid"), "{e}");
 }
 
 /// The fluid scene with an inflow face on x = 0 (air entering at 10 m/s).

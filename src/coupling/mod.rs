@@ -2,19 +2,25 @@
 //! material points and fluids in cell-centred ICE, coupled through the
 //! multifield equations on one grid.
 //!
-//! One solid field (a deformable material or a rigid one with a prescribed
-//! velocity) takes part in the cell equations as the last ICE material; its
-//! cell state is rebuilt from the nodes every step. The step, in the order of
-//! the paper:
+//! Every solid field ([`SolidField`]: a deformable material or a rigid one
+//! with a prescribed velocity, with its own particles and nodal velocity
+//! field) takes part in the cell equations as an ICE material of its own,
+//! after the fluids; its cell state is rebuilt from its nodes every step.
+//! Solid fields interact with each other and with the fluids only through
+//! the cell equations: the shared pressure and the multifield exchange
+//! (Guilkey Eqs. 38–39, every pair of materials). Each phase below runs
+//! once per field, the cell stages once for all materials. The step, in the
+//! order of the paper:
 //!
 //! 1. P2G (Eq. 22) and node → cell: the cell's solid mass and momentum are
 //!    the averages of its `2^D` corner nodes (mass-weighted velocity). The
 //!    mirror-particle wall treatment of the MPM grid has already doubled the
 //!    boundary nodes' mass on symmetry planes, which is Guilkey's "weight of
-//!    those nodes on the boundary must be doubled". Empty cells get a tiny
-//!    mass floor and the fluid's velocity. The solid's specific volume is
-//!    its EOS value at the previous pressure ([`SolidEos`], never the
-//!    interpolated volume).
+//!    those nodes on the boundary must be doubled". Cells where a field is
+//!    absent get a tiny mass floor of it and the velocity of the other
+//!    materials there (fluids and present solid fields). A solid's specific
+//!    volume is its EOS value at the previous pressure ([`SolidEos`], never
+//!    the interpolated volume).
 //! 2. Equilibration on the total material volume (Eq. 13, Sec. 3.3 step 2),
 //!    3. face velocities of all materials (Eq. 28) and the face exchange,
 //!    5. `Δp` (Eq. 29, all materials' volume fluxes), 6. face pressure
@@ -53,8 +59,8 @@ use crate::mpm::{
 };
 
 /// The MPM phases of the current step, borrowing only the run's MPM fields
-/// (so the particles, grid state and scratch can be borrowed mutably
-/// beside it).
+/// (so the solid fields' particles, grid states and scratch can be
+/// borrowed mutably beside it).
 macro_rules! phases {
     ($run:ident, $dt:expr) => {
         CoupledMpm {
@@ -75,22 +81,23 @@ pub struct CouplingParams {
     /// Reference pressure `p_ref`: the pressure at which the solid is
     /// stress-free (Guilkey Sec. 3.3 step 7).
     pub p_ref: f64,
-    /// Initial temperature of the solid: every particle starts at it. With
-    /// `heat_exchange = 0` the solid stays at it (isothermal, and no
+    /// Initial temperature of the solids: every particle starts at it. With
+    /// `heat_exchange = 0` the solids stay at it (isothermal, and no
     /// temperature transfer is computed).
     pub solid_temperature: f64,
-    /// Volume-fraction floor: empty cells hold this fraction of solid (at
-    /// the solid's density), fully solid cells this fraction of fluid. It
+    /// Volume-fraction floor: cells where a solid field is absent hold this
+    /// fraction of it (at its density), fully solid cells this fraction of
+    /// fluid. It
     /// must make `Δt K θ_floor v` negligible (`1e-15` with `K = 1e15`).
     pub floor_fraction: f64,
-    /// Momentum exchange coefficient `K` between the solid field and every
-    /// fluid (Guilkey Eq. 38; `1e15` drives them to one velocity where they
+    /// Momentum exchange coefficient `K` between every solid field and every
+    /// other material, fluid or solid (Guilkey Eq. 38; `1e15` drives them to one velocity where they
     /// share a cell: no slip, no interpenetration, Sec. 4.2).
     pub momentum_exchange: f64,
-    /// Heat exchange coefficient `H` between the solid field and every
-    /// fluid (Guilkey Eq. 39, `dT_r/dt = Σ_s H θ_s v_r (T_s − T_r)/c_v,r`;
-    /// 0: none, the solid isothermal). The solid's change goes from the
-    /// cells to the nodes and then to the particles' temperatures.
+    /// Heat exchange coefficient `H` between every solid field and every
+    /// other material, fluid or solid (Guilkey Eq. 39, `dT_r/dt = Σ_s H θ_s v_r (T_s − T_r)/c_v,r`;
+    /// 0: none, the solids isothermal). A field's change goes from the
+    /// cells to its nodes and then to its particles' temperatures.
     pub heat_exchange: f64,
 }
 
@@ -130,121 +137,228 @@ impl<const D: usize> NodeCellMap<D> {
     }
 }
 
-/// A coupled MPM-ICE run (explicit or semi-implicit pressure).
+/// What [`CoupledRun::with_fields`] needs to know of one solid field.
+#[derive(Debug, Clone)]
+pub struct SolidFieldSpec<const D: usize> {
+    /// Name of the field's ICE material (the solid material's name in a
+    /// scene).
+    pub name: String,
+    /// The field's particles (`material` indexes the run's `materials`).
+    pub particles: Particles<D>,
+    /// The field's bulk EOS in the cells (Guilkey Fig. 1).
+    pub eos: SolidEos,
+    /// Prescribed velocity of a rigid field (`None`: deformable).
+    pub rigid_velocity: Option<SVector<f64, D>>,
+}
+
+/// One solid velocity field: its particles, its nodal velocity field and
+/// its ICE material (Guilkey Sec. 2: every material has its own velocity;
+/// solid fields meet each other and the fluids only through the cell
+/// exchange, Eqs. 38–39).
+pub struct SolidField<const D: usize> {
+    /// Index of the field among the ICE materials (after the fluids).
+    pub ice_material: usize,
+    /// The field's particles.
+    pub particles: Particles<D>,
+    /// The field's bulk EOS in the cells.
+    pub eos: SolidEos,
+    /// Prescribed velocity of a rigid field (`None`: deformable).
+    pub rigid_velocity: Option<SVector<f64, D>>,
+    /// The rigid velocity of the current step (mid-step value).
+    rigid_now: Option<SVector<f64, D>>,
+    gs: GridState<D>,
+    scratch: StepScratch<D>,
+    /// Per interior cell: the field's mass from the nodes.
+    cell_mass: Vec<f64>,
+    /// Per interior cell: the field's velocity from the nodes (P2G, then
+    /// Lagrangian).
+    cell_velocity: Vec<SVector<f64, D>>,
+    /// Per interior cell: the field's temperature from the nodes (only
+    /// with a heat exchange).
+    cell_temp: Vec<f64>,
+}
+
+impl<const D: usize> SolidField<D> {
+    /// The grid nodes' state of the field's last step.
+    pub fn grid_state(&self) -> &GridState<D> {
+        &self.gs
+    }
+
+    /// Accumulated MPM phase times of the field.
+    pub fn phase_times(&self) -> crate::mpm::PhaseTimes {
+        self.scratch.times
+    }
+
+    /// The floor mass of the field in a cell of volume `vol`: below it the
+    /// field is absent from the cell.
+    fn floor_mass(&self, floor_fraction: f64, vol: f64) -> f64 {
+        floor_fraction * self.eos.reference_density() * vol
+    }
+}
+
+/// `v` with the smooth start `v (1 − cos(π t/T))/2` for `t < T`.
+fn ramped<const D: usize>(
+    v: Option<SVector<f64, D>>,
+    ramp: f64,
+    t: f64,
+) -> Option<SVector<f64, D>> {
+    v.map(|v| {
+        if ramp > 0.0 && t < ramp {
+            v * (0.5 * (1.0 - (std::f64::consts::PI * t / ramp).cos()))
+        } else {
+            v
+        }
+    })
+}
+
+/// A coupled MPM-ICE run (explicit or semi-implicit pressure) with one or
+/// more solid fields.
 pub struct CoupledRun<const D: usize> {
     /// Background grid (nodes) shared with the ICE cells.
     pub grid: Grid<D>,
-    /// Solid materials (one solid field: the particles' materials share it).
+    /// Solid materials of all fields (the particles' `material` indexes
+    /// this list).
     pub materials: Vec<SolidMaterial>,
-    /// Particles of the solid field.
-    pub particles: Particles<D>,
+    /// The solid fields, in ICE material order (after the fluids).
+    pub fields: Vec<SolidField<D>>,
     /// MPM discretisation (shape, update ordering, damping).
     pub mpm: ExplicitParams,
     /// Body force on the particles.
     pub body: Option<Box<dyn BodyForce<D> + Send + Sync>>,
-    /// The cell state; the solid field is material `solid`.
+    /// The cell state; the fluids come first, then one material per solid
+    /// field (`fields[i].ice_material`).
     pub fluid: IceState<D>,
-    /// ICE parameters (frames set: fluids Eulerian, the solid field
+    /// ICE parameters (frames set: fluids Eulerian, the solid fields
     /// `Particles` or `Rigid`).
     pub ice: IceParams<D>,
-    /// Index of the solid field among the ICE materials.
-    pub solid: usize,
-    /// Prescribed velocity of a rigid solid field (`None`: deformable).
-    pub rigid_velocity: Option<SVector<f64, D>>,
     /// Time over which a rigid field's velocity rises smoothly from zero,
     /// `v(t) = V (1 − cos(π t/T))/2` for `t < T` (0: impulsive start).
     pub rigid_ramp: f64,
-    /// The solid field's bulk EOS in the cells.
-    pub solid_eos: SolidEos,
     /// Coupling settings.
     pub coupling: CouplingParams,
     /// Courant number of the MPM limit (the ICE limit uses `ice.cfl`).
     pub cfl: f64,
     /// Completed steps.
     pub steps: u64,
-    /// The rigid velocity of the current step (mid-step value).
-    rigid_now: Option<SVector<f64, D>>,
     ws: IceWorkspace<D>,
-    gs: GridState<D>,
-    scratch: StepScratch<D>,
     map: NodeCellMap<D>,
     node_pressure: Vec<f64>,
     node_force: Vec<SVector<f64, D>>,
     cell_vec: Vec<SVector<f64, D>>,
+    /// Per ICE material: the Lagrangian cell velocity of a solid field
+    /// (empty for the fluids).
     particle_velocity: Vec<Vec<SVector<f64, D>>>,
-    solid_l: Vec<SVector<f64, D>>,
-    /// Per interior cell: (mass, momentum) of the solid from the nodes.
-    cell_mass: Vec<f64>,
-    /// Whether the solid exchanges heat (`coupling.heat_exchange > 0`):
+    /// Whether the solids exchange heat (`coupling.heat_exchange > 0`):
     /// only then are temperatures transferred.
     heat_on: bool,
-    /// Per node: the solid's temperature, then its exchange change.
+    /// Per node: a field's temperature, then its exchange change.
     node_scalar: Vec<f64>,
-    /// Per cell: the solid's exchange temperature change.
+    /// Per cell: a field's exchange temperature change.
     cell_scalar: Vec<f64>,
-    /// Per interior cell: the solid's temperature from the nodes.
-    cell_temp: Vec<f64>,
 }
 
 impl<const D: usize> CoupledRun<D> {
-    /// Builds a run from the fluid materials' initial state `fluid`; the
-    /// solid field is appended as the last ICE material (named
-    /// `solid_name`), `ice.frames` and `ice.normalise_volume` are set. The
-    /// fluid masses are reduced where the solid's particles occupy a cell
-    /// (`1 − θ_s`, with the floor), so the initial material volume fills
-    /// every cell.
+    /// Builds a run with one solid field (all `particles`, named
+    /// `solid_name`, with the cell EOS `solid_eos`, rigid if
+    /// `rigid_velocity` is given): [`Self::with_fields`] with one
+    /// [`SolidFieldSpec`].
     ///
     /// # Errors
-    /// [`Error::Fluid`] for invalid ICE parameters or too many materials.
+    /// As [`Self::with_fields`].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         grid: Grid<D>,
         materials: Vec<SolidMaterial>,
         particles: Particles<D>,
         mpm: ExplicitParams,
-        mut fluid: IceState<D>,
-        mut ice: IceParams<D>,
+        fluid: IceState<D>,
+        ice: IceParams<D>,
         solid_name: &str,
         solid_eos: SolidEos,
         rigid_velocity: Option<SVector<f64, D>>,
         coupling: CouplingParams,
         cfl: f64,
     ) -> Result<Self> {
-        let solid = fluid.num_materials();
-        if solid + 1 > ice::MAX_MATERIALS {
+        let field = SolidFieldSpec {
+            name: solid_name.to_string(),
+            particles,
+            eos: solid_eos,
+            rigid_velocity,
+        };
+        Self::with_fields(grid, materials, vec![field], mpm, fluid, ice, coupling, cfl)
+    }
+
+    /// Builds a run from the fluid materials' initial state `fluid` and
+    /// one or more solid fields, appended in order as ICE materials after
+    /// the fluids; `ice.frames` and `ice.normalise_volume` are set and the
+    /// exchange coefficients grown: `coupling.momentum_exchange` and
+    /// `coupling.heat_exchange` between every solid field and every other
+    /// material, solid fields included (Guilkey Eqs. 38–39). The fluid
+    /// masses are reduced where the solids' particles occupy a cell
+    /// (`1 − Σ θ_s`, with the floor), so the initial material volume fills
+    /// every cell.
+    ///
+    /// # Errors
+    /// [`Error::Fluid`] for no solid field, invalid ICE parameters or too
+    /// many materials.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_fields(
+        grid: Grid<D>,
+        materials: Vec<SolidMaterial>,
+        fields: Vec<SolidFieldSpec<D>>,
+        mpm: ExplicitParams,
+        mut fluid: IceState<D>,
+        mut ice: IceParams<D>,
+        coupling: CouplingParams,
+        cfl: f64,
+    ) -> Result<Self> {
+        let nf = fluid.num_materials();
+        let nm = nf + fields.len();
+        if fields.is_empty() || nm > ice::MAX_MATERIALS {
             return Err(ice::IceError::InvalidInput {
                 field: "materials".into(),
-                reason: format!("at most {} materials", ice::MAX_MATERIALS),
+                reason: format!(
+                    "at least one solid field and at most {} materials in all (got {} fluids, {} \
+                     solid fields)",
+                    ice::MAX_MATERIALS,
+                    nf,
+                    fields.len()
+                ),
             }
             .into());
         }
-        fluid.push_material(ice::IceMaterial::new(solid_name, solid_eos));
-        let nm = solid + 1;
         ice.frames = vec![Frame::Eulerian; nm];
-        ice.frames[solid] = if rigid_velocity.is_some() {
-            Frame::Rigid
-        } else {
-            Frame::Particles
-        };
+        for (i, f) in fields.iter().enumerate() {
+            fluid.push_material(ice::IceMaterial::new(&f.name, f.eos));
+            ice.frames[nf + i] = if f.rigid_velocity.is_some() {
+                Frame::Rigid
+            } else {
+                Frame::Particles
+            };
+        }
         ice.normalise_volume = true;
         {
-            // Grow the coefficient matrices by the solid's row and column
-            // (`coupling.momentum_exchange`, `coupling.heat_exchange`).
+            // Grow the coefficient matrices by the solid fields' rows and
+            // columns: every pair with a solid field in it exchanges at
+            // `coupling.momentum_exchange` / `coupling.heat_exchange`,
+            // solid–solid pairs included (Guilkey Eqs. 38–39).
             let ex = ice
                 .exchange
-                .get_or_insert_with(|| ice::ExchangeCoefficients::uniform(solid, 0.0, 0.0));
-            let k = coupling.momentum_exchange;
+                .get_or_insert_with(|| ice::ExchangeCoefficients::uniform(nf, 0.0, 0.0));
             let mut momentum = vec![0.0; nm * nm];
             let mut heat = vec![0.0; nm * nm];
-            for r in 0..solid {
-                for s in 0..solid {
-                    momentum[r * nm + s] = ex.momentum[r * solid + s];
-                    heat[r * nm + s] = ex.heat[r * solid + s];
+            for r in 0..nm {
+                for s in 0..nm {
+                    let (m, h) = if r < nf && s < nf {
+                        (ex.momentum[r * nf + s], ex.heat[r * nf + s])
+                    } else if r != s {
+                        (coupling.momentum_exchange, coupling.heat_exchange)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    momentum[r * nm + s] = m;
+                    heat[r * nm + s] = h;
                 }
-                momentum[r * nm + solid] = k;
-                momentum[solid * nm + r] = k;
-                heat[r * nm + solid] = coupling.heat_exchange;
-                heat[solid * nm + r] = coupling.heat_exchange;
             }
             ex.momentum = momentum;
             ex.heat = heat;
@@ -256,54 +370,52 @@ impl<const D: usize> CoupledRun<D> {
         let map = NodeCellMap::new(&grid, &fluid.layout);
         let n_int = fluid.layout.num_interior();
         let heat_on = coupling.heat_exchange > 0.0;
-        let mut particles = particles;
-        particles.temperature.fill(coupling.solid_temperature);
+        let sized = |n: usize| if heat_on { vec![0.0; n] } else { Vec::new() };
+        let fields = fields
+            .into_iter()
+            .enumerate()
+            .map(|(i, spec)| {
+                let mut particles = spec.particles;
+                particles.temperature.fill(coupling.solid_temperature);
+                SolidField {
+                    ice_material: nf + i,
+                    particles,
+                    eos: spec.eos,
+                    rigid_velocity: spec.rigid_velocity,
+                    rigid_now: spec.rigid_velocity,
+                    gs: GridState::new(n_nodes),
+                    scratch: StepScratch::default(),
+                    cell_mass: vec![0.0; n_int],
+                    cell_velocity: vec![SVector::zeros(); n_int],
+                    cell_temp: sized(n_int),
+                }
+            })
+            .collect();
         let mut run = Self {
             heat_on,
-            node_scalar: if heat_on {
-                vec![0.0; n_nodes]
-            } else {
-                Vec::new()
-            },
-            cell_scalar: if heat_on {
-                vec![0.0; n_cells]
-            } else {
-                Vec::new()
-            },
-            cell_temp: if heat_on {
-                vec![0.0; n_int]
-            } else {
-                Vec::new()
-            },
-            gs: GridState::new(n_nodes),
-            scratch: StepScratch::default(),
+            node_scalar: sized(n_nodes),
+            cell_scalar: sized(n_cells),
             map,
             node_pressure: vec![0.0; n_nodes],
             node_force: vec![SVector::zeros(); n_nodes],
             cell_vec: vec![SVector::zeros(); n_cells],
             particle_velocity: (0..nm)
                 .map(|r| {
-                    if r == solid {
+                    if r >= nf {
                         vec![SVector::zeros(); n_cells]
                     } else {
                         Vec::new()
                     }
                 })
                 .collect(),
-            solid_l: vec![SVector::zeros(); n_int],
-            cell_mass: vec![0.0; n_int],
             grid,
             materials,
-            particles,
+            fields,
             mpm,
             body: None,
             fluid,
             ice,
-            solid,
-            rigid_velocity,
             rigid_ramp: 0.0,
-            rigid_now: rigid_velocity,
-            solid_eos,
             coupling,
             cfl,
             steps: 0,
@@ -313,50 +425,60 @@ impl<const D: usize> CoupledRun<D> {
         Ok(run)
     }
 
-    /// Step 1: P2G and node → cell of the solid's mass and velocity (and
+    /// Number of fluid materials (the ICE materials before the solid
+    /// fields).
+    pub fn num_fluids(&self) -> usize {
+        self.fields[0].ice_material
+    }
+
+    /// All particles of all fields, in field order (a copy, for output).
+    pub fn all_particles(&self) -> Particles<D> {
+        let mut all = self.fields[0].particles.clone();
+        for f in &self.fields[1..] {
+            all.append(&f.particles);
+        }
+        all
+    }
+
+    /// Step 1: P2G and node → cell of every field's mass and velocity (and
     /// temperature, with a heat exchange).
     fn p2g_to_cells(&mut self, dt: f64) -> Result<()> {
         let phases = phases!(self, dt);
-        phases.p2g(&self.particles, &mut self.gs, &mut self.scratch)?;
-        let gs = &self.gs;
-        nodes_to_cells(
-            &gs.mass,
-            &gs.velocity,
-            &self.map,
-            &mut self.cell_mass,
-            &mut self.solid_l,
-        );
-        if self.heat_on {
-            let p = &self.particles;
-            phases.p2g_scalar(p, &p.temperature, gs, &self.scratch, &mut self.node_scalar);
+        for f in &mut self.fields {
+            phases.p2g(&f.particles, &mut f.gs, &mut f.scratch)?;
             nodes_to_cells(
-                &gs.mass,
-                &self.node_scalar,
+                &f.gs.mass,
+                &f.gs.velocity,
                 &self.map,
-                &mut self.cell_mass,
-                &mut self.cell_temp,
+                &mut f.cell_mass,
+                &mut f.cell_velocity,
             );
+            if self.heat_on {
+                let p = &f.particles;
+                phases.p2g_scalar(p, &p.temperature, &f.gs, &f.scratch, &mut self.node_scalar);
+                nodes_to_cells(
+                    &f.gs.mass,
+                    &self.node_scalar,
+                    &self.map,
+                    &mut f.cell_mass,
+                    &mut f.cell_temp,
+                );
+            }
         }
         Ok(())
     }
 
-    /// The rigid field's velocity at time `t` (with the ramp).
-    pub fn rigid_velocity_at(&self, t: f64) -> Option<SVector<f64, D>> {
-        let ramp = self.rigid_ramp;
-        self.rigid_velocity.map(|v| {
-            if ramp > 0.0 && t < ramp {
-                v * (0.5 * (1.0 - (std::f64::consts::PI * t / ramp).cos()))
-            } else {
-                v
-            }
-        })
+    /// The rigid velocity of field `field` at time `t` (with the ramp;
+    /// `None` for a deformable field).
+    pub fn rigid_velocity_at(&self, field: usize, t: f64) -> Option<SVector<f64, D>> {
+        ramped(self.fields[field].rigid_velocity, self.rigid_ramp, t)
     }
 
-    /// Displacement of the rigid field from time 0 to `t` (the integral of
-    /// [`Self::rigid_velocity_at`]).
-    pub fn rigid_displacement(&self, t: f64) -> Option<SVector<f64, D>> {
+    /// Displacement of rigid field `field` from time 0 to `t` (the integral
+    /// of [`Self::rigid_velocity_at`]).
+    pub fn rigid_displacement(&self, field: usize, t: f64) -> Option<SVector<f64, D>> {
         let ramp = self.rigid_ramp;
-        self.rigid_velocity.map(|v| {
+        self.fields[field].rigid_velocity.map(|v| {
             if ramp > 0.0 {
                 let tr = t.min(ramp);
                 let pi = std::f64::consts::PI;
@@ -368,74 +490,72 @@ impl<const D: usize> CoupledRun<D> {
         })
     }
 
-    /// Mass-weighted velocity and temperature of the fluids in interior
-    /// cell `c` (what an empty solid cell takes, so that its exchange
-    /// changes nothing).
-    fn fluid_mixture(&self, c: usize) -> (SVector<f64, D>, f64) {
-        let mut m = 0.0;
-        let mut p = SVector::<f64, D>::zeros();
-        let mut mt = 0.0;
-        for r in 0..self.solid {
-            let mc = &self.fluid.cells[r];
-            m += mc.mass[c];
-            p += mc.velocity[c] * mc.mass[c];
-            mt += mc.temperature[c] * mc.mass[c];
-        }
-        if m > 0.0 {
-            (p / m, mt / m)
-        } else {
-            (SVector::zeros(), self.coupling.solid_temperature)
+    /// Sets every rigid field's velocity of the step (at time `t`).
+    fn set_rigid_now(&mut self, t: f64) {
+        for f in &mut self.fields {
+            f.rigid_now = ramped(f.rigid_velocity, self.rigid_ramp, t);
         }
     }
 
-    /// Writes the solid field's cell state from `cell_mass` / `solid_l`.
+    /// Writes every solid field's cell state from its node → cell mass and
+    /// velocity (Guilkey Sec. 3.3 step 1). Where a field is absent (mass at
+    /// or below its floor) it keeps the floor mass, moving with (and at the
+    /// temperature of) the mass-weighted mixture of the other materials in
+    /// the cell, fluids and present solid fields: its exchange then changes
+    /// nothing (Eqs. 38–39 with equal velocities).
     fn set_solid_cells(&mut self) {
         let vol = self.fluid.layout.cell_volume();
-        let floor = self.coupling.floor_fraction * self.solid_eos.reference_density() * vol;
+        let ff = self.coupling.floor_fraction;
         let t_s = self.coupling.solid_temperature;
-        let rigid = self.rigid_now;
-        for (k, &c) in self.fluid.layout.interior.iter().enumerate() {
-            let m = self.cell_mass[k];
-            // An empty cell's floor moves with the fluid (even for a rigid
-            // field): its exchange then changes nothing.
-            let (mass, u, t) = if m > floor {
-                let t = if self.heat_on { self.cell_temp[k] } else { t_s };
-                (m, rigid.unwrap_or(self.solid_l[k]), t)
-            } else {
-                let (u, t) = self.fluid_mixture(c);
-                (floor, u, if self.heat_on { t } else { t_s })
-            };
-            let p = self.fluid.pressure[c];
-            let p = if p > 0.0 { p } else { self.coupling.p_ref };
-            let rho = self
-                .solid_eos
-                .density(p, t)
-                .unwrap_or(self.solid_eos.reference_density());
-            let sc = &mut self.fluid.cells[self.solid];
-            sc.mass[c] = mass;
-            sc.velocity[c] = u;
-            sc.temperature[c] = t;
-            sc.sp_vol[c] = 1.0 / rho;
+        let heat_on = self.heat_on;
+        let nf = self.num_fluids();
+        let (fluids, solids) = self.fluid.cells.split_at_mut(nf);
+        let layout = &self.fluid.layout;
+        let pressure = &self.fluid.pressure;
+        for (i, (f, sc)) in self.fields.iter().zip(solids.iter_mut()).enumerate() {
+            let floor = f.floor_mass(ff, vol);
+            for (k, &c) in layout.interior.iter().enumerate() {
+                let m = f.cell_mass[k];
+                let (mass, u, t) = if m > floor {
+                    let t = if heat_on { f.cell_temp[k] } else { t_s };
+                    (m, f.rigid_now.unwrap_or(f.cell_velocity[k]), t)
+                } else {
+                    // Even for a rigid field.
+                    let (u, t) =
+                        others_mixture(fluids, &self.fields, i, (k, c), ff, vol, heat_on, t_s);
+                    (floor, u, if heat_on { t } else { t_s })
+                };
+                let p = pressure[c];
+                let p = if p > 0.0 { p } else { self.coupling.p_ref };
+                let rho = f.eos.density(p, t).unwrap_or(f.eos.reference_density());
+                sc.mass[c] = mass;
+                sc.velocity[c] = u;
+                sc.temperature[c] = t;
+                sc.sp_vol[c] = 1.0 / rho;
+            }
         }
     }
 
-    /// Initial state: the fluid volume fractions reduced where the solid
-    /// sits, the equilibration pressure and the pressure field.
+    /// Initial state: the fluid volume fractions reduced where the solids
+    /// sit, the equilibration pressure and the pressure field.
     fn initialise(&mut self) -> Result<()> {
         self.p2g_to_cells(0.0)?;
         let vol = self.fluid.layout.cell_volume();
         let floor = self.coupling.floor_fraction;
+        let nf = self.num_fluids();
         for (k, &c) in self.fluid.layout.interior.iter().enumerate() {
             let p = self.fluid.p_eq[c];
             self.fluid.pressure[c] = p;
-            let rho_s = self
-                .solid_eos
-                .density(if p > 0.0 { p } else { self.coupling.p_ref }, 300.0)
-                .unwrap_or(self.solid_eos.reference_density());
-            let theta_s = (self.cell_mass[k] / (rho_s * vol)).min(1.0 - floor);
+            let mut theta_s = 0.0;
+            for f in &self.fields {
+                let rho_s = f
+                    .eos
+                    .density(if p > 0.0 { p } else { self.coupling.p_ref }, 300.0)
+                    .unwrap_or(f.eos.reference_density());
+                theta_s += (f.cell_mass[k] / (rho_s * vol)).min(1.0 - floor);
+            }
             let keep = (1.0 - theta_s).max(floor);
-            for r in 0..self.solid {
-                let mc = &mut self.fluid.cells[r];
+            for mc in &mut self.fluid.cells[..nf] {
                 mc.mass[c] *= keep;
                 if mc.mass[c].is_nan() || mc.mass[c] <= 0.0 {
                     mc.mass[c] = floor * vol / mc.sp_vol[c].max(f64::MIN_POSITIVE);
@@ -461,7 +581,8 @@ impl<const D: usize> CoupledRun<D> {
     }
 
     /// Largest stable time step: the ICE limit over all materials (the
-    /// solid's sound speed included) and the MPM limit.
+    /// solids' sound speeds included) and the MPM limit of every
+    /// deformable field.
     pub fn stable_dt(&self) -> f64 {
         let factor = self
             .ice
@@ -470,26 +591,30 @@ impl<const D: usize> CoupledRun<D> {
             .map_or(1.0, |sp| sp.sound_speed_factor);
         // Explicit: every material's sound speed (a deformable solid's too:
         // Eq. 29 in cells it shares; not a rigid one's); semi-implicit:
-        // advection only (factor 0 by default) — the solid field stays
+        // advection only (factor 0 by default) — the solid fields stay
         // explicit through `solid_dt`.
         let fluid_dt =
             ice::timestep_with(&self.fluid, self.ice.cfl, factor, &self.ice.rigid_mask());
-        let solid_dt = if self.rigid_velocity.is_some() || self.particles.is_empty() {
-            f64::INFINITY
-        } else {
-            stable_dt(&self.grid, &self.materials, &self.particles, self.cfl)
-        };
+        let solid_dt = self
+            .fields
+            .iter()
+            .filter(|f| f.rigid_velocity.is_none() && !f.particles.is_empty())
+            .map(|f| stable_dt(&self.grid, &self.materials, &f.particles, self.cfl))
+            .fold(f64::INFINITY, f64::min);
         fluid_dt.min(solid_dt)
     }
 
-    /// The grid nodes' state of the last step.
-    pub fn grid_state(&self) -> &GridState<D> {
-        &self.gs
-    }
-
-    /// Accumulated MPM phase times.
+    /// Accumulated MPM phase times, summed over the fields.
     pub fn phase_times(&self) -> crate::mpm::PhaseTimes {
-        self.scratch.times
+        let mut t = crate::mpm::PhaseTimes::default();
+        for f in &self.fields {
+            let s = f.phase_times();
+            t.bin_s += s.bin_s;
+            t.p2g_s += s.p2g_s;
+            t.grid_s += s.grid_s;
+            t.g2p_s += s.g2p_s;
+        }
+        t
     }
 
     /// One coupled step of at most `dt_max` (halved on a retryable ICE
@@ -520,42 +645,11 @@ impl<const D: usize> CoupledRun<D> {
         }
     }
 
-    /// The solid's temperature change of the exchange (Guilkey Eq. 39),
-    /// cells → nodes → particles (Sec. 3.3 step 10), before the particles
-    /// move. Empty cells contribute nothing. The transfer conserves the
-    /// solid's thermal energy: `Σ_p m_p ΔT_p = Σ_i m_i ΔT_i = Σ_c m_c ΔT_c`.
-    fn heat_to_particles(&mut self, dt: f64) {
-        let layout = &self.fluid.layout;
-        let floor = self.coupling.floor_fraction
-            * self.solid_eos.reference_density()
-            * layout.cell_volume();
-        let tl = self.ws.lagrangian_temperature(self.solid);
-        let t0 = &self.fluid.cells[self.solid].temperature;
-        for (k, &c) in layout.interior.iter().enumerate() {
-            self.cell_scalar[c] = if self.cell_mass[k] > floor {
-                tl[c] - t0[c]
-            } else {
-                0.0
-            };
-        }
-        cells_to_nodes(&self.grid, layout, &self.cell_scalar, &mut self.node_scalar);
-        self.grid.mirror_ghosts(&mut self.node_scalar);
-        let mut temperature = std::mem::take(&mut self.particles.temperature);
-        let phases = phases!(self, dt);
-        phases.g2p_scalar_add(
-            &self.particles,
-            &self.node_scalar,
-            &self.scratch,
-            &mut temperature,
-        );
-        self.particles.temperature = temperature;
-    }
-
     fn step_inner(&mut self, dt_try: f64) -> Result<StepInfo> {
         let mut dt = dt_try;
         // Step 1: P2G and node → cell (does not change the particles).
         self.p2g_to_cells(dt)?;
-        self.rigid_now = self.rigid_velocity_at(self.fluid.time + 0.5 * dt);
+        self.set_rigid_now(self.fluid.time + 0.5 * dt);
         self.set_solid_cells();
         // Steps 2–6.
         let mut tries = 0;
@@ -565,7 +659,7 @@ impl<const D: usize> CoupledRun<D> {
                 Err(e) if tries < 20 && e.retry_dt().is_some() => {
                     dt *= 0.5;
                     tries += 1;
-                    self.rigid_now = self.rigid_velocity_at(self.fluid.time + 0.5 * dt);
+                    self.set_rigid_now(self.fluid.time + 0.5 * dt);
                     self.set_solid_cells();
                 }
                 Err(e) => return Err(e.into()),
@@ -574,6 +668,7 @@ impl<const D: usize> CoupledRun<D> {
         let dt = info.dt;
         let layout = &self.fluid.layout;
         let vol = layout.cell_volume();
+        let ff = self.coupling.floor_fraction;
         // Cell pressure → nodes (average of the 2^D surrounding cells,
         // ghosts from the boundary conditions).
         {
@@ -598,68 +693,68 @@ impl<const D: usize> CoupledRun<D> {
                     *pn = sum * inv;
                 });
         }
-        // Step 8: the pressure force −V θ_s ∇p* of each cell, to the nodes.
-        {
-            let pstar = self.ws.face_pressure();
-            let theta = &self.fluid.cells[self.solid].vol_frac;
-            let out = &mut self.cell_vec;
-            for &c in &layout.interior {
-                let mut g = SVector::<f64, D>::zeros();
-                for d in 0..D {
-                    g[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
+        let phases = phases!(self, dt);
+        for f in &mut self.fields {
+            let r = f.ice_material;
+            // Step 8: the pressure force −V θ_s ∇p* of each cell on this
+            // field, to the nodes.
+            {
+                let pstar = self.ws.face_pressure();
+                let theta = &self.fluid.cells[r].vol_frac;
+                let out = &mut self.cell_vec;
+                for &c in &layout.interior {
+                    let mut g = SVector::<f64, D>::zeros();
+                    for d in 0..D {
+                        g[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
+                    }
+                    out[c] = -g * (vol * theta[c]);
                 }
-                out[c] = -g * (vol * theta[c]);
             }
-        }
-        cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
-        // Steps 7–9 on the nodes.
-        if let Some(v) = self.rigid_now {
-            let gs = &mut self.gs;
-            for (i, &m) in gs.mass.iter().enumerate() {
-                let u = if m > self.mpm.mass_floor {
-                    v
-                } else {
-                    SVector::zeros()
-                };
-                gs.velocity_new[i] = u;
-                gs.accel[i] = SVector::zeros();
+            cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
+            // Steps 7–9 on the field's nodes.
+            if let Some(v) = f.rigid_now {
+                let gs = &mut f.gs;
+                for (i, &m) in gs.mass.iter().enumerate() {
+                    let u = if m > self.mpm.mass_floor {
+                        v
+                    } else {
+                        SVector::zeros()
+                    };
+                    gs.velocity_new[i] = u;
+                    gs.accel[i] = SVector::zeros();
+                }
+            } else {
+                phases.solve(
+                    &mut f.particles,
+                    &mut f.gs,
+                    &mut f.scratch,
+                    &self.node_pressure,
+                    self.coupling.p_ref,
+                    &self.node_force,
+                )?;
             }
-        } else {
-            let phases = phases!(self, dt);
-            phases.solve(
-                &mut self.particles,
-                &mut self.gs,
-                &mut self.scratch,
-                &self.node_pressure,
-                self.coupling.p_ref,
-                &self.node_force,
-            )?;
-        }
-        // Node → cell: the solid's Lagrangian cell velocity.
-        nodes_to_cells(
-            &self.gs.mass,
-            &self.gs.velocity_new,
-            &self.map,
-            &mut self.cell_mass,
-            &mut self.solid_l,
-        );
-        {
-            let layout = &self.fluid.layout;
-            let pv = &mut self.particle_velocity[self.solid];
-            let sc = &self.fluid.cells[self.solid];
-            let floor = self.coupling.floor_fraction
-                * self.solid_eos.reference_density()
-                * layout.cell_volume();
+            // Node → cell: the field's Lagrangian cell velocity.
+            nodes_to_cells(
+                &f.gs.mass,
+                &f.gs.velocity_new,
+                &self.map,
+                &mut f.cell_mass,
+                &mut f.cell_velocity,
+            );
+            let pv = &mut self.particle_velocity[r];
+            let sc = &self.fluid.cells[r];
+            let floor = f.floor_mass(ff, vol);
             for (k, &c) in layout.interior.iter().enumerate() {
-                pv[c] = if self.cell_mass[k] > floor {
-                    self.rigid_now.unwrap_or(self.solid_l[k])
+                pv[c] = if f.cell_mass[k] > floor {
+                    f.rigid_now.unwrap_or(f.cell_velocity[k])
                 } else {
-                    // Empty cell: the floor keeps the velocity it was given.
+                    // Absent: the floor keeps the velocity it was given.
                     sc.velocity[c]
                 };
             }
         }
-        // Steps 8–11 at the cells (fluid sources, exchange, specific volume).
+        // Steps 8–11 at the cells (fluid sources, exchange among all
+        // materials — Eqs. 38–39 —, specific volume).
         ice::stage_lagrangian(
             &self.fluid,
             &self.ice,
@@ -667,45 +762,110 @@ impl<const D: usize> CoupledRun<D> {
             dt,
             &self.particle_velocity,
         )?;
-        // The solid's exchange velocity change, cells → nodes.
-        if self.rigid_velocity.is_none() {
-            let layout = &self.fluid.layout;
-            let ul = self.ws.lagrangian_velocity(self.solid);
-            let pv = &self.particle_velocity[self.solid];
-            for &c in &layout.interior {
-                self.cell_vec[c] = ul[c] - pv[c];
+        for f in &mut self.fields {
+            let r = f.ice_material;
+            // The field's exchange velocity change, cells → nodes.
+            if f.rigid_velocity.is_none() {
+                let ul = self.ws.lagrangian_velocity(r);
+                let pv = &self.particle_velocity[r];
+                for &c in &layout.interior {
+                    self.cell_vec[c] = ul[c] - pv[c];
+                }
+                cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
+                let inv_dt = 1.0 / dt;
+                let floor = self.mpm.mass_floor;
+                let gs = &mut f.gs;
+                gs.velocity_new
+                    .par_iter_mut()
+                    .zip(gs.accel.par_iter_mut())
+                    .zip(gs.mass.par_iter().zip(self.node_force.par_iter()))
+                    .for_each(|((v, a), (&m, dv))| {
+                        if m > floor {
+                            *v += dv;
+                            *a += dv * inv_dt;
+                        }
+                    });
+                self.grid.mirror_ghosts(&mut gs.velocity_new);
+                self.grid.mirror_ghosts(&mut gs.accel);
             }
-            cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
-            let inv_dt = 1.0 / dt;
-            let floor = self.mpm.mass_floor;
-            let gs = &mut self.gs;
-            gs.velocity_new
-                .par_iter_mut()
-                .zip(gs.accel.par_iter_mut())
-                .zip(gs.mass.par_iter().zip(self.node_force.par_iter()))
-                .for_each(|((v, a), (&m, dv))| {
-                    if m > floor {
-                        *v += dv;
-                        *a += dv * inv_dt;
-                    }
-                });
-            self.grid.mirror_ghosts(&mut gs.velocity_new);
-            self.grid.mirror_ghosts(&mut gs.accel);
-        }
-        if self.heat_on {
-            self.heat_to_particles(dt);
-        }
-        // Step 13: G2P.
-        if let Some(v) = self.rigid_now {
-            self.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
-            self.particles.v.par_iter_mut().for_each(|u| *u = v);
-        } else {
-            let phases = phases!(self, dt);
-            phases.g2p(&mut self.particles, &self.gs, &mut self.scratch)?;
+            // The field's temperature change of the exchange (Guilkey
+            // Eq. 39), cells → nodes → particles (Sec. 3.3 step 10),
+            // before the particles move. Absent cells contribute nothing.
+            // The transfer conserves the field's thermal energy:
+            // `Σ_p m_p ΔT_p = Σ_i m_i ΔT_i = Σ_c m_c ΔT_c`.
+            if self.heat_on {
+                let floor = f.floor_mass(ff, vol);
+                let tl = self.ws.lagrangian_temperature(r);
+                let t0 = &self.fluid.cells[r].temperature;
+                for (k, &c) in layout.interior.iter().enumerate() {
+                    self.cell_scalar[c] = if f.cell_mass[k] > floor {
+                        tl[c] - t0[c]
+                    } else {
+                        0.0
+                    };
+                }
+                cells_to_nodes(&self.grid, layout, &self.cell_scalar, &mut self.node_scalar);
+                self.grid.mirror_ghosts(&mut self.node_scalar);
+                let mut temperature = std::mem::take(&mut f.particles.temperature);
+                phases.g2p_scalar_add(
+                    &f.particles,
+                    &self.node_scalar,
+                    &f.scratch,
+                    &mut temperature,
+                );
+                f.particles.temperature = temperature;
+            }
+            // Step 13: G2P.
+            if let Some(v) = f.rigid_now {
+                f.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
+                f.particles.v.par_iter_mut().for_each(|u| *u = v);
+            } else {
+                phases.g2p(&mut f.particles, &f.gs, &mut f.scratch)?;
+            }
         }
         // Step 12: fluid advection and the commit of the cell state.
         let info = ice::stage_advect(&mut self.fluid, &self.ice, &mut self.ws, info)?;
         Ok(info)
+    }
+}
+
+/// Mass-weighted velocity and temperature in interior cell `c` (index `k`
+/// among the interior cells) of every material but solid field `skip`: the
+/// fluids and the solid fields present there (mass above their floor).
+/// What an absent field's floor takes, so that its exchange changes
+/// nothing (Guilkey Eqs. 38–39 with equal velocities and temperatures).
+#[allow(clippy::too_many_arguments)]
+fn others_mixture<const D: usize>(
+    fluids: &[ice::MaterialCells<D>],
+    fields: &[SolidField<D>],
+    skip: usize,
+    (k, c): (usize, usize),
+    floor_fraction: f64,
+    vol: f64,
+    heat_on: bool,
+    t_s: f64,
+) -> (SVector<f64, D>, f64) {
+    let mut m = 0.0;
+    let mut p = SVector::<f64, D>::zeros();
+    let mut mt = 0.0;
+    for mc in fluids {
+        m += mc.mass[c];
+        p += mc.velocity[c] * mc.mass[c];
+        mt += mc.temperature[c] * mc.mass[c];
+    }
+    for (j, g) in fields.iter().enumerate() {
+        let mg = g.cell_mass[k];
+        if j != skip && mg > g.floor_mass(floor_fraction, vol) {
+            let t = if heat_on { g.cell_temp[k] } else { t_s };
+            m += mg;
+            p += g.rigid_now.unwrap_or(g.cell_velocity[k]) * mg;
+            mt += t * mg;
+        }
+    }
+    if m > 0.0 {
+        (p / m, mt / m)
+    } else {
+        (SVector::zeros(), t_s)
     }
 }
 

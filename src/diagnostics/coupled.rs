@@ -1,11 +1,12 @@
 //! Coupled MPM-ICE reference setups: a steel block in air (at rest, or
-//! translating with the air — Zhang Sec. 3) and the adiabatic piston
-//! (Guilkey Sec. 4.2, Eq. 44).
+//! translating with the air — Zhang Sec. 3), solid blocks in gas as one or
+//! several solid fields, and the adiabatic piston (Guilkey Sec. 4.2,
+//! Eq. 44).
 
 use nalgebra::SVector;
 
 use super::mms::fill_box;
-use crate::coupling::{CoupledRun, CouplingParams};
+use crate::coupling::{CoupledRun, CouplingParams, SolidFieldSpec};
 use crate::error::Result;
 use crate::grid::{Boundary, Grid};
 use crate::ice::{
@@ -28,6 +29,17 @@ pub fn steel() -> SolidMaterial {
         density: 8900.0,
         model: SolidModel::NeoHookean,
         elastic: ElasticConstants::from_bulk_shear(117.0e9, 43.8e9),
+    }
+}
+
+/// Aluminium: `E = 70` GPa, `ν = 0.33` (`K = 68.6` GPa, `G = 26.3` GPa),
+/// `ρ = 2700`.
+pub fn aluminium() -> SolidMaterial {
+    SolidMaterial {
+        name: "aluminium".into(),
+        density: 2700.0,
+        model: SolidModel::NeoHookean,
+        elastic: ElasticConstants::from_bulk_shear(70.0e9 / (3.0 * 0.34), 70.0e9 / 2.66),
     }
 }
 
@@ -174,13 +186,139 @@ fn steel_run<const D: usize>(
     )
 }
 
+/// One block of [`blocks_in_air`]: the box `[lo, hi]` of `material`
+/// (2 × 2 particles per cell) moving at `velocity`, in solid field `field`.
+#[derive(Debug, Clone)]
+pub struct Block {
+    /// Lower corner.
+    pub lo: [f64; 2],
+    /// Upper corner.
+    pub hi: [f64; 2],
+    /// Initial velocity (the prescribed one of a rigid field).
+    pub velocity: [f64; 2],
+    /// The block's material.
+    pub material: SolidMaterial,
+    /// Index of the block's solid field (`0..number of fields`, every
+    /// index used).
+    pub field: usize,
+    /// Whether the block's field is rigid (moving at `velocity`; all
+    /// blocks of a rigid field share it).
+    pub rigid: bool,
+}
+
+/// The gas of [`blocks_in_air`]: air (`γ = 1.4`) at density `rho` and
+/// pressure `p` (also the solids' reference pressure) moving at `velocity`.
+#[derive(Debug, Clone, Copy)]
+pub struct Gas {
+    /// Density [kg/m³].
+    pub rho: f64,
+    /// Pressure [Pa].
+    pub p: f64,
+    /// Velocity [m/s].
+    pub velocity: [f64; 2],
+}
+
+impl Gas {
+    /// Air at `(ρ, p) = (1.1768, 101325)` moving at `velocity`.
+    pub fn air(velocity: [f64; 2]) -> Self {
+        Self {
+            rho: 1.1768,
+            p: 101_325.0,
+            velocity,
+        }
+    }
+}
+
+/// Solid blocks in `gas` in the box `[0, 1]²` of `n × n` cells, each block
+/// in the solid field its `field` names (a field holds any number of
+/// blocks: one field for two blocks, or one field each, are the same
+/// bodies; the fields follow the fluid as ICE materials, field `i` named
+/// after its first block's material, `_i` appended). Block `b`'s particles
+/// have material `b` (the run's `materials` are the blocks'). Walls:
+/// closed (symmetry) when the gas is at rest, free / outflow when it
+/// moves; `K = 1e15`, `p_ref` the gas pressure, USF, linear hat.
+///
+/// # Errors
+/// As [`CoupledRun::with_fields`].
+pub fn blocks_in_air(n: usize, gas: Gas, blocks: &[Block]) -> Result<CoupledRun<2>> {
+    let (gbc, fbc) = if gas.velocity != [0.0; 2] {
+        (Boundary::Free, IceBoundary::Outflow)
+    } else {
+        (Boundary::Symmetry, IceBoundary::Wall)
+    };
+    let grid = Grid::<2>::new(
+        SVector::zeros(),
+        SVector::repeat(1.0),
+        [n, n],
+        [[gbc; 2]; 2],
+    );
+    let layout = CellLayout::from_grid(&grid)?;
+    let ua = SVector::<f64, 2>::from(gas.velocity);
+    let fluid = IceState::new(layout, vec![air()], |_| {
+        vec![MaterialInit::new(1.0, gas.rho, gas.p, ua)]
+    })?;
+    let mut params = IceParams::new([[fbc.clone(), fbc.clone()], [fbc.clone(), fbc]]);
+    params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
+    let n_fields = blocks.iter().map(|b| b.field + 1).max().unwrap_or(0);
+    let mut fields: Vec<Option<SolidFieldSpec<2>>> = vec![None; n_fields];
+    for (i, b) in blocks.iter().enumerate() {
+        let v = SVector::<f64, 2>::from(b.velocity);
+        let mut p = fill_box(
+            &grid,
+            &SVector::from(b.lo),
+            &SVector::from(b.hi),
+            2,
+            b.material.density,
+            |_| true,
+        );
+        p.v.fill(v);
+        p.material.fill(i as u16);
+        match &mut fields[b.field] {
+            Some(f) => f.particles.append(&p),
+            slot => {
+                *slot = Some(SolidFieldSpec {
+                    name: format!("{}_{}", b.material.name, b.field),
+                    particles: p,
+                    eos: solid_eos(&b.material, gas.p),
+                    rigid_velocity: b.rigid.then_some(v),
+                })
+            }
+        }
+    }
+    let fields: Vec<SolidFieldSpec<2>> = fields.into_iter().flatten().collect();
+    let min_mass = fields
+        .iter()
+        .flat_map(|f| f.particles.mass.iter().copied())
+        .fold(f64::INFINITY, f64::min);
+    let mpm = ExplicitParams {
+        shape: ShapeKind::Linear,
+        scheme: UpdateScheme::Usf,
+        mass_floor: 1e-12 * min_mass,
+        damping: 0.0,
+    };
+    let coupling = CouplingParams {
+        p_ref: gas.p,
+        ..CouplingParams::default()
+    };
+    CoupledRun::with_fields(
+        grid,
+        blocks.iter().map(|b| b.material.clone()).collect(),
+        fields,
+        mpm,
+        fluid,
+        params,
+        coupling,
+        0.5,
+    )
+}
+
 /// The adiabatic piston of Guilkey Sec. 4.2 in 1D: air at
 /// `(ρ, p) = (1.1768, 101325)` in `[0, 1.2]` (`n` cells, walls at both
 /// ends), a rigid steel piston filling `[1.0, 1.1]` (2 particles per cell)
 /// moving towards the closed end `x = 0` at `speed`, reached smoothly over
 /// `ramp` seconds ([`CoupledRun::rigid_ramp`]); exchange `K = 1e15`. The gas
 /// below the piston is compressed from length 1 to
-/// `1 + run.rigid_displacement(t)`.
+/// `1 + run.rigid_displacement(0, t)`.
 ///
 /// # Errors
 /// As [`CoupledRun::new`].
@@ -242,7 +380,10 @@ pub fn piston_history(
     let mut out = Vec::new();
     let mut next = 1.5;
     let ratio = |run: &CoupledRun<1>| {
-        1.0 / (1.0 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]))
+        1.0 / (1.0
+            + run
+                .rigid_displacement(0, run.fluid.time)
+                .map_or(0.0, |d| d[0]))
     };
     while ratio(&run) < ratio_end {
         run.step(f64::INFINITY)?;
@@ -289,7 +430,7 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
     }
     let pressure = sum / n.max(1) as f64 - p_ref;
     let target = 2.0 * pressure / 3.0;
-    let p = &run.particles;
+    let p = &run.fields[0].particles;
     let mut e43 = 0.0;
     let y_min = p.x0.iter().map(|x| x[1]).fold(f64::INFINITY, f64::min);
     let mut row = Vec::new();
@@ -319,7 +460,10 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
 /// behind the tip (0.25–0.75 wedge lengths: clear of the tip's smeared
 /// cells and the base's expansion).
 pub fn measure_wedge_mach3(run: &CoupledRun<2>) -> WedgeMeasured {
-    let tip = 0.6 + run.rigid_displacement(run.fluid.time).map_or(0.0, |d| d[0]);
+    let tip = 0.6
+        + run
+            .rigid_displacement(0, run.fluid.time)
+            .map_or(0.0, |d| d[0]);
     measure_wedge(
         &run.fluid,
         tip,

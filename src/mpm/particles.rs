@@ -76,6 +76,42 @@ impl<const D: usize> Particles<D> {
         self.temperature.push(Self::INITIAL_TEMPERATURE);
     }
 
+    /// The particles `p` with `keep(p)`, in order (a new set).
+    pub fn select(&self, keep: impl Fn(usize) -> bool) -> Self {
+        let mut out = Self::default();
+        for p in (0..self.len()).filter(|&p| keep(p)) {
+            out.x.push(self.x[p]);
+            out.x0.push(self.x0[p]);
+            out.v.push(self.v[p]);
+            out.mass.push(self.mass[p]);
+            out.vol0.push(self.vol0[p]);
+            out.vol.push(self.vol[p]);
+            out.half_size.push(self.half_size[p]);
+            out.f.push(self.f[p]);
+            out.stress.push(self.stress[p]);
+            out.work.push(self.work[p]);
+            out.material.push(self.material[p]);
+            out.temperature.push(self.temperature[p]);
+        }
+        out
+    }
+
+    /// Appends copies of all of `other`'s particles.
+    pub fn append(&mut self, other: &Self) {
+        self.x.extend_from_slice(&other.x);
+        self.x0.extend_from_slice(&other.x0);
+        self.v.extend_from_slice(&other.v);
+        self.mass.extend_from_slice(&other.mass);
+        self.vol0.extend_from_slice(&other.vol0);
+        self.vol.extend_from_slice(&other.vol);
+        self.half_size.extend_from_slice(&other.half_size);
+        self.f.extend_from_slice(&other.f);
+        self.stress.extend_from_slice(&other.stress);
+        self.work.extend_from_slice(&other.work);
+        self.material.extend_from_slice(&other.material);
+        self.temperature.extend_from_slice(&other.temperature);
+    }
+
     /// Total mass.
     pub fn total_mass(&self) -> f64 {
         self.mass.iter().sum()

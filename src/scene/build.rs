@@ -591,43 +591,63 @@ pub fn build_fluid_run<const D: usize>(
 }
 
 /// Builds the coupled MPM-ICE run of a validated scene with solid and fluid
-/// materials (`D == dim`): the particles of the one solid material, the
-/// fluid state from `[[regions]]`, the heat sources and `[coupling]`.
+/// materials (`D == dim`): one solid field per solid material (in
+/// `materials` order, with the particles of the objects of that material,
+/// rigid with the objects' velocity if the material is `rigid`), the fluid
+/// state from `[[regions]]`, the heat sources and `[coupling]`.
 pub fn build_coupled_run<const D: usize>(
     scene: &Scene,
 ) -> Result<crate::coupling::CoupledRun<D>, SceneError> {
     let solid_run = build_solid_run::<D>(scene)?;
     let (state, mut params) = build_fluid_run::<D>(scene)?;
-    let spec_index = scene
+    let cs = &scene.coupling;
+    let mut specs = Vec::new();
+    // `k`: the material's index among the solid materials (the particles'
+    // `material`).
+    let solid_specs = scene
         .materials
         .iter()
-        .position(|m| m.kind == MaterialKind::Solid)
-        .ok_or_else(|| SceneError::new("materials", "a coupled scene needs a solid material"))?;
-    let spec = &scene.materials[spec_index];
-    let solid = solid_material(spec);
-    let cs = &scene.coupling;
-    let eos = crate::material::eos::SolidEos::new(
-        solid.density,
-        solid.elastic.bulk(),
-        cs.reference_pressure,
-        cs.reference_pressure,
-        // c_v only enters the heat exchange, which requires it; otherwise
-        // steel's value stands in.
-        spec.cv.unwrap_or(450.0),
-    )
-    .map_err(|e| SceneError::new(format!("materials[{spec_index}]"), e.to_string()))?;
-    let rigid_velocity = if spec.rigid {
-        let v = scene
-            .objects
-            .iter()
-            .find(|o| o.material == spec.name)
-            .and_then(|o| o.velocity.as_deref())
-            .map(to_vec::<D>)
-            .unwrap_or_else(SVector::zeros);
-        Some(v)
-    } else {
-        None
-    };
+        .enumerate()
+        .filter(|(_, m)| m.kind == MaterialKind::Solid);
+    for (k, (spec_index, spec)) in solid_specs.enumerate() {
+        let solid = solid_material(spec);
+        let eos = crate::material::eos::SolidEos::new(
+            solid.density,
+            solid.elastic.bulk(),
+            cs.reference_pressure,
+            cs.reference_pressure,
+            // c_v only enters the heat exchange, which requires it;
+            // otherwise steel's value stands in.
+            spec.cv.unwrap_or(450.0),
+        )
+        .map_err(|e| SceneError::new(format!("materials[{spec_index}]"), e.to_string()))?;
+        let rigid_velocity = if spec.rigid {
+            let v = scene
+                .objects
+                .iter()
+                .find(|o| o.material == spec.name)
+                .and_then(|o| o.velocity.as_deref())
+                .map(to_vec::<D>)
+                .unwrap_or_else(SVector::zeros);
+            Some(v)
+        } else {
+            None
+        };
+        specs.push(crate::coupling::SolidFieldSpec {
+            name: spec.name.clone(),
+            particles: solid_run
+                .particles
+                .select(|p| solid_run.particles.material[p] as usize == k),
+            eos,
+            rigid_velocity,
+        });
+    }
+    if specs.is_empty() {
+        return Err(SceneError::new(
+            "materials",
+            "a coupled scene needs at least one solid material",
+        ));
+    }
     // Heat sources: the power on the cells whose centre lies in the region.
     let fluid_names: Vec<&str> = scene
         .materials
@@ -670,21 +690,17 @@ pub fn build_coupled_run<const D: usize>(
     let SolidRun {
         grid,
         materials,
-        particles,
         params: mpm,
         body,
         ..
     } = solid_run;
-    let mut run = crate::coupling::CoupledRun::new(
+    let mut run = crate::coupling::CoupledRun::with_fields(
         grid,
         materials,
-        particles,
+        specs,
         mpm,
         state,
         params,
-        &spec.name,
-        eos,
-        rigid_velocity,
         coupling,
         scene.time.cfl.min(0.9),
     )

@@ -239,8 +239,10 @@ pub struct MaterialSpec {
     /// Dynamic viscosity μ ≥ 0 (fluids; default 0 = inviscid).
     pub viscosity: Option<f64>,
     /// A rigid solid (coupled scenes): its particles move with their
-    /// object's `velocity`, prescribed; the elastic constants give its bulk
-    /// EOS in the cells.
+    /// objects' `velocity` (one for all objects of the material),
+    /// prescribed; the elastic constants give its bulk EOS in the cells.
+    /// Per material: in a coupled scene every solid material is a solid
+    /// field of its own, rigid or deformable.
     #[serde(default)]
     pub rigid: bool,
 }
@@ -249,23 +251,24 @@ pub struct MaterialSpec {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingSpec {
-    /// Pressure at which the solid is stress-free (> 0).
+    /// Pressure at which the solids are stress-free (> 0).
     #[serde(default = "default_p_ref")]
     pub reference_pressure: f64,
-    /// Momentum exchange coefficient between the solid and each fluid
-    /// (≥ 0; Guilkey uses 1e15).
+    /// Momentum exchange coefficient between every solid field and every
+    /// other material, fluids and the other solid fields (≥ 0; Guilkey
+    /// uses 1e15).
     #[serde(default = "default_k_solid")]
     pub momentum_exchange: f64,
-    /// Initial temperature of the solid (> 0; every particle starts at
-    /// it). Without a heat exchange the solid stays at it (isothermal).
+    /// Initial temperature of the solids (> 0; every particle starts at
+    /// it). Without a heat exchange the solids stay at it (isothermal).
     #[serde(default = "default_solid_t")]
     pub solid_temperature: f64,
-    /// Heat exchange coefficient H between the solid and each fluid
-    /// (Guilkey Eq. 39; ≥ 0, default 0: no heat exchange, isothermal
-    /// solid). With H > 0 the solid material needs `cv`.
+    /// Heat exchange coefficient H between every solid field and every
+    /// other material (Guilkey Eq. 39; ≥ 0, default 0: no heat exchange,
+    /// isothermal solids). With H > 0 every solid material needs `cv`.
     #[serde(default)]
     pub heat_exchange: f64,
-    /// Time over which a rigid solid's prescribed velocity rises smoothly
+    /// Time over which every rigid solid's prescribed velocity rises smoothly
     /// from zero, `V (1 − cos(π t/T))/2` (≥ 0; 0: impulsive start).
     #[serde(default)]
     pub rigid_ramp: f64,
@@ -1322,18 +1325,64 @@ impl Scene {
 }
 
 impl Scene {
-    /// Checks of a scene with solid and fluid materials (MPM-ICE).
+    /// Checks of one solid material `s` of a coupled scene (one solid
+    /// field): used by an object, its `cv` when heat is exchanged, one prescribed velocity for
+    /// all its objects when it is rigid.
+    fn validate_solid_field(&self, s: usize) -> Result<(), SceneError> {
+        let c = &self.coupling;
+        if !self
+            .objects
+            .iter()
+            .any(|o| o.material == self.materials[s].name)
+        {
+            return Err(err(
+                format!("materials[{s}]"),
+                format!(
+                    "solid material `{}` is used by no object; in a coupled scene each solid \
+                     material is one solid field and needs particles",
+                    self.materials[s].name
+                ),
+            ));
+        }
+        if c.heat_exchange > 0.0 && self.materials[s].cv.is_none() {
+            return Err(err(
+                format!("materials[{s}].cv"),
+                "missing; the solid needs a specific heat cv > 0 when coupling.heat_exchange > 0",
+            ));
+        }
+        if self.materials[s].rigid {
+            let name = &self.materials[s].name;
+            let mut vel: Option<&Option<Vec<f64>>> = None;
+            for (i, o) in self.objects.iter().enumerate() {
+                if &o.material == name {
+                    match vel {
+                        None => vel = Some(&o.velocity),
+                        Some(v) if *v != o.velocity => {
+                            return Err(err(
+                                format!("objects[{i}].velocity"),
+                                "all objects of a rigid material move with one prescribed \
+                                 velocity",
+                            ))
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks of a scene with solid and fluid materials (MPM-ICE): one
+    /// solid field per solid material.
     fn validate_coupled(&self) -> Result<(), SceneError> {
         let solids: Vec<usize> = (0..self.materials.len())
             .filter(|&i| self.materials[i].kind == MaterialKind::Solid)
             .collect();
-        if solids.len() != 1 {
+        if solids.is_empty() {
             return Err(err(
                 "materials",
-                format!(
-                    "a coupled scene has exactly one solid material (one solid field), got {}",
-                    solids.len()
-                ),
+                "a coupled scene needs at least one solid material (each solid material is \
+                 one solid field), got none",
             ));
         }
         if self.mpm.update == UpdateScheme::Musl {
@@ -1374,31 +1423,8 @@ impl Scene {
                 format!("must be finite and >= 0, got {}", c.heat_exchange),
             ));
         }
-        let s = solids[0];
-        if c.heat_exchange > 0.0 && self.materials[s].cv.is_none() {
-            return Err(err(
-                format!("materials[{s}].cv"),
-                "missing; the solid needs a specific heat cv > 0 when coupling.heat_exchange > 0",
-            ));
-        }
-        if self.materials[s].rigid {
-            let name = &self.materials[s].name;
-            let mut vel: Option<&Option<Vec<f64>>> = None;
-            for (i, o) in self.objects.iter().enumerate() {
-                if &o.material == name {
-                    match vel {
-                        None => vel = Some(&o.velocity),
-                        Some(v) if *v != o.velocity => {
-                            return Err(err(
-                                format!("objects[{i}].velocity"),
-                                "all objects of a rigid material move with one prescribed \
-                                 velocity",
-                            ))
-                        }
-                        _ => {}
-                    }
-                }
-            }
+        for &s in &solids {
+            self.validate_solid_field(s)?;
         }
         let (lo, hi) = (&self.grid.lower, &self.grid.upper);
         let dim = self.grid.dim;

@@ -31,7 +31,7 @@ pub fn cylinder_at(dx: f64) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
     run.advance_to(sc.time.end)?;
     let wall = start.elapsed().as_secs_f64();
     let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
-    let np = run.particles.len();
+    let np = run.fields[0].particles.len();
     let nc = run.fluid.layout.num_interior();
     let point = Point::new(
         dx,
