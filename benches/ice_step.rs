@@ -49,7 +49,8 @@ fn bench(c: &mut Criterion) {
         [IceBoundary::Wall, IceBoundary::Wall],
     ];
     // `literal_dbd`: the literal step with the dimension-by-dimension
-    // advection instead of corner transport (the cost of the CTU terms).
+    // advection instead of corner transport (the cost of the CTU terms);
+    // `hancock_no_remap`: Hancock without the Lagrangian remap.
     let mut dbd = IceParams::new(bcs.clone());
     dbd.advection = Advection::DimensionByDimension(Limiter::VanLeer);
     for (name, mut params) in [
@@ -57,6 +58,14 @@ fn bench(c: &mut Criterion) {
         ("literal_dbd", dbd),
         ("high_resolution", IceParams::high_resolution(bcs.clone())),
         ("hancock", IceParams::hancock(bcs.clone())),
+        // The cost of the Lagrangian remap (`lagrangian_remap`).
+        (
+            "hancock_no_remap",
+            IceParams {
+                lagrangian_remap: false,
+                ..IceParams::hancock(bcs.clone())
+            },
+        ),
         ("hancock_acoustic", IceParams::hancock_acoustic(bcs.clone())),
     ] {
         params.exchange = Some(ExchangeCoefficients::uniform(2, 1e15, 0.0));

@@ -602,13 +602,15 @@ mod solid_fields {
     /// 29.7 m/s at the end), and the bodies do not interpenetrate: they
     /// stop about two cells apart, where each field's cells (one beyond
     /// its particles) overlap. Momentum of particles and gas is conserved
-    /// only as well as the one-field scheme conserves it, not to round-off:
-    /// step 8 gives each corner node of a cell its share of the cell's
-    /// pressure force `−V θ_s ∇p*`, and the share of a massless node is
-    /// dropped (one steel block at 80 m/s alone, one field, drifts 4.6e-6
-    /// of its momentum in 100 steps, each step's drift equal to the
-    /// dropped impulse). Measured drift 3.8e-6 of Σ m|v| over the 1733
-    /// steps; closest gap 2.14 cells.
+    /// to 2e-8 of Σ m|v| over the run (measured 1.97e-8 over 1935 steps;
+    /// closest gap 2.14 cells, final mean velocities 25.3 and 31.4 m/s).
+    /// Before step 8 shared a cell's pressure force among its corner nodes
+    /// by mass, each corner got an equal share and a massless node's share
+    /// was dropped: drift 3.8e-6 (one steel block at 80 m/s alone, one
+    /// field, drifted 4.6e-6 in 100 steps, each step's drift equal to the
+    /// dropped impulse). The remaining 2e-8 is not round-off and was not
+    /// traced (candidates: nodes below the MPM mass floor, the closed
+    /// box's walls).
     #[test]
     fn two_solid_fields_collide_through_the_cells() {
         let n = 40;
@@ -666,7 +668,7 @@ mod solid_fields {
             gap(&run)
         );
         assert!(finite, "NaN or inf in the state");
-        assert!(drift < 2e-5, "momentum drift {drift:e}");
+        assert!(drift < 1e-7, "momentum drift {drift:e}");
         assert!(gap_min > -1.0, "interpenetration {:.3} cells", -gap_min);
         assert!(v_steel < 0.7 * v, "the steel was not slowed: {v_steel} m/s");
         assert!(v_al > 0.0, "the aluminium was not thrown back: {v_al} m/s");

@@ -40,12 +40,13 @@ fn hancock_diagonal_simple_wave_is_second_order_in_2d() {
 }
 
 /// Acoustic Hancock at N = 64 and 128. Measured (release): L1/ε =
-/// 2.4875e-2, 1.0436e-2, order 1.25 (before the remap: 2.5240e-2,
-/// 1.0390e-2, order 1.28). Not second order at these N: the expansion
-/// weight of the Δp switch (`WEIGHT_SWITCH_SCALE = 3e-3` on
-/// `|Δp|/p_eq ≈ 0.8 h`) still runs at its shock value 0.4; the order
-/// rises to 3.1 between N = 256 and 512 and 2.1 between 512 and 1024
-/// (L1/ε 5.10e-5 at N = 1024, 3.9× Hancock's).
+/// 2.4880e-2, 1.0368e-2, order 1.26 (before the remap: 2.5240e-2,
+/// 1.0390e-2, order 1.28). Not second order at these N: the Δp weight's
+/// switches (`WEIGHT_SWITCH_SCALE = 3e-3` on `|Δp|/p_eq ≈ 0.8 h`, and the
+/// shock sensor, which on this coarse a wave still reads a shock) run at
+/// their shock values there; the orders per refinement are then 2.42,
+/// 3.00 and 3.91 up to N = 1024 (L1/ε 1.61e-5, Hancock's 1.30e-5; with
+/// the expansion weight switched by amplitude alone it was 5.10e-5).
 #[test]
 fn acoustic_hancock_simple_wave_eps_0_1() {
     let params = IceParams::hancock_acoustic([[IceBoundary::Periodic, IceBoundary::Periodic]]);
@@ -53,6 +54,6 @@ fn acoustic_hancock_simple_wave_eps_0_1() {
     let (e128, steps, _) = simple_wave_run(&params, 0.1, 0.5, 128).unwrap();
     let order = (e64 / e128).log2();
     eprintln!("L1/eps N = 64: {e64:.4e}, N = 128: {e128:.4e} ({steps} steps), order {order:.3}");
-    assert!(e128 <= 1.2 * 1.0436e-2, "L1/eps at N = 128: {e128:.4e}");
+    assert!(e128 <= 1.2 * 1.0368e-2, "L1/eps at N = 128: {e128:.4e}");
     assert!(order >= 1.15, "observed order {order:.3}");
 }
