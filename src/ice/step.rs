@@ -381,8 +381,10 @@ impl<const D: usize> IceParams<D> {
     /// 2.97e-4, 1.57e-4). The switches were tuned before the remap.
     /// Expansion weights below 0.4 were more accurate at N ≤ 1600 but
     /// stalled the convergence at N = 6400; switching the weight, or the
-    /// jump factor, with the pressure shock sensor instead cost 18–27 % on
-    /// Sod (the rarefaction then runs at the smooth values).
+    /// jump factor, with the pressure shock sensor *instead of* the
+    /// amplitude switch cost 18–27 % on Sod (the rarefaction then runs at
+    /// the smooth values); both weights now take the product of the two
+    /// (see [`Self::source_weight`]).
     pub fn hancock_acoustic(boundaries: Boundaries<D>) -> Self {
         Self {
             cfl: 0.9,

@@ -1,0 +1,42 @@
+//! Criterion bench of the coupled MPM-ICE step against the bare MPM and ICE
+//! steps on the same particles and cells (the pressurised cylinder of
+//! Guilkey 4.1, `cases/pressurized_cylinder.toml` on a 96 × 96 grid): a
+//! scene with only solids or only fluids runs the bare path, and the
+//! coupled step should cost about their sum (the coupling's own work is
+//! the node ↔ cell transfers and the solid's cell state).
+//! `cargo bench --bench coupled_step`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use mpmice::ice::{step_with_dt, IceWorkspace};
+use mpmice::scene;
+
+const N: usize = 96;
+
+fn bench(c: &mut Criterion) {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
+    let mut sc = scene::load(&path).expect("case");
+    sc.grid.cells = vec![N, N];
+    let mut g = c.benchmark_group("cylinder_96x96");
+    g.sample_size(20);
+    // The coupled step's Δt (the ICE limit), used by the bare steps too.
+    let mut run = scene::build_coupled_run::<2>(&sc).expect("coupled");
+    let dt = run.step(f64::INFINITY).expect("step").dt;
+    g.bench_function("coupled", |b| {
+        b.iter(|| run.step(dt).expect("coupled step"))
+    });
+    let mut solid = scene::build_solid_run::<2>(&sc).expect("solid");
+    solid.time.dt = Some(dt);
+    solid.time.end = f64::INFINITY;
+    g.bench_function("mpm_only", |b| b.iter(|| solid.step().expect("MPM step")));
+    let (mut state, params) = scene::build_fluid_run::<2>(&sc).expect("fluid");
+    mpmice::ice::equilibrate(&mut state, &params).expect("equilibrate");
+    let mut ws = IceWorkspace::new(&state);
+    g.bench_function("ice_only", |b| {
+        b.iter(|| step_with_dt(&mut state, &params, &mut ws, dt).expect("ICE step"))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
