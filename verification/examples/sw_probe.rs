@@ -1,40 +1,45 @@
-//! Simple-wave probe: `sw_probe VARIANT EPS T_END N...` prints L1/ε and
-//! the observed orders (variants: hancock, hancock_acoustic, high_resolution).
+//! Simple-wave probe (the `ice_simple_wave` study at chosen N):
+//! `cargo run --release -p verification --example sw_probe -- VARIANT EPS T_END N...`
+//! prints L1/ε and the observed order per refinement. VARIANT is one of
+//! hancock, hancock_acoustic, high_resolution. Environment: `CFL=c` sets
+//! the Courant number, `REMAP=0|1` the Lagrangian remap, `DIAG=1` runs the
+//! wave along the diagonal of the unit square (2D, `N × N` cells).
 use mpmice::ice::{IceBoundary, IceParams};
 use verification::ice_studies::{simple_wave_run, simple_wave_run_diagonal};
 
-fn main() -> anyhow::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    let b = [[IceBoundary::<1>::Periodic, IceBoundary::<1>::Periodic]];
-    let mut params = match a[1].as_str() {
+/// The named variant with periodic faces, `CFL` and `REMAP` applied.
+fn params<const D: usize>(name: &str) -> anyhow::Result<IceParams<D>> {
+    let b = std::array::from_fn(|_| [IceBoundary::<D>::Periodic, IceBoundary::<D>::Periodic]);
+    let mut p = match name {
         "hancock" => IceParams::hancock(b),
         "hancock_acoustic" => IceParams::hancock_acoustic(b),
-        _ => IceParams::high_resolution(b),
+        "high_resolution" => IceParams::high_resolution(b),
+        other => anyhow::bail!(
+            "unknown variant {other}; allowed: hancock, hancock_acoustic, high_resolution"
+        ),
     };
     if let Ok(c) = std::env::var("CFL") {
-        params.cfl = c.parse()?;
+        p.cfl = c.parse()?;
     }
     if let Ok(r) = std::env::var("REMAP") {
-        params.lagrangian_remap = r == "1";
+        p.lagrangian_remap = r == "1";
     }
+    Ok(p)
+}
+
+fn main() -> anyhow::Result<()> {
+    let a: Vec<String> = std::env::args().collect();
+    anyhow::ensure!(a.len() >= 5, "usage: sw_probe VARIANT EPS T_END N [N ...]");
     let eps: f64 = a[2].parse()?;
     let t_end: f64 = a[3].parse()?;
+    let diag = std::env::var("DIAG").is_ok();
     let mut prev: Option<(f64, f64)> = None;
     for n in a[4..].iter().map(|s| s.parse::<usize>()) {
         let n = n?;
-        let (err, steps, wall) = if std::env::var("DIAG").is_ok() {
-            let b2 =
-                std::array::from_fn(|_| [IceBoundary::<2>::Periodic, IceBoundary::<2>::Periodic]);
-            let mut p2 = match a[1].as_str() {
-                "hancock" => IceParams::hancock(b2),
-                "hancock_acoustic" => IceParams::hancock_acoustic(b2),
-                _ => IceParams::high_resolution(b2),
-            };
-            p2.cfl = params.cfl;
-            p2.lagrangian_remap = params.lagrangian_remap;
-            simple_wave_run_diagonal(&p2, eps, t_end, n)?
+        let (err, steps, wall) = if diag {
+            simple_wave_run_diagonal(&params::<2>(&a[1])?, eps, t_end, n)?
         } else {
-            simple_wave_run(&params, eps, t_end, n)?
+            simple_wave_run(&params::<1>(&a[1])?, eps, t_end, n)?
         };
         let order = prev.map(|(e0, n0)| (e0 / err).ln() / (n as f64 / n0).ln());
         println!(
