@@ -88,7 +88,9 @@ pub struct IceParams<const D: usize> {
     /// material. In 2D and 3D `V^L` is the full Lagrangian volume (all
     /// directions), which is exact to second order for a plane wave in
     /// any direction (measured: the ε = 0.1 wave along the diagonal,
-    /// order 1.93 at 64², 1.75 at 256²; 1.12 without the remap).
+    /// order 1.93 at 64², 1.75 at 256² with superbee, whose compression of
+    /// the steepening wave costs the order there, and 2.00 at 256² with
+    /// the MC limiter; 1.12 without the remap).
     pub lagrangian_remap: bool,
     /// Weight `w` of `Δp` in the pressure of the momentum and energy
     /// sources, `p = p_eq + w Δp` (Guilkey Eq. 30 has `w = 1`); `w = 1/2`

@@ -2,9 +2,10 @@
 //! `cargo run --release -p verification --example sw_probe -- VARIANT EPS T_END N...`
 //! prints L1/ε and the observed order per refinement. VARIANT is one of
 //! hancock, hancock_acoustic, high_resolution. Environment: `CFL=c` sets
-//! the Courant number, `REMAP=0|1` the Lagrangian remap, `DIAG=1` runs the
-//! wave along the diagonal of the unit square (2D, `N × N` cells).
-use mpmice::ice::{IceBoundary, IceParams};
+//! the Courant number, `REMAP=0|1` the Lagrangian remap, `LIM=vl|mc|sb`
+//! the limiter (advection and face states), `DIAG=1` runs the wave along
+//! the diagonal of the unit square (2D, `N × N` cells).
+use mpmice::ice::{Advection, IceBoundary, IceParams, Limiter};
 use verification::ice_studies::{simple_wave_run, simple_wave_run_diagonal};
 
 /// The named variant with periodic faces, `CFL` and `REMAP` applied.
@@ -23,6 +24,16 @@ fn params<const D: usize>(name: &str) -> anyhow::Result<IceParams<D>> {
     }
     if let Ok(r) = std::env::var("REMAP") {
         p.lagrangian_remap = r == "1";
+    }
+    if let Ok(l) = std::env::var("LIM") {
+        let lim = match l.as_str() {
+            "vl" => Limiter::VanLeer,
+            "mc" => Limiter::MonotonizedCentral,
+            "sb" => Limiter::Superbee,
+            other => anyhow::bail!("unknown limiter {other}; allowed: vl, mc, sb"),
+        };
+        p.advection = Advection::SecondOrder(lim);
+        p.face_reconstruction = Some(lim);
     }
     Ok(p)
 }
