@@ -6,9 +6,8 @@
 //! SHAPE one of linear, gimp, quadratic_bspline, cubic_bspline; `PPC=K`
 //! sets K × K particles per cell (the case has 2), `END=T` the end time
 //! (the case: 8 ms), `DAMPING=A` the solid's damping (the case: 3000 1/s).
-use std::time::Instant;
 
-use mpmice::diagnostics::coupled::{eq43_particle_error, measure_cylinder};
+use mpmice::diagnostics::coupled::{eq43_particle_error, run_cylinder_scene};
 use mpmice::scene;
 use mpmice::shape::ShapeKind;
 
@@ -36,13 +35,7 @@ fn main() -> anyhow::Result<()> {
         if let Ok(a) = std::env::var("DAMPING") {
             sc.mpm.damping = a.parse()?;
         }
-        let n = (1.2 / dx).round() as usize;
-        sc.grid.cells = vec![n, n];
-        let mut run = scene::build_coupled_run::<2>(&sc)?;
-        let start = Instant::now();
-        run.advance_to(sc.time.end)?;
-        let wall = start.elapsed().as_secs_f64();
-        let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
+        let (run, m, wall) = run_cylinder_scene(sc, dx)?;
         // Eq. 43 per particle, split by the reference radius.
         let target = 2.0 * m.pressure / 3.0;
         let p = &run.fields[0].particles;

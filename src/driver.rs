@@ -382,13 +382,7 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
     let e0 = run.energies();
     let m0 = run.particles.total_mass();
     let p0 = run.particles.momentum();
-    let p_scale = run
-        .particles
-        .mass
-        .iter()
-        .zip(&run.particles.v)
-        .map(|(m, v)| m * v.norm())
-        .sum::<f64>();
+    let p_scale = run.particles.momentum_scale();
     writer.snapshot(&run)?;
     writer.history_row(0.0, &e0)?;
     let interval = scene.output.interval;

@@ -103,7 +103,8 @@ pub fn heated_mixture(n: usize, fill: f64, h: f64, t_solid: f64) -> Result<Coupl
 }
 
 /// [`block_in_air`] with the particle masses scaled by `mass_scale` and
-/// the coupling settings given.
+/// the coupling settings given: one steel block of [`blocks_run`], the
+/// box closed only when nothing moves.
 fn steel_in_air(
     n: usize,
     (lo, hi): ([f64; 2], [f64; 2]),
@@ -113,39 +114,16 @@ fn steel_in_air(
     mass_scale: f64,
     coupling: CouplingParams,
 ) -> Result<CoupledRun<2>> {
-    let moving = u_air != [0.0, 0.0] || u_solid != [0.0, 0.0];
-    let (gbc, fbc) = if moving {
-        (Boundary::Free, IceBoundary::Outflow)
-    } else {
-        (Boundary::Symmetry, IceBoundary::Wall)
+    let closed = u_air == [0.0, 0.0] && u_solid == [0.0, 0.0];
+    let block = Block {
+        lo,
+        hi,
+        velocity: u_solid,
+        material: steel(),
+        field: 0,
+        rigid,
     };
-    let grid = Grid::<2>::new(
-        SVector::zeros(),
-        SVector::repeat(1.0),
-        [n, n],
-        [[gbc; 2]; 2],
-    );
-    let layout = CellLayout::from_grid(&grid)?;
-    let ua = SVector::<f64, 2>::from(u_air);
-    let fluid = IceState::new(layout, vec![air()], |_| {
-        vec![MaterialInit::new(1.0, 1.1768, 101_325.0, ua)]
-    })?;
-    let mut params = IceParams::new([[fbc.clone(), fbc.clone()], [fbc.clone(), fbc]]);
-    params.exchange = Some(ExchangeCoefficients::uniform(1, 1e15, 0.0));
-    let m = steel();
-    let mut particles = fill_box(
-        &grid,
-        &SVector::from(lo),
-        &SVector::from(hi),
-        2,
-        m.density,
-        |_| true,
-    );
-    for mp in &mut particles.mass {
-        *mp *= mass_scale;
-    }
-    let us = SVector::<f64, 2>::from(u_solid);
-    steel_run(grid, particles, us, rigid, fluid, params, coupling)
+    blocks_run(n, Gas::air(u_air), &[block], closed, mass_scale, coupling)
 }
 
 /// A coupled run of steel particles moving at `v` (prescribed if `rigid`)
@@ -241,10 +219,25 @@ impl Gas {
 /// # Errors
 /// As [`CoupledRun::with_fields`].
 pub fn blocks_in_air(n: usize, gas: Gas, blocks: &[Block]) -> Result<CoupledRun<2>> {
-    let (gbc, fbc) = if gas.velocity != [0.0; 2] {
-        (Boundary::Free, IceBoundary::Outflow)
-    } else {
+    let closed = gas.velocity == [0.0; 2];
+    blocks_run(n, gas, blocks, closed, 1.0, CouplingParams::default())
+}
+
+/// [`blocks_in_air`] with the walls closed (symmetry / wall) or free /
+/// outflow, the particle masses scaled by `mass_scale` and the coupling
+/// settings given (`p_ref` set to the gas pressure).
+fn blocks_run(
+    n: usize,
+    gas: Gas,
+    blocks: &[Block],
+    closed: bool,
+    mass_scale: f64,
+    coupling: CouplingParams,
+) -> Result<CoupledRun<2>> {
+    let (gbc, fbc) = if closed {
         (Boundary::Symmetry, IceBoundary::Wall)
+    } else {
+        (Boundary::Free, IceBoundary::Outflow)
     };
     let grid = Grid::<2>::new(
         SVector::zeros(),
@@ -273,6 +266,9 @@ pub fn blocks_in_air(n: usize, gas: Gas, blocks: &[Block]) -> Result<CoupledRun<
         );
         p.v.fill(v);
         p.material.fill(i as u16);
+        for mp in &mut p.mass {
+            *mp *= mass_scale;
+        }
         match &mut fields[b.field] {
             Some(f) => f.particles.append(&p),
             slot => {
@@ -298,7 +294,7 @@ pub fn blocks_in_air(n: usize, gas: Gas, blocks: &[Block]) -> Result<CoupledRun<
     };
     let coupling = CouplingParams {
         p_ref: gas.p,
-        ..CouplingParams::default()
+        ..coupling
     };
     CoupledRun::with_fields(
         grid,
@@ -415,6 +411,28 @@ pub struct CylinderMeasured {
 /// `T = 2P/3` (in plane strain `σ_r + σ_θ = σ_xx + σ_yy`).
 pub fn eq43_particle_error(stress: &nalgebra::Matrix3<f64>, target: f64) -> f64 {
     (((stress[(0, 0)] + stress[(1, 1)]).abs() - target) / target).abs()
+}
+
+/// The coupled pressurised-cylinder scene `sc` (Guilkey 4.1: the quarter
+/// annulus `r_i = 0.5` on `[0, 1.2]²`, `cases/pressurized_cylinder.toml`)
+/// at cell size `dx`, run to its end time: the run, its Eq. 43 measure
+/// ([`measure_cylinder`] at `sc.coupling.reference_pressure`) and the
+/// wall time of the stepping in seconds.
+///
+/// # Errors
+/// The scene's build error or the run's failure.
+pub fn run_cylinder_scene(
+    mut sc: crate::scene::Scene,
+    dx: f64,
+) -> Result<(CoupledRun<2>, CylinderMeasured, f64)> {
+    let n = (1.2 / dx).round() as usize;
+    sc.grid.cells = vec![n, n];
+    let mut run = crate::scene::build_coupled_run::<2>(&sc)?;
+    let start = std::time::Instant::now();
+    run.advance_to(sc.time.end)?;
+    let wall = start.elapsed().as_secs_f64();
+    let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
+    Ok((run, m, wall))
 }
 
 /// Guilkey Eq. 43 and the Fig. 3a row of a coupled cylinder run (inner

@@ -80,41 +80,46 @@ impl<const D: usize> Particles<D> {
     pub fn select(&self, keep: impl Fn(usize) -> bool) -> Self {
         let mut out = Self::default();
         for p in (0..self.len()).filter(|&p| keep(p)) {
-            out.x.push(self.x[p]);
-            out.x0.push(self.x0[p]);
-            out.v.push(self.v[p]);
-            out.mass.push(self.mass[p]);
-            out.vol0.push(self.vol0[p]);
-            out.vol.push(self.vol[p]);
-            out.half_size.push(self.half_size[p]);
-            out.f.push(self.f[p]);
-            out.stress.push(self.stress[p]);
-            out.work.push(self.work[p]);
-            out.material.push(self.material[p]);
-            out.temperature.push(self.temperature[p]);
+            out.push_copy(self, p);
         }
         out
     }
 
     /// Appends copies of all of `other`'s particles.
     pub fn append(&mut self, other: &Self) {
-        self.x.extend_from_slice(&other.x);
-        self.x0.extend_from_slice(&other.x0);
-        self.v.extend_from_slice(&other.v);
-        self.mass.extend_from_slice(&other.mass);
-        self.vol0.extend_from_slice(&other.vol0);
-        self.vol.extend_from_slice(&other.vol);
-        self.half_size.extend_from_slice(&other.half_size);
-        self.f.extend_from_slice(&other.f);
-        self.stress.extend_from_slice(&other.stress);
-        self.work.extend_from_slice(&other.work);
-        self.material.extend_from_slice(&other.material);
-        self.temperature.extend_from_slice(&other.temperature);
+        for p in 0..other.len() {
+            self.push_copy(other, p);
+        }
+    }
+
+    /// Appends a copy of particle `p` of `other` (every field).
+    fn push_copy(&mut self, other: &Self, p: usize) {
+        self.x.push(other.x[p]);
+        self.x0.push(other.x0[p]);
+        self.v.push(other.v[p]);
+        self.mass.push(other.mass[p]);
+        self.vol0.push(other.vol0[p]);
+        self.vol.push(other.vol[p]);
+        self.half_size.push(other.half_size[p]);
+        self.f.push(other.f[p]);
+        self.stress.push(other.stress[p]);
+        self.work.push(other.work[p]);
+        self.material.push(other.material[p]);
+        self.temperature.push(other.temperature[p]);
     }
 
     /// Total mass.
     pub fn total_mass(&self) -> f64 {
         self.mass.iter().sum()
+    }
+
+    /// `Σ m_p |v_p|`: the scale of a momentum drift.
+    pub fn momentum_scale(&self) -> f64 {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .map(|(m, v)| m * v.norm())
+            .sum()
     }
 
     /// Total linear momentum Σ m_p v_p.

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use mpmice::diagnostics::coupled::{measure_cylinder, piston_history};
+use mpmice::diagnostics::coupled::{piston_history, run_cylinder_scene};
 use mpmice::scene;
 
 use crate::harness::{
@@ -23,14 +23,7 @@ pub type RowStress = (f64, f64, f64);
 /// size `dx`: (Eq. 43 point, the Fig. 3a row, measured P).
 pub fn cylinder_at(dx: f64) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
     let path = repo_root().join("cases/pressurized_cylinder.toml");
-    let mut sc = scene::load(&path)?;
-    let n = (1.2 / dx).round() as usize;
-    sc.grid.cells = vec![n, n];
-    let mut run = scene::build_coupled_run::<2>(&sc)?;
-    let start = Instant::now();
-    run.advance_to(sc.time.end)?;
-    let wall = start.elapsed().as_secs_f64();
-    let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
+    let (run, m, wall) = run_cylinder_scene(scene::load(&path)?, dx)?;
     let np = run.fields[0].particles.len();
     let nc = run.fluid.layout.num_interior();
     let point = Point::new(

@@ -489,6 +489,29 @@ impl SimpleWave {
         self.eps * (2.0 * PI * xi).sin()
     }
 
+    /// The initial state of a cell from the averages of the conserved
+    /// mass, momentum and total energy, `average(f)` being the cell average
+    /// of `f(s)` over the wave coordinate `s`: `(ρ̄, ū = (ρu)‾/ρ̄,
+    /// p̄ = (γ−1)(Ē − ρ̄ū²/2))`.
+    pub fn averaged_initial_state(
+        &self,
+        average: impl Fn(&dyn Fn(f64) -> f64) -> f64,
+    ) -> (f64, f64, f64) {
+        let g = SW_GAMMA;
+        let at = |s: f64| self.state_of_u(self.eps * (2.0 * PI * s).sin());
+        let rho = average(&|s| at(s).0);
+        let mom = average(&|s| {
+            let (r, u, _) = at(s);
+            r * u
+        });
+        let energy = average(&|s| {
+            let (r, u, p) = at(s);
+            p / (g - 1.0) + 0.5 * r * u * u
+        });
+        let u = mom / rho;
+        (rho, u, (g - 1.0) * (energy - 0.5 * rho * u * u))
+    }
+
     /// Exact `(ρ, u, p)` at `(x, t)`.
     pub fn state(&self, x: f64, t: f64) -> (f64, f64, f64) {
         self.state_of_u(self.velocity(x, t))
@@ -537,18 +560,7 @@ pub fn simple_wave_run(
     let h = 1.0 / n as f64;
     let layout = CellLayout::<1>::new(SVector::<f64, 1>::zeros(), SVector::<f64, 1>::new(h), [n])?;
     let st = IceState::new(layout, vec![gas(g)?], |x| {
-        let at = |y: f64| wave.state_of_u(wave.eps * (2.0 * PI * y).sin());
-        let rho = cell_average(x[0], h, |y| at(y).0);
-        let mom = cell_average(x[0], h, |y| {
-            let (r, u, _) = at(y);
-            r * u
-        });
-        let energy = cell_average(x[0], h, |y| {
-            let (r, u, p) = at(y);
-            p / (g - 1.0) + 0.5 * r * u * u
-        });
-        let u = mom / rho;
-        let p = (g - 1.0) * (energy - 0.5 * rho * u * u);
+        let (rho, u, p) = wave.averaged_initial_state(|f| cell_average(x[0], h, f));
         vec![MaterialInit::new(1.0, rho, p, SVector::<f64, 1>::new(u))]
     })?;
     let run = run_fluid(st, params, t_end, 10_000_000)?;
@@ -588,18 +600,7 @@ pub fn simple_wave_run_diagonal(
     };
     let layout = CellLayout::<2>::new(SVector::zeros(), SVector::from_element(h), [n, n])?;
     let st = IceState::new(layout, vec![gas(g)?], |x| {
-        let at = |s: f64| wave.state_of_u(wave.eps * (2.0 * PI * s).sin());
-        let rho = avg2(x, &|s| at(s).0);
-        let mom = avg2(x, &|s| {
-            let (r, u, _) = at(s);
-            r * u
-        });
-        let energy = avg2(x, &|s| {
-            let (r, u, p) = at(s);
-            p / (g - 1.0) + 0.5 * r * u * u
-        });
-        let u = mom / rho;
-        let p = (g - 1.0) * (energy - 0.5 * rho * u * u);
+        let (rho, u, p) = wave.averaged_initial_state(|f| avg2(x, f));
         let v = u / r2;
         vec![MaterialInit::new(1.0, rho, p, SVector::<f64, 2>::new(v, v))]
     })?;
@@ -684,26 +685,7 @@ pub fn ice_simple_wave(quick: bool) -> Result<StudyResult> {
                     Point::new(1.0 / n as f64, err, wall, ups).with_extra("steps", steps as f64),
                 );
             }
-            let orders: Vec<String> = points
-                .windows(2)
-                .map(|w| {
-                    format!(
-                        "{:.3}",
-                        (w[0].error / w[1].error).ln() / (w[0].h / w[1].h).ln()
-                    )
-                })
-                .collect();
-            let label = format!("{tag}, eps {eps}");
-            notes.push(format!(
-                "{label}: L1/eps {}; orders per refinement {}",
-                points
-                    .iter()
-                    .map(|p| format!("{:.4e}", p.error))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                orders.join(", ")
-            ));
-            series.push(Series::new(label, "L1/eps", points));
+            push_simple_wave_series(format!("{tag}, eps {eps}"), points, &mut notes, &mut series);
         }
     }
     // 2D: the wave along the diagonal of the unit square (corner
@@ -751,32 +733,39 @@ pub fn ice_simple_wave(quick: bool) -> Result<StudyResult> {
             points
                 .push(Point::new(1.0 / n as f64, err, wall, ups).with_extra("steps", steps as f64));
         }
-        let orders: Vec<String> = points
-            .windows(2)
-            .map(|w| {
-                format!(
-                    "{:.3}",
-                    (w[0].error / w[1].error).ln() / (w[0].h / w[1].h).ln()
-                )
-            })
-            .collect();
-        let label = format!("{tag}, eps {eps}");
-        notes.push(format!(
-            "{label}: L1/eps {}; orders per refinement {}",
-            points
-                .iter()
-                .map(|p| format!("{:.4e}", p.error))
-                .collect::<Vec<_>>()
-                .join(", "),
-            orders.join(", ")
-        ));
-        series.push(Series::new(label, "L1/eps", points));
+        push_simple_wave_series(format!("{tag}, eps {eps}"), points, &mut notes, &mut series);
     }
     Ok(StudyResult {
         study: "ice_simple_wave".into(),
         series,
         notes,
     })
+}
+
+/// Adds one [`ice_simple_wave`] series and its note (the errors and the
+/// observed order of each refinement).
+fn push_simple_wave_series(
+    label: String,
+    points: Vec<Point>,
+    notes: &mut Vec<String>,
+    series: &mut Vec<Series>,
+) {
+    let orders: Vec<String> = points
+        .windows(2)
+        .map(|w| {
+            format!(
+                "{:.3}",
+                (w[0].error / w[1].error).ln() / (w[0].h / w[1].h).ln()
+            )
+        })
+        .collect();
+    let errors: Vec<String> = points.iter().map(|p| format!("{:.4e}", p.error)).collect();
+    notes.push(format!(
+        "{label}: L1/eps {}; orders per refinement {}",
+        errors.join(", "),
+        orders.join(", ")
+    ));
+    series.push(Series::new(label, "L1/eps", points));
 }
 
 /// L1 density error averaged over the interior cells: mean of
