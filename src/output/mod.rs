@@ -7,6 +7,7 @@
 //!
 //! This module depends on `std` only.
 
+pub mod checkpoint;
 pub mod csv;
 pub mod vtk;
 
