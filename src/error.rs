@@ -65,6 +65,39 @@ pub enum Error {
     /// A fluid (ICE) failure; names step, time, cell and material.
     #[error("fluid: {0}")]
     Fluid(#[from] crate::ice::IceError),
+    /// The watchdog found a non-finite or impossible value after a step.
+    #[error("watchdog: after step {step}, t = {time:.6e}: {what}")]
+    Watchdog {
+        /// Completed steps when it was found.
+        step: u64,
+        /// Simulation time when it was found.
+        time: f64,
+        /// The site, material, field and value.
+        what: String,
+    },
+    /// The run was stopped by an interrupt (Ctrl-C) at the end of a step.
+    #[error("interrupted after step {step}, t = {time:.6e}")]
+    Interrupted {
+        /// Completed steps.
+        step: u64,
+        /// Simulation time.
+        time: f64,
+    },
+    /// A run stopped by `source`; the last good state was saved.
+    #[error("{source}; last good state (step {step}, t = {time:.6e}) saved in {}", checkpoint.display())]
+    Stopped {
+        /// Why it stopped.
+        source: Box<Error>,
+        /// The checkpoint folder of the last good state.
+        checkpoint: PathBuf,
+        /// Its step.
+        step: u64,
+        /// Its time.
+        time: f64,
+    },
+    /// A checkpoint could not be written or read.
+    #[error(transparent)]
+    Checkpoint(#[from] crate::output::checkpoint::CheckpointError),
     /// File output failed.
     #[error("I/O error on {path}: {source}")]
     Io {
@@ -76,6 +109,15 @@ pub enum Error {
 }
 
 impl Error {
+    /// The time step to retry below when the failure is recoverable with a
+    /// smaller step (`None`: it is not).
+    pub fn retry_dt(&self) -> Option<f64> {
+        match self {
+            Error::Fluid(e) => e.retry_dt(),
+            _ => None,
+        }
+    }
+
     /// Wraps an I/O error with the path it concerns.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

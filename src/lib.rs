@@ -10,8 +10,6 @@
 pub mod coupling;
 pub mod diagnostics;
 pub mod driver;
-mod driver_coupled;
-mod driver_fluid;
 pub mod error;
 pub mod grid;
 pub mod ice;

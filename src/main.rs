@@ -2,6 +2,8 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 
@@ -31,6 +33,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Continue from a checkpoint folder (`OUT/checkpoints/step_N`) of a
+        /// run of the same scene; the outputs continue in the output folder.
+        #[arg(long, value_name = "DIR")]
+        restart: Option<PathBuf>,
     },
     /// Validate a scene without running it.
     Check {
@@ -48,6 +54,21 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A flag set by the first Ctrl-C (SIGINT): the run stops cleanly at the end
+/// of the current step and writes a checkpoint. A second Ctrl-C exits at
+/// once (status 130).
+fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupt: stopping at the end of this step (Ctrl-C again to abort)");
+    })?;
+    Ok(flag)
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -70,6 +91,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             threads,
             quiet,
+            restart,
         } => {
             let s = mpmice::scene::load(&scene)?;
             let out_dir = out.unwrap_or_else(|| {
@@ -79,6 +101,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out_dir: out_dir.clone(),
                 threads,
                 progress: !quiet,
+                restart,
+                interrupt: Some(interrupt_flag()?),
             };
             let sum = mpmice::driver::run_scene(&s, &opts)?;
             let rate = if sum.n_particles > 0 {

@@ -118,6 +118,7 @@ fn colliding_disks_conserve_mass_and_momentum_and_bounce() {
             out_dir: dir.path().to_path_buf(),
             threads: 1,
             progress: false,
+            ..Default::default()
         },
     )
     .expect("run");

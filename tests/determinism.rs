@@ -28,6 +28,7 @@ fn one_and_two_threads_are_bit_identical() {
                 out_dir: out.clone(),
                 threads,
                 progress: false,
+                ..Default::default()
             };
             let sum = run_scene(&s, &opts).expect("run");
             assert_eq!(sum.threads, threads);

@@ -298,6 +298,7 @@ fn the_fluid_scene_is_accepted_and_runs() {
             out_dir: dir.path().to_path_buf(),
             threads: 1,
             progress: false,
+            ..Default::default()
         },
     )
     .expect("run");

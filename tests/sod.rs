@@ -30,6 +30,7 @@ fn l1_density(file: &str, variant: &str, cells: usize) -> (f64, mpmice::driver::
             out_dir: dir.path().to_path_buf(),
             threads: 1,
             progress: false,
+            ..Default::default()
         },
     )
     .expect("run");

@@ -633,6 +633,30 @@ impl<const D: usize> CoupledRun<D> {
         Ok(info)
     }
 
+    /// One step of exactly `dt` (a fixed time step, no stability limit; the
+    /// pressure stage may still halve it on a cell emptied by the flux).
+    ///
+    /// # Errors
+    /// As [`Self::step`].
+    pub fn step_exact(&mut self, dt: f64) -> Result<StepInfo> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(self.fail(format!("time step is {dt}")));
+        }
+        let info = self.step_inner(dt)?;
+        self.steps += 1;
+        Ok(info)
+    }
+
+    /// The ICE workspace (its carried part is saved in a checkpoint).
+    pub fn ice_workspace(&self) -> &IceWorkspace<D> {
+        &self.ws
+    }
+
+    /// The ICE workspace, to restore its carried part from a checkpoint.
+    pub fn ice_workspace_mut(&mut self) -> &mut IceWorkspace<D> {
+        &mut self.ws
+    }
+
     fn fail(&self, what: String) -> Error {
         Error::Numerical {
             site: FailureSite {

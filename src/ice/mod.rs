@@ -38,6 +38,7 @@
 #![allow(clippy::needless_range_loop)]
 pub mod advection;
 pub mod boundary;
+mod carried;
 pub mod equilibration;
 pub mod exchange;
 pub mod faces;

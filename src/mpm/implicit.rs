@@ -436,6 +436,18 @@ pub struct ImplicitRun<const D: usize> {
     initialised: bool,
 }
 
+/// The state an [`ImplicitRun`] carries between steps besides its public
+/// fields (see [`ImplicitRun::carried`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImplicitCarried {
+    /// Load factor up to which the prescribed displacements are applied.
+    pub prescribed_applied: f64,
+    /// Whether the initial acceleration has been computed.
+    pub initialised: bool,
+    /// Whether a failed Cholesky switched the matrix to full storage (LU).
+    pub full_storage: bool,
+}
+
 /// Per-step grid data (stencils, dofs, nodal fields).
 struct StepData<const D: usize> {
     /// Stencil entries per particle.
@@ -536,6 +548,23 @@ impl<const D: usize> ImplicitRun<D> {
     /// Whether the end time is reached.
     pub fn finished(&self) -> bool {
         self.t >= self.end * (1.0 - 1e-12)
+    }
+
+    /// What a later step reads besides the particles, accelerations, time,
+    /// step count and next Δt: for a checkpoint.
+    pub fn carried(&self) -> ImplicitCarried {
+        ImplicitCarried {
+            prescribed_applied: self.prescribed_applied,
+            initialised: self.initialised,
+            full_storage: self.cache.full_storage,
+        }
+    }
+
+    /// Restores what [`Self::carried`] returned.
+    pub fn restore_carried(&mut self, c: ImplicitCarried) {
+        self.prescribed_applied = c.prescribed_applied;
+        self.initialised = c.initialised;
+        self.cache.full_storage = c.full_storage;
     }
 
     /// Load factor at time `t`.

@@ -11,5 +11,7 @@ pub use explicit::{
     explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes,
     StepScratch, UpdateScheme,
 };
-pub use implicit::{ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad};
+pub use implicit::{
+    ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad,
+};
 pub use particles::Particles;

@@ -1,11 +1,13 @@
 //! Output writers: ParaView VTK XML files ([`vtk`]), plain CSV tables and
-//! histories ([`csv`]), and the [`atomic_write`] helper they share.
+//! histories ([`csv`]), checkpoint folders ([`checkpoint`]: a manifest and
+//! `.npy` arrays), and the [`atomic_write`] helper they share.
 //!
 //! Every whole-file output is written through [`atomic_write`], so a crash or
 //! an interrupted run never leaves a half-written file behind: readers see
 //! either the previous complete version or the new complete version.
 //!
-//! This module depends on `std` only.
+//! This module depends on `std` and crates only (the checkpoint format on
+//! `serde_json` and `npyz`), never on the solver's other modules.
 
 pub mod checkpoint;
 pub mod csv;

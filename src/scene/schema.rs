@@ -137,6 +137,16 @@ pub struct TimeSpec {
     pub mode: Mode,
     /// Stop after this many steps even before `end`.
     pub max_steps: Option<u64>,
+    /// Steps between watchdog scans for non-finite or impossible values
+    /// (NaN, negative mass, density or internal energy, J ≤ 0); each
+    /// passed scan also keeps the state as the last good one, which a
+    /// failure writes as a checkpoint. 0 turns the watchdog off.
+    #[serde(default = "default_watchdog_interval")]
+    pub watchdog_interval: u64,
+}
+
+fn default_watchdog_interval() -> u64 {
+    10
 }
 
 fn default_cfl() -> f64 {
@@ -834,6 +844,17 @@ pub struct OutputSpec {
     /// Simulation time between rows of `history.csv` (default: interval / 20,
     /// or every step when there is no interval).
     pub history_interval: Option<f64>,
+    /// Simulation time between checkpoints (`checkpoints/step_NNNNNNNNNN/`);
+    /// absent: none (a failure or an interrupt still writes one).
+    pub checkpoint_interval: Option<f64>,
+    /// How many interval checkpoints to keep (the oldest are removed; 0 keeps
+    /// all).
+    #[serde(default = "default_checkpoint_keep")]
+    pub checkpoint_keep: usize,
+}
+
+fn default_checkpoint_keep() -> usize {
+    2
 }
 
 fn default_formats() -> Vec<Format> {
@@ -846,6 +867,8 @@ impl Default for OutputSpec {
             interval: None,
             formats: default_formats(),
             history_interval: None,
+            checkpoint_interval: None,
+            checkpoint_keep: default_checkpoint_keep(),
         }
     }
 }
@@ -1774,6 +1797,9 @@ impl Scene {
         }
         if let Some(iv) = out.history_interval {
             positive("output.history_interval", iv)?;
+        }
+        if let Some(iv) = out.checkpoint_interval {
+            positive("output.checkpoint_interval", iv)?;
         }
         Ok(())
     }

@@ -112,7 +112,11 @@ impl<const D: usize> SolidRun<D> {
 
     /// Takes one step; returns the timestep used.
     pub fn step(&mut self) -> Result<f64> {
-        let dt = self.next_dt();
+        self.step_dt(self.next_dt())
+    }
+
+    /// Takes one step of exactly `dt`; returns it.
+    pub fn step_dt(&mut self, dt: f64) -> Result<f64> {
         explicit_step(
             &self.grid,
             &self.materials,

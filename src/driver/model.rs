@@ -1,0 +1,293 @@
+//! The model interface: what every system (explicit or implicit solid, ICE,
+//! coupled MPM-ICE, and every later one) provides to the one run loop
+//! ([`crate::driver::run_model`]).
+//!
+//! A model knows its physics only: its time, its stable time step, one step,
+//! its snapshot fields with names and units, its conservation totals, a
+//! watchdog scan for impossible values, and saving and loading its whole
+//! state. Time control, retries, outputs, checkpoints, progress and the
+//! summary are the loop's.
+
+use serde::Serialize;
+
+use crate::error::Error;
+use crate::output::checkpoint::{Checkpoint, CheckpointError};
+use crate::stepper::Energies;
+
+/// The time step the loop asks a model to take.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DtRequest {
+    /// Upper bound: the time left to the end, the scene's fixed step, or a
+    /// retry's cut.
+    pub value: f64,
+    /// Take exactly `value` (a fixed time step, `time.dt`) instead of
+    /// `min(stable Δt, value)`.
+    pub exact: bool,
+}
+
+/// What one accepted step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepStats {
+    /// The time step taken.
+    pub dt: f64,
+    /// Nonlinear iterations: Newton (implicit MPM) or outer pressure
+    /// iterations (semi-implicit ICE); 0 for explicit steps.
+    pub nonlinear_iterations: usize,
+    /// Krylov iterations behind them (0 with a direct solver).
+    pub linear_iterations: usize,
+    /// Attempts the model itself cut and repeated inside the step (implicit
+    /// MPM's Δt control); the loop's own retries are counted apart.
+    pub retries: usize,
+}
+
+/// Conservation totals of one material.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct MaterialTotals {
+    /// The material's scene name.
+    pub name: String,
+    /// Mass [kg, per depth in 2D, per area in 1D].
+    pub mass: f64,
+    /// Momentum (x, y, z; zero beyond the dimension).
+    pub momentum: [f64; 3],
+    /// Kinetic energy Σ ½ m |v|².
+    pub kinetic: f64,
+    /// Stored energy: strain energy of a solid, internal energy of a fluid.
+    pub internal: f64,
+}
+
+/// The conserved quantities of a model's whole state.
+#[derive(Debug, Clone, Default)]
+pub struct Conserved {
+    /// Per material, in the scene's material order.
+    pub materials: Vec<MaterialTotals>,
+    /// System energies (kinetic; stored in `strain`; body-force potential).
+    pub energies: Energies,
+    /// Σ m |v|: the scale of the momentum drift.
+    pub momentum_scale: f64,
+}
+
+impl Conserved {
+    /// Total mass.
+    pub fn mass(&self) -> f64 {
+        self.materials.iter().map(|m| m.mass).sum()
+    }
+
+    /// Total momentum.
+    pub fn momentum(&self) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for m in &self.materials {
+            for d in 0..3 {
+                p[d] += m.momentum[d];
+            }
+        }
+        p
+    }
+}
+
+/// Values of one snapshot field, one entry per point or cell.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Values {
+    /// One number.
+    Scalar(Vec<f64>),
+    /// A vector padded to 3 components.
+    Vector(Vec<[f64; 3]>),
+    /// A 3×3 tensor, row-major.
+    Tensor(Vec<[f64; 9]>),
+}
+
+/// A named snapshot field with its unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutField {
+    /// Name in the VTK file.
+    pub name: String,
+    /// Column base name in the CSV file (vectors add `x`, `y`, `z`, tensors
+    /// the index pair, e.g. `sxy`); `None`: VTK only.
+    pub csv: Option<String>,
+    /// Unit, e.g. `m/s` or `kg/m` (already per depth where it applies).
+    pub unit: String,
+    /// The values.
+    pub values: Values,
+}
+
+impl OutField {
+    /// A field with the CSV name equal to the VTK name.
+    pub fn new(name: &str, unit: &str, values: Values) -> Self {
+        Self {
+            name: name.to_string(),
+            csv: Some(name.to_string()),
+            unit: unit.to_string(),
+            values,
+        }
+    }
+
+    /// A field with its own CSV base name (`None`: not in the CSV).
+    pub fn with_csv(name: &str, csv: Option<&str>, unit: &str, values: Values) -> Self {
+        Self {
+            name: name.to_string(),
+            csv: csv.map(str::to_string),
+            unit: unit.to_string(),
+            values,
+        }
+    }
+}
+
+/// Where a field set lives.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    /// Scattered points (particles): positions padded to 3D.
+    Points(Vec<[f64; 3]>),
+    /// A structured grid; the fields are on its nodes or on its cells.
+    Image {
+        /// Lower corner.
+        origin: [f64; 3],
+        /// Cell size (1 beyond the dimension).
+        spacing: [f64; 3],
+        /// Cells per direction (0 beyond the dimension).
+        cells: [usize; 3],
+        /// Whether the fields are per cell (else per node).
+        on_cells: bool,
+        /// Cell centres of the CSV rows (cell fields only; empty otherwise).
+        centres: Vec<[f64; 3]>,
+    },
+}
+
+/// One group of snapshot fields: written as `NAME_NNNN.vtu|vti` (with a
+/// `NAME.pvd` series) and, if `csv`, `NAME_NNNN.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldSet {
+    /// File stem: `particles`, `grid`, `cells`, ….
+    pub name: &'static str,
+    /// Points or grid.
+    pub geometry: Geometry,
+    /// The fields.
+    pub fields: Vec<OutField>,
+    /// Whether to write a CSV table too (when the scene asks for CSV).
+    pub csv: bool,
+}
+
+/// Where an impossible value sits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Location {
+    /// A material point.
+    Particle(usize),
+    /// A grid cell (flat index of the model's cell layout) with its integer
+    /// coordinates.
+    Cell(usize, [isize; 3]),
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Location::Particle(p) => write!(f, "particle {p}"),
+            Location::Cell(c, ijk) => write!(f, "cell {c} {ijk:?}"),
+        }
+    }
+}
+
+/// A non-finite or physically impossible value found by the watchdog.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Violation {
+    /// Particle or cell.
+    pub at: Location,
+    /// The material's scene name.
+    pub material: String,
+    /// The field, e.g. `J`, `mass`, `temperature`.
+    pub field: &'static str,
+    /// The offending value.
+    pub value: f64,
+    /// What it must satisfy, e.g. `> 0 and finite`.
+    pub rule: &'static str,
+}
+
+impl std::fmt::Display for Violation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of material `{}`: {} = {:e} (must be {})",
+            self.at, self.material, self.field, self.value, self.rule
+        )
+    }
+}
+
+/// Sizes of a model for the run summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Counts {
+    /// Material points.
+    pub particles: usize,
+    /// Grid cells (interior).
+    pub cells: usize,
+    /// Fluid materials.
+    pub fluid_materials: usize,
+}
+
+/// How a model describes itself in the run summary.
+#[derive(Debug, Clone, Default)]
+pub struct Description {
+    /// Shape function (empty without particles).
+    pub shape: String,
+    /// MPM update scheme, `newmark` or `quasistatic` (empty without
+    /// particles).
+    pub update: String,
+    /// Whether its steps iterate (implicit MPM, semi-implicit pressure): the
+    /// summary then reports iteration counts.
+    pub iterative: bool,
+    /// Whether the momentum of the whole state is conserved (walls and
+    /// boundary pressures exchange momentum with a coupled system).
+    pub momentum_conserved: bool,
+    /// Wall time per phase of the explicit MPM step.
+    pub phase_times: crate::mpm::PhaseTimes,
+    /// Implicit MPM: seconds in assembly, factorisation, solves and particle
+    /// updates.
+    pub implicit_split: Option<[f64; 4]>,
+}
+
+/// A system the run loop drives.
+pub trait Model {
+    /// Kind and dimension, e.g. `explicit_solid_2d`: a checkpoint of another
+    /// kind is rejected.
+    fn kind(&self) -> String;
+    /// Current time.
+    fn time(&self) -> f64;
+    /// Completed steps.
+    fn steps(&self) -> u64;
+    /// The stable time step of the current state (CFL estimate; for an
+    /// implicit model the step it will try next).
+    fn stable_dt(&self) -> f64;
+    /// Takes one step. On an error whose [`Error::retry_dt`] is `Some`, the
+    /// state must be as before the call so that the loop can retry with a
+    /// smaller step.
+    fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error>;
+    /// The Δt below which a failed step may be retried (`None`: the
+    /// failure is final, or the model already retried inside the step).
+    fn retry_dt(&self, e: &Error) -> Option<f64> {
+        e.retry_dt()
+    }
+    /// Adds what the model knows to a step's error (e.g. the scene name of
+    /// the failing particle's material).
+    fn annotate(&self, e: Error) -> Error {
+        e
+    }
+    /// The snapshot fields of the current state.
+    fn field_sets(&self) -> Vec<FieldSet>;
+    /// Columns of `history.csv` after the time: `(quantity, unit)`, units
+    /// before the per-depth suffix the loop appends.
+    fn history_columns(&self) -> Vec<(&'static str, &'static str)>;
+    /// Appends one history row's values (after the time) to `row`.
+    fn history_row(&self, row: &mut Vec<f64>);
+    /// Conservation totals.
+    fn conserved(&self) -> Conserved;
+    /// The first non-finite or impossible value of the state, if any.
+    fn watchdog(&self) -> Option<Violation>;
+    /// Writes the whole state (everything a later step reads) into `ck`.
+    fn save(&self, ck: &mut Checkpoint);
+    /// Restores the whole state from `ck`, after the model was built from
+    /// the same scene.
+    ///
+    /// # Errors
+    /// A missing array or one of the wrong shape.
+    fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError>;
+    /// Sizes for the summary.
+    fn counts(&self) -> Counts;
+    /// Description for the summary.
+    fn describe(&self) -> Description;
+}

@@ -1,0 +1,489 @@
+//! Conversions between the solver's arrays (vectors of `SVector`, 3×3
+//! matrices, material indices) and checkpoint arrays (`[n, D]`, `[n, 3, 3]`,
+//! u64), and the shared particle and ICE-cell parts of the models: their
+//! snapshot fields, their save/load and their watchdog scans.
+
+use nalgebra::{Matrix3, SVector};
+use rayon::prelude::*;
+
+use crate::driver::model::{FieldSet, Geometry, Location, OutField, Values, Violation};
+use crate::driver::outputs::{pad3, per_depth};
+use crate::ice::{IceState, MaterialCells};
+use crate::material::eos::EquationOfState;
+use crate::material::SolidMaterial;
+use crate::mpm::Particles;
+use crate::output::checkpoint::{Checkpoint, CheckpointError};
+
+/// Stores `D`-vectors as an `[n, D]` array.
+pub fn put_vectors<const D: usize>(ck: &mut Checkpoint, name: &str, v: &[SVector<f64, D>]) {
+    let data = v.iter().flat_map(|x| x.iter().copied()).collect();
+    ck.put_f64(name, vec![v.len(), D], data);
+}
+
+/// Reads an `[n, D]` array back into `D`-vectors.
+pub fn take_vectors<const D: usize>(
+    ck: &mut Checkpoint,
+    name: &str,
+    n: usize,
+) -> Result<Vec<SVector<f64, D>>, CheckpointError> {
+    let data = ck.take_f64(name, Some(&[n, D]))?;
+    Ok(data
+        .chunks_exact(D)
+        .map(SVector::<f64, D>::from_column_slice)
+        .collect())
+}
+
+/// Stores 3×3 matrices as an `[n, 3, 3]` array (row-major, as NumPy reads
+/// it).
+pub fn put_matrices(ck: &mut Checkpoint, name: &str, m: &[Matrix3<f64>]) {
+    let data = m
+        .iter()
+        .flat_map(|a| (0..9).map(move |k| a[(k / 3, k % 3)]))
+        .collect();
+    ck.put_f64(name, vec![m.len(), 3, 3], data);
+}
+
+/// Reads an `[n, 3, 3]` array back into matrices.
+pub fn take_matrices(
+    ck: &mut Checkpoint,
+    name: &str,
+    n: usize,
+) -> Result<Vec<Matrix3<f64>>, CheckpointError> {
+    let data = ck.take_f64(name, Some(&[n, 3, 3]))?;
+    Ok(data
+        .chunks_exact(9)
+        .map(Matrix3::from_row_slice)
+        .collect())
+}
+
+/// Stores a scalar array as `[n]`.
+pub fn put_scalars(ck: &mut Checkpoint, name: &str, v: &[f64]) {
+    ck.put_f64(name, vec![v.len()], v.to_vec());
+}
+
+/// Reads an `[n]` array.
+pub fn take_scalars(
+    ck: &mut Checkpoint,
+    name: &str,
+    n: usize,
+) -> Result<Vec<f64>, CheckpointError> {
+    ck.take_f64(name, Some(&[n]))
+}
+
+/// The length of array `name` (its first axis).
+pub fn length_of(ck: &Checkpoint, name: &str) -> Result<usize, CheckpointError> {
+    ck.shape(name)
+        .and_then(|s| s.first().copied())
+        .ok_or_else(|| CheckpointError::Missing {
+            what: format!("array `{name}`"),
+        })
+}
+
+/// Saves every particle array under `prefix` (`prefix.x`, `prefix.v`, …).
+pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Particles<D>) {
+    let n = |s: &str| format!("{prefix}.{s}");
+    put_vectors(ck, &n("x"), &p.x);
+    put_vectors(ck, &n("x0"), &p.x0);
+    put_vectors(ck, &n("v"), &p.v);
+    put_scalars(ck, &n("mass"), &p.mass);
+    put_scalars(ck, &n("vol0"), &p.vol0);
+    put_scalars(ck, &n("vol"), &p.vol);
+    put_vectors(ck, &n("half_size"), &p.half_size);
+    put_matrices(ck, &n("f"), &p.f);
+    put_matrices(ck, &n("stress"), &p.stress);
+    put_scalars(ck, &n("work"), &p.work);
+    let mat = p.material.iter().map(|&m| m as u64).collect();
+    ck.put_u64(&n("material"), vec![p.len()], mat);
+    put_scalars(ck, &n("temperature"), &p.temperature);
+}
+
+/// Loads the particle arrays saved by [`save_particles`]; the material
+/// indices must name one of `n_materials` materials.
+pub fn load_particles<const D: usize>(
+    ck: &mut Checkpoint,
+    prefix: &str,
+    n_materials: usize,
+) -> Result<Particles<D>, CheckpointError> {
+    let n = |s: &str| format!("{prefix}.{s}");
+    let len = length_of(ck, &n("x"))?;
+    let material = ck.take_u64(&n("material"), Some(&[len]))?;
+    if let Some(&m) = material.iter().find(|&&m| m as usize >= n_materials) {
+        return Err(CheckpointError::Malformed {
+            what: n("material"),
+            reason: format!("material index {m}, the scene has {n_materials} solid materials"),
+        });
+    }
+    Ok(Particles {
+        x: take_vectors(ck, &n("x"), len)?,
+        x0: take_vectors(ck, &n("x0"), len)?,
+        v: take_vectors(ck, &n("v"), len)?,
+        mass: take_scalars(ck, &n("mass"), len)?,
+        vol0: take_scalars(ck, &n("vol0"), len)?,
+        vol: take_scalars(ck, &n("vol"), len)?,
+        half_size: take_vectors(ck, &n("half_size"), len)?,
+        f: take_matrices(ck, &n("f"), len)?,
+        stress: take_matrices(ck, &n("stress"), len)?,
+        work: take_scalars(ck, &n("work"), len)?,
+        material: material.into_iter().map(|m| m as u16).collect(),
+        temperature: take_scalars(ck, &n("temperature"), len)?,
+    })
+}
+
+fn tensor9(m: &Matrix3<f64>) -> [f64; 9] {
+    std::array::from_fn(|k| m[(k / 3, k % 3)])
+}
+
+/// The particle snapshot: velocity, displacement, stress, deformation
+/// gradient, mass, volume, J, material and temperature.
+pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
+    let u = per_depth(D);
+    let disp: Vec<[f64; 3]> =
+        p.x.iter()
+            .zip(&p.x0)
+            .map(|(x, x0)| pad3(&(x - x0)))
+            .collect();
+    FieldSet {
+        name: "particles",
+        geometry: Geometry::Points(p.x.iter().map(pad3).collect()),
+        fields: vec![
+            OutField::with_csv(
+                "velocity",
+                Some("v"),
+                "m/s",
+                Values::Vector(p.v.iter().map(pad3).collect()),
+            ),
+            OutField::with_csv("displacement", Some("u"), "m", Values::Vector(disp)),
+            OutField::with_csv(
+                "stress",
+                Some("s"),
+                "Pa",
+                Values::Tensor(p.stress.iter().map(tensor9).collect()),
+            ),
+            OutField::with_csv(
+                "deformation_gradient",
+                None,
+                "-",
+                Values::Tensor(p.f.iter().map(tensor9).collect()),
+            ),
+            OutField::new("mass", &format!("kg{u}"), Values::Scalar(p.mass.clone())),
+            OutField::new("volume", &format!("m^3{u}"), Values::Scalar(p.vol.clone())),
+            OutField::new(
+                "J",
+                "-",
+                Values::Scalar(p.f.iter().map(|f| f.determinant()).collect()),
+            ),
+            OutField::new(
+                "material",
+                "-",
+                Values::Scalar(p.material.iter().map(|&m| m as f64).collect()),
+            ),
+            OutField::new("temperature", "K", Values::Scalar(p.temperature.clone())),
+        ],
+        csv: true,
+    }
+}
+
+/// Whether particle `i` holds only finite, physically possible values.
+fn particle_ok<const D: usize>(p: &Particles<D>, i: usize) -> bool {
+    particle_violation(p, i).is_none()
+}
+
+/// The first impossible value of particle `i`: `(field, value, rule)`.
+fn particle_violation<const D: usize>(
+    p: &Particles<D>,
+    i: usize,
+) -> Option<(&'static str, f64, &'static str)> {
+    const POS: &str = "finite and > 0";
+    const FIN: &str = "finite";
+    let bad_vec = |v: &SVector<f64, D>| v.iter().copied().find(|x| !x.is_finite());
+    if let Some(x) = bad_vec(&p.x[i]) {
+        return Some(("position", x, FIN));
+    }
+    if let Some(x) = bad_vec(&p.v[i]) {
+        return Some(("velocity", x, FIN));
+    }
+    for (field, x) in [("mass", p.mass[i]), ("volume", p.vol[i])] {
+        if !(x.is_finite() && x > 0.0) {
+            return Some((field, x, POS));
+        }
+    }
+    let j = p.f[i].determinant();
+    if !(j.is_finite() && j > 0.0) {
+        return Some(("J", j, POS));
+    }
+    if let Some(&x) = p.stress[i].iter().find(|x| !x.is_finite()) {
+        return Some(("stress", x, FIN));
+    }
+    let t = p.temperature[i];
+    if !(t.is_finite() && t > 0.0) {
+        return Some(("temperature", t, POS));
+    }
+    None
+}
+
+/// The first particle (lowest index) with an impossible value.
+pub fn particle_watchdog<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+) -> Option<Violation> {
+    let i = (0..p.len())
+        .into_par_iter()
+        .find_first(|&i| !particle_ok(p, i))?;
+    let (field, value, rule) = particle_violation(p, i)?;
+    Some(Violation {
+        at: Location::Particle(i),
+        material: materials
+            .get(p.material[i] as usize)
+            .map_or_else(|| format!("#{}", p.material[i]), |m| m.name.clone()),
+        field,
+        value,
+        rule,
+    })
+}
+
+/// Saves the cell fields of every ICE material (ghosts included), the
+/// pressures, the time and the step count under `prefix`.
+pub fn save_cells<const D: usize>(ck: &mut Checkpoint, prefix: &str, s: &IceState<D>) {
+    for (r, mc) in s.cells.iter().enumerate() {
+        let n = |f: &str| format!("{prefix}.m{r}.{f}");
+        put_scalars(ck, &n("mass"), &mc.mass);
+        put_vectors(ck, &n("velocity"), &mc.velocity);
+        put_scalars(ck, &n("temperature"), &mc.temperature);
+        put_scalars(ck, &n("sp_vol"), &mc.sp_vol);
+        put_scalars(ck, &n("vol_frac"), &mc.vol_frac);
+    }
+    put_scalars(ck, &format!("{prefix}.p_eq"), &s.p_eq);
+    put_scalars(ck, &format!("{prefix}.pressure"), &s.pressure);
+    ck.put_f64(&format!("{prefix}.time"), vec![1], vec![s.time]);
+    ck.put_u64(&format!("{prefix}.steps"), vec![1], vec![s.steps]);
+}
+
+/// Loads what [`save_cells`] saved into `s` (built from the same scene, so
+/// of the same layout and materials).
+pub fn load_cells<const D: usize>(
+    ck: &mut Checkpoint,
+    prefix: &str,
+    s: &mut IceState<D>,
+) -> Result<(), CheckpointError> {
+    let len = s.layout.len();
+    for (r, mc) in s.cells.iter_mut().enumerate() {
+        let n = |f: &str| format!("{prefix}.m{r}.{f}");
+        *mc = MaterialCells {
+            mass: take_scalars(ck, &n("mass"), len)?,
+            velocity: take_vectors(ck, &n("velocity"), len)?,
+            temperature: take_scalars(ck, &n("temperature"), len)?,
+            sp_vol: take_scalars(ck, &n("sp_vol"), len)?,
+            vol_frac: take_scalars(ck, &n("vol_frac"), len)?,
+        };
+    }
+    s.p_eq = take_scalars(ck, &format!("{prefix}.p_eq"), len)?;
+    s.pressure = take_scalars(ck, &format!("{prefix}.pressure"), len)?;
+    s.time = ck.take_f64(&format!("{prefix}.time"), Some(&[1]))?[0];
+    s.steps = ck.take_u64(&format!("{prefix}.steps"), Some(&[1]))?[0];
+    Ok(())
+}
+
+/// The first impossible value of cell `c` for material `r`.
+fn cell_violation<const D: usize>(
+    mc: &MaterialCells<D>,
+    c: usize,
+) -> Option<(&'static str, f64, &'static str)> {
+    let m = mc.mass[c];
+    if !(m.is_finite() && m >= 0.0) {
+        return Some(("mass", m, "finite and >= 0"));
+    }
+    if let Some(&u) = mc.velocity[c].iter().find(|u| !u.is_finite()) {
+        return Some(("velocity", u, "finite"));
+    }
+    let t = mc.temperature[c];
+    if !(t.is_finite() && t > 0.0) {
+        return Some(("temperature (internal energy)", t, "finite and > 0"));
+    }
+    let v = mc.sp_vol[c];
+    if !(v.is_finite() && v > 0.0) {
+        return Some(("specific volume (1/density)", v, "finite and > 0"));
+    }
+    let th = mc.vol_frac[c];
+    if !(th.is_finite() && th >= 0.0) {
+        return Some(("volume fraction", th, "finite and >= 0"));
+    }
+    None
+}
+
+/// The first interior cell (in layout order, then material order) with an
+/// impossible value; `names[r]` names ICE material `r`; the pressure must be
+/// finite.
+pub fn cell_watchdog<const D: usize>(s: &IceState<D>) -> Option<Violation> {
+    let interior = &s.layout.interior;
+    let bad = |c: usize| {
+        !s.pressure[c].is_finite() || s.cells.iter().any(|mc| cell_violation(mc, c).is_some())
+    };
+    let k = (0..interior.len())
+        .into_par_iter()
+        .find_first(|&k| bad(interior[k]))?;
+    let c = interior[k];
+    let ijk = s.layout.coords(c);
+    let at = Location::Cell(c, std::array::from_fn(|d| if d < D { ijk[d] } else { 0 }));
+    for (r, mc) in s.cells.iter().enumerate() {
+        if let Some((field, value, rule)) = cell_violation(mc, c) {
+            return Some(Violation {
+                at,
+                material: s.materials[r].name.clone(),
+                field,
+                value,
+                rule,
+            });
+        }
+    }
+    Some(Violation {
+        at,
+        material: "(mixture)".into(),
+        field: "pressure",
+        value: s.pressure[c],
+        rule: "finite",
+    })
+}
+
+/// The cell snapshot: pressure, equilibration pressure and mixture density,
+/// then per material its density, true density, volume fraction,
+/// temperature and velocity (names prefixed by the material's name).
+pub fn cell_fields<const D: usize>(s: &IceState<D>) -> FieldSet {
+    let l = &s.layout;
+    let interior = &l.interior;
+    let vol = l.cell_volume();
+    let pick = |v: &[f64]| interior.iter().map(|&c| v[c]).collect::<Vec<f64>>();
+    let mut fields = vec![
+        OutField::new("pressure", "Pa", Values::Scalar(pick(&s.pressure))),
+        OutField::new("p_eq", "Pa", Values::Scalar(pick(&s.p_eq))),
+        OutField::new(
+            "mixture_density",
+            "kg/m^3",
+            Values::Scalar(interior.iter().map(|&c| s.mixture_density(c)).collect()),
+        ),
+    ];
+    for (m, mc) in s.materials.iter().zip(&s.cells) {
+        let n = &m.name;
+        fields.push(OutField::new(
+            &format!("{n}_density"),
+            "kg/m^3",
+            Values::Scalar(interior.iter().map(|&c| mc.mass[c] / vol).collect()),
+        ));
+        fields.push(OutField::new(
+            &format!("{n}_true_density"),
+            "kg/m^3",
+            Values::Scalar(interior.iter().map(|&c| 1.0 / mc.sp_vol[c]).collect()),
+        ));
+        fields.push(OutField::new(
+            &format!("{n}_volume_fraction"),
+            "-",
+            Values::Scalar(pick(&mc.vol_frac)),
+        ));
+        fields.push(OutField::new(
+            &format!("{n}_temperature"),
+            "K",
+            Values::Scalar(pick(&mc.temperature)),
+        ));
+        fields.push(OutField::with_csv(
+            &format!("{n}_velocity"),
+            Some(&format!("{n}_u")),
+            "m/s",
+            Values::Vector(interior.iter().map(|&c| pad3(&mc.velocity[c])).collect()),
+        ));
+    }
+    FieldSet {
+        name: "cells",
+        geometry: Geometry::Image {
+            origin: pad3(&l.lower),
+            spacing: std::array::from_fn(|d| if d < D { l.h[d] } else { 1.0 }),
+            cells: std::array::from_fn(|d| if d < D { l.cells[d] } else { 0 }),
+            on_cells: true,
+            centres: interior.iter().map(|&c| pad3(&l.centre(c))).collect(),
+        },
+        fields,
+        csv: D <= 2,
+    }
+}
+
+/// Kinetic and internal energy of the fluid cells (internal in `strain`).
+pub fn cell_energies<const D: usize>(state: &IceState<D>) -> crate::stepper::Energies {
+    let (mut kinetic, mut internal) = (0.0, 0.0);
+    for (mat, mc) in state.materials.iter().zip(&state.cells) {
+        let cv = mat.eos.specific_heat_cv();
+        for &c in &state.layout.interior {
+            kinetic += 0.5 * mc.mass[c] * mc.velocity[c].norm_squared();
+            internal += mc.mass[c] * cv * mc.temperature[c];
+        }
+    }
+    crate::stepper::Energies {
+        kinetic,
+        strain: internal,
+        potential: 0.0,
+    }
+}
+
+/// Per-material totals of ICE material `r` over the interior cells.
+pub fn cell_material_totals<const D: usize>(
+    s: &IceState<D>,
+    r: usize,
+) -> crate::driver::model::MaterialTotals {
+    let (mat, mc) = (&s.materials[r], &s.cells[r]);
+    let cv = mat.eos.specific_heat_cv();
+    let mut t = crate::driver::model::MaterialTotals {
+        name: mat.name.clone(),
+        ..Default::default()
+    };
+    let mut p = SVector::<f64, D>::zeros();
+    for &c in &s.layout.interior {
+        let m = mc.mass[c];
+        t.mass += m;
+        p += mc.velocity[c] * m;
+        t.kinetic += 0.5 * m * mc.velocity[c].norm_squared();
+        t.internal += m * cv * mc.temperature[c];
+    }
+    t.momentum = pad3(&p);
+    t
+}
+
+/// Per-material totals of the particles of solid material `k`.
+pub fn particle_material_totals<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+    k: usize,
+) -> crate::driver::model::MaterialTotals {
+    let mut t = crate::driver::model::MaterialTotals {
+        name: materials[k].name.clone(),
+        ..Default::default()
+    };
+    let mut mom = SVector::<f64, D>::zeros();
+    for i in (0..p.len()).filter(|&i| p.material[i] as usize == k) {
+        t.mass += p.mass[i];
+        mom += p.v[i] * p.mass[i];
+        t.kinetic += 0.5 * p.mass[i] * p.v[i].norm_squared();
+        t.internal += p.vol0[i] * materials[k].strain_energy_density(&p.f[i], p.work[i]);
+    }
+    t.momentum = pad3(&mom);
+    t
+}
+
+/// Names the material of the particle a numerical failure names (`what`
+/// gains `, material `NAME``).
+pub fn name_particle_material<const D: usize>(
+    e: crate::error::Error,
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+) -> crate::error::Error {
+    match e {
+        crate::error::Error::Numerical { site, what } => {
+            let name = site
+                .particle
+                .and_then(|i| p.material.get(i))
+                .and_then(|&m| materials.get(m as usize));
+            let what = match name {
+                Some(m) => format!("{what} (material `{}`)", m.name),
+                None => what,
+            };
+            crate::error::Error::Numerical { site, what }
+        }
+        e => e,
+    }
+}

@@ -1,0 +1,191 @@
+//! Coupled MPM-ICE (Guilkey Sec. 3.3; explicit or semi-implicit pressure,
+//! one or more solid fields) as a model of the run loop.
+
+use crate::coupling::CoupledRun;
+use crate::driver::model::{
+    Conserved, Counts, Description, DtRequest, FieldSet, MaterialTotals, Model, StepStats,
+    Violation,
+};
+use crate::driver::models::arrays::{
+    cell_energies, cell_fields, cell_material_totals, cell_watchdog, load_cells, load_particles,
+    particle_fields, particle_material_totals, particle_watchdog, save_cells, save_particles,
+};
+use crate::driver::models::fluid::{
+    cell_momentum_scale, fluid_history_row, load_carried, save_carried, FLUID_HISTORY,
+};
+use crate::driver::models::solid_explicit::scene_name;
+use crate::error::Error;
+use crate::material::eos::EquationOfState;
+use crate::output::checkpoint::{Checkpoint, CheckpointError};
+use crate::stepper::Energies;
+
+/// A coupled run.
+pub struct Coupled<const D: usize> {
+    /// The run.
+    pub run: CoupledRun<D>,
+}
+
+impl<const D: usize> Coupled<D> {
+    /// Energies of the whole system: kinetic (fluid + particles), internal
+    /// of the fluids (in `strain`) plus the particles' strain energy.
+    fn energies(&self) -> Energies {
+        let run = &self.run;
+        let mut e = cell_energies(&run.fluid);
+        // The solid fields' cells are a copy of the particles: count those.
+        for f in &run.fields {
+            let sc = &run.fluid.cells[f.ice_material];
+            let cv = f.eos.specific_heat_cv();
+            for &c in &run.fluid.layout.interior {
+                e.kinetic -= 0.5 * sc.mass[c] * sc.velocity[c].norm_squared();
+                e.strain -= sc.mass[c] * cv * sc.temperature[c];
+            }
+            e.kinetic += f.particles.kinetic_energy();
+            e.strain += f.particles.strain_energy(&run.materials);
+        }
+        e
+    }
+}
+
+impl<const D: usize> Model for Coupled<D> {
+    fn kind(&self) -> String {
+        format!("coupled_mpm_ice_{D}d")
+    }
+
+    fn time(&self) -> f64 {
+        self.run.fluid.time
+    }
+
+    fn steps(&self) -> u64 {
+        self.run.steps
+    }
+
+    fn stable_dt(&self) -> f64 {
+        self.run.stable_dt()
+    }
+
+    fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error> {
+        let info = if dt.exact {
+            self.run.step_exact(dt.value)?
+        } else {
+            self.run.step(dt.value)?
+        };
+        Ok(StepStats {
+            dt: info.dt,
+            nonlinear_iterations: info.outer_iterations,
+            linear_iterations: info.linear_iterations,
+            retries: 0,
+        })
+    }
+
+    fn retry_dt(&self, _e: &Error) -> Option<f64> {
+        // The coupled step halves Δt itself on a retryable pressure stage;
+        // a failure after that may have moved the particles.
+        None
+    }
+
+    fn field_sets(&self) -> Vec<FieldSet> {
+        let run = &self.run;
+        // One field: its particles; several: all of them, field by field.
+        let particles = if run.fields.len() == 1 {
+            particle_fields(&run.fields[0].particles)
+        } else {
+            particle_fields(&run.all_particles())
+        };
+        vec![particles, cell_fields(&run.fluid)]
+    }
+
+    fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
+        FLUID_HISTORY.to_vec()
+    }
+
+    fn history_row(&self, row: &mut Vec<f64>) {
+        fluid_history_row(&self.run.fluid, row);
+    }
+
+    fn conserved(&self) -> Conserved {
+        let run = &self.run;
+        let mut materials: Vec<MaterialTotals> = (0..run.num_fluids())
+            .map(|r| cell_material_totals(&run.fluid, r))
+            .collect();
+        for k in 0..run.materials.len() {
+            let mut t = MaterialTotals {
+                name: run.materials[k].name.clone(),
+                ..Default::default()
+            };
+            for f in &run.fields {
+                let ft = particle_material_totals(&f.particles, &run.materials, k);
+                t.mass += ft.mass;
+                t.kinetic += ft.kinetic;
+                t.internal += ft.internal;
+                for d in 0..3 {
+                    t.momentum[d] += ft.momentum[d];
+                }
+            }
+            materials.push(t);
+        }
+        Conserved {
+            materials,
+            energies: self.energies(),
+            momentum_scale: cell_momentum_scale(&run.fluid, 0..run.num_fluids())
+                + run
+                    .fields
+                    .iter()
+                    .map(|f| f.particles.momentum_scale())
+                    .sum::<f64>(),
+        }
+    }
+
+    fn watchdog(&self) -> Option<Violation> {
+        let run = &self.run;
+        run.fields
+            .iter()
+            .find_map(|f| particle_watchdog(&f.particles, &run.materials))
+            .or_else(|| cell_watchdog(&run.fluid))
+    }
+
+    fn save(&self, ck: &mut Checkpoint) {
+        let run = &self.run;
+        save_cells(ck, "cells", &run.fluid);
+        for (i, f) in run.fields.iter().enumerate() {
+            save_particles(ck, &format!("field{i}"), &f.particles);
+        }
+        save_carried(ck, "workspace", run.ice_workspace());
+        ck.put_u64("model.steps", vec![1], vec![run.steps]);
+    }
+
+    fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
+        let run = &mut self.run;
+        load_cells(ck, "cells", &mut run.fluid)?;
+        let n_materials = run.materials.len();
+        for i in 0..run.fields.len() {
+            run.fields[i].particles = load_particles(ck, &format!("field{i}"), n_materials)?;
+        }
+        let cells = run.fluid.layout.len();
+        load_carried(ck, "workspace", run.ice_workspace_mut(), cells)?;
+        run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
+        Ok(())
+    }
+
+    fn counts(&self) -> Counts {
+        let run = &self.run;
+        Counts {
+            particles: run.fields.iter().map(|f| f.particles.len()).sum(),
+            cells: run.fluid.layout.num_interior(),
+            fluid_materials: run.num_fluids(),
+        }
+    }
+
+    fn describe(&self) -> Description {
+        let run = &self.run;
+        Description {
+            shape: scene_name(&run.mpm.shape),
+            update: scene_name(&run.mpm.scheme),
+            iterative: run.ice.implicit.is_some(),
+            // Walls and the pressure at them exchange momentum with the
+            // coupled system.
+            momentum_conserved: false,
+            phase_times: run.phase_times(),
+            implicit_split: None,
+        }
+    }
+}

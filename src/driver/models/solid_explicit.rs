@@ -1,0 +1,165 @@
+//! The explicit MPM solid as a model of the run loop.
+
+use crate::driver::model::{
+    Conserved, Counts, Description, DtRequest, FieldSet, Geometry, Model, OutField, StepStats,
+    Values, Violation,
+};
+use crate::driver::models::arrays::{
+    load_particles, name_particle_material, particle_fields, particle_material_totals,
+    particle_watchdog, save_particles,
+};
+use crate::driver::outputs::pad3;
+use crate::error::Error;
+use crate::mpm::stable_dt;
+use crate::output::checkpoint::{Checkpoint, CheckpointError};
+use crate::stepper::SolidRun;
+
+/// A solid-only explicit MPM run.
+pub struct ExplicitSolid<const D: usize> {
+    /// The run: grid, materials, particles and buffers.
+    pub run: SolidRun<D>,
+}
+
+/// The name a scene file uses for a serialisable choice (`quadratic_bspline`).
+pub fn scene_name<T: serde::Serialize>(x: &T) -> String {
+    match serde_json::to_value(x) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => String::new(),
+    }
+}
+
+/// Solid energies as history columns.
+pub(crate) const SOLID_HISTORY: [(&str, &str); 4] = [
+    ("kinetic", "J"),
+    ("strain", "J"),
+    ("potential", "J"),
+    ("total", "J"),
+];
+
+impl<const D: usize> Model for ExplicitSolid<D> {
+    fn kind(&self) -> String {
+        format!("explicit_solid_{D}d")
+    }
+
+    fn time(&self) -> f64 {
+        self.run.t
+    }
+
+    fn steps(&self) -> u64 {
+        self.run.steps
+    }
+
+    fn stable_dt(&self) -> f64 {
+        let r = &self.run;
+        stable_dt(&r.grid, &r.materials, &r.particles, r.time.cfl)
+    }
+
+    fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error> {
+        let dt = if dt.exact {
+            dt.value
+        } else {
+            self.stable_dt().min(dt.value)
+        };
+        let dt = self.run.step_dt(dt)?;
+        Ok(StepStats {
+            dt,
+            ..Default::default()
+        })
+    }
+
+    fn annotate(&self, e: Error) -> Error {
+        name_particle_material(e, &self.run.particles, &self.run.materials)
+    }
+
+    fn field_sets(&self) -> Vec<FieldSet> {
+        let r = &self.run;
+        let g = &r.grid;
+        let gs = r.grid_state();
+        let cells: [usize; 3] = std::array::from_fn(|d| if d < D { g.cells[d] } else { 0 });
+        let n: [usize; 3] = std::array::from_fn(|d| cells[d] + 1);
+        let mut mass = Vec::with_capacity(n[0] * n[1] * n[2]);
+        let mut vel = Vec::with_capacity(mass.capacity());
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let c = [i as isize, j as isize, k as isize];
+                    let idx = g.node_index(std::array::from_fn(|d| c[d]));
+                    mass.push(gs.mass[idx]);
+                    vel.push(pad3(&gs.velocity_new[idx]));
+                }
+            }
+        }
+        let grid = FieldSet {
+            name: "grid",
+            geometry: Geometry::Image {
+                origin: pad3(&g.lower),
+                spacing: std::array::from_fn(|d| if d < D { g.h[d] } else { 1.0 }),
+                cells,
+                on_cells: false,
+                centres: Vec::new(),
+            },
+            fields: vec![
+                OutField::new("mass", "kg", Values::Scalar(mass)),
+                OutField::new("velocity", "m/s", Values::Vector(vel)),
+            ],
+            csv: false,
+        };
+        vec![particle_fields(&r.particles), grid]
+    }
+
+    fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
+        SOLID_HISTORY.to_vec()
+    }
+
+    fn history_row(&self, row: &mut Vec<f64>) {
+        let e = self.run.energies();
+        row.extend([e.kinetic, e.strain, e.potential, e.total()]);
+    }
+
+    fn conserved(&self) -> Conserved {
+        let r = &self.run;
+        Conserved {
+            materials: (0..r.materials.len())
+                .map(|k| particle_material_totals(&r.particles, &r.materials, k))
+                .collect(),
+            energies: r.energies(),
+            momentum_scale: r.particles.momentum_scale(),
+        }
+    }
+
+    fn watchdog(&self) -> Option<Violation> {
+        particle_watchdog(&self.run.particles, &self.run.materials)
+    }
+
+    fn save(&self, ck: &mut Checkpoint) {
+        save_particles(ck, "particles", &self.run.particles);
+        ck.put_f64("model.time", vec![1], vec![self.run.t]);
+        ck.put_u64("model.steps", vec![1], vec![self.run.steps]);
+    }
+
+    fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
+        self.run.particles = load_particles(ck, "particles", self.run.materials.len())?;
+        self.run.t = ck.take_f64("model.time", Some(&[1]))?[0];
+        self.run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
+        Ok(())
+    }
+
+    fn counts(&self) -> Counts {
+        Counts {
+            particles: self.run.particles.len(),
+            cells: self.run.grid.num_cells(),
+            fluid_materials: 0,
+        }
+    }
+
+    fn describe(&self) -> Description {
+        Description {
+            shape: scene_name(&self.run.params.shape),
+            update: scene_name(&self.run.params.scheme),
+            iterative: false,
+            momentum_conserved: true,
+            phase_times: self.run.phase_times(),
+            implicit_split: None,
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! The run loop's files: snapshots of a model's field sets (VTK + `.pvd`
+//! series, CSV tables) and `history.csv`.
+//!
+//! Every file is written whole under a temporary name and renamed
+//! ([`crate::output::atomic_write`]): the history is kept in memory and the
+//! file rewritten at each snapshot, checkpoint and at the end, so a run
+//! killed at any moment leaves only complete files.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::driver::model::{FieldSet, Geometry, Values};
+use crate::error::{Error, Result};
+use crate::output::csv::write_columns;
+use crate::output::vtk::{write_vti, write_vtu_points, Field, PvdSeries};
+use crate::scene::Format;
+
+/// Unit of a quantity per unit of the dimensions a run does not resolve
+/// (2D plane strain is per metre of depth, 1D per square metre of section).
+pub fn per_depth(dim: usize) -> &'static str {
+    match dim {
+        1 => "/m^2",
+        2 => "/m",
+        _ => "",
+    }
+}
+
+/// Pads a `D`-vector to 3 components.
+pub fn pad3<const D: usize>(v: &nalgebra::SVector<f64, D>) -> [f64; 3] {
+    std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
+}
+
+/// The snapshot series and the history of one run.
+pub(crate) struct Outputs {
+    dir: PathBuf,
+    formats: Vec<Format>,
+    dim: usize,
+    /// One `.pvd` series per field set, by set name.
+    series: Vec<(&'static str, PvdSeries)>,
+    /// Times of the snapshots written so far (snapshot `k` at `times[k]`).
+    pub times: Vec<f64>,
+    header: Vec<String>,
+    /// History rows, flattened (`header.len()` values a row).
+    pub history: Vec<f64>,
+    row: Vec<f64>,
+    /// Seconds spent writing.
+    pub output_s: f64,
+}
+
+impl Outputs {
+    /// Creates `dir`; the history has a time column and one column per
+    /// `(quantity, unit)`, units made per depth in 2D and per area in 1D.
+    pub fn new(
+        dir: &Path,
+        formats: &[Format],
+        dim: usize,
+        columns: &[(&str, &str)],
+    ) -> Result<Self> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let u = per_depth(dim);
+        let mut header = vec!["time [s]".to_string()];
+        header.extend(columns.iter().map(|(q, unit)| format!("{q} [{unit}{u}]")));
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            formats: formats.to_vec(),
+            dim,
+            series: Vec::new(),
+            times: Vec::new(),
+            header,
+            history: Vec::new(),
+            row: Vec::new(),
+            output_s: 0.0,
+        })
+    }
+
+    /// Number of snapshots written.
+    pub fn snapshots(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Columns of a history row, the time included.
+    pub fn history_width(&self) -> usize {
+        self.header.len()
+    }
+
+    /// Appends a history row: the time, then `fill`'s values.
+    pub fn history_row(&mut self, t: f64, fill: impl FnOnce(&mut Vec<f64>)) {
+        self.row.clear();
+        self.row.push(t);
+        fill(&mut self.row);
+        debug_assert_eq!(self.row.len(), self.header.len());
+        self.history.extend_from_slice(&self.row);
+    }
+
+    /// Time of the last history row.
+    pub fn last_history_time(&self) -> Option<f64> {
+        let w = self.header.len();
+        (self.history.len() >= w).then(|| self.history[self.history.len() - w])
+    }
+
+    /// Rewrites `history.csv` atomically with every row so far.
+    pub fn flush_history(&mut self) -> Result<()> {
+        let start = Instant::now();
+        let w = self.header.len();
+        let rows = self.history.len() / w;
+        let cols: Vec<Vec<f64>> = (0..w)
+            .map(|j| (0..rows).map(|i| self.history[i * w + j]).collect())
+            .collect();
+        let h: Vec<&str> = self.header.iter().map(String::as_str).collect();
+        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let path = self.dir.join("history.csv");
+        write_columns(&path, &h, &c).map_err(|e| Error::io(&path, e))?;
+        self.output_s += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Writes snapshot number [`Self::snapshots`] of `sets` at time `t`.
+    pub fn snapshot(&mut self, t: f64, sets: &[FieldSet]) -> Result<()> {
+        let start = Instant::now();
+        let k = self.times.len();
+        for set in sets {
+            if self.formats.contains(&Format::Vtk) {
+                let ext = match set.geometry {
+                    Geometry::Points(_) => "vtu",
+                    Geometry::Image { .. } => "vti",
+                };
+                let name = format!("{}_{k:04}.{ext}", set.name);
+                let path = self.dir.join(&name);
+                write_vtk(&path, set).map_err(|e| Error::io(&path, e))?;
+                let series = self.series_of(set.name);
+                series
+                    .push(t, &name)
+                    .map_err(|e| Error::io(series.path().to_path_buf(), e))?;
+            }
+            if self.formats.contains(&Format::Csv) && set.csv {
+                let path = self.dir.join(format!("{}_{k:04}.csv", set.name));
+                write_csv(&path, set, self.dim).map_err(|e| Error::io(&path, e))?;
+            }
+        }
+        self.times.push(t);
+        self.output_s += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn series_of(&mut self, name: &'static str) -> &mut PvdSeries {
+        let i = match self.series.iter().position(|(n, _)| *n == name) {
+            Some(i) => i,
+            None => {
+                let pvd = PvdSeries::new(self.dir.join(format!("{name}.pvd")));
+                self.series.push((name, pvd));
+                self.series.len() - 1
+            }
+        };
+        &mut self.series[i].1
+    }
+
+    /// Restores the state of a restarted run: the snapshot times (the
+    /// `.pvd` series of `sets` are rewritten to list them) and the history
+    /// rows.
+    pub fn restore(&mut self, times: Vec<f64>, history: Vec<f64>, sets: &[FieldSet]) -> Result<()> {
+        if self.formats.contains(&Format::Vtk) {
+            for set in sets {
+                let ext = match set.geometry {
+                    Geometry::Points(_) => "vtu",
+                    Geometry::Image { .. } => "vti",
+                };
+                let mut pvd = PvdSeries::new(self.dir.join(format!("{}.pvd", set.name)));
+                for (k, &t) in times.iter().enumerate() {
+                    pvd.push(t, &format!("{}_{k:04}.{ext}", set.name))
+                        .map_err(|e| Error::io(pvd.path().to_path_buf(), e))?;
+                }
+                self.series.push((set.name, pvd));
+            }
+        }
+        self.times = times;
+        self.history = history;
+        self.flush_history()
+    }
+}
+
+fn vtk_fields(set: &FieldSet) -> Vec<Field<'_>> {
+    set.fields
+        .iter()
+        .map(|f| match &f.values {
+            Values::Scalar(v) => Field::scalar(&f.name, v),
+            Values::Vector(v) => Field::vector(&f.name, v),
+            Values::Tensor(v) => Field::tensor(&f.name, v),
+        })
+        .collect()
+}
+
+fn write_vtk(path: &Path, set: &FieldSet) -> std::io::Result<()> {
+    let fields = vtk_fields(set);
+    match &set.geometry {
+        Geometry::Points(x) => write_vtu_points(path, x, &fields),
+        Geometry::Image {
+            origin,
+            spacing,
+            cells,
+            on_cells,
+            ..
+        } => {
+            if *on_cells {
+                write_vti(path, *origin, *spacing, *cells, &[], &fields)
+            } else {
+                write_vti(path, *origin, *spacing, *cells, &fields, &[])
+            }
+        }
+    }
+}
+
+/// Components of a symmetric tensor written to CSV in `dim` dimensions.
+fn tensor_components(dim: usize) -> &'static [(usize, usize)] {
+    match dim {
+        1 => &[(0, 0), (1, 1), (2, 2)],
+        2 => &[(0, 0), (1, 1), (2, 2), (0, 1)],
+        _ => &[(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)],
+    }
+}
+
+fn write_csv(path: &Path, set: &FieldSet, dim: usize) -> std::io::Result<()> {
+    const AXES: [&str; 3] = ["x", "y", "z"];
+    let mut header: Vec<String> = Vec::new();
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    let coords: &[[f64; 3]] = match &set.geometry {
+        Geometry::Points(x) => x,
+        Geometry::Image { centres, .. } => centres,
+    };
+    for d in 0..dim {
+        header.push(format!("{} [m]", AXES[d]));
+        cols.push(coords.iter().map(|x| x[d]).collect());
+    }
+    for f in &set.fields {
+        let Some(base) = &f.csv else { continue };
+        let unit = &f.unit;
+        match &f.values {
+            Values::Scalar(v) => {
+                header.push(format!("{base} [{unit}]"));
+                cols.push(v.clone());
+            }
+            Values::Vector(v) => {
+                for d in 0..dim {
+                    header.push(format!("{base}{} [{unit}]", AXES[d]));
+                    cols.push(v.iter().map(|x| x[d]).collect());
+                }
+            }
+            Values::Tensor(v) => {
+                for &(a, b) in tensor_components(dim) {
+                    header.push(format!("{base}{}{} [{unit}]", AXES[a], AXES[b]));
+                    cols.push(v.iter().map(|s| s[3 * a + b]).collect());
+                }
+            }
+        }
+    }
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    write_columns(path, &h, &c)
+}

@@ -1,0 +1,617 @@
+//! The one run loop: time control, retries, the watchdog, snapshot and
+//! history cadence, checkpoints, restart, a clean stop on interrupt,
+//! progress and the summary — for every [`Model`].
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use crate::driver::model::{Conserved, DtRequest, MaterialTotals, Model};
+use crate::driver::outputs::Outputs;
+use crate::driver::summary::{write_summary, IterationStats, Summary};
+use crate::error::{Error, Result};
+use crate::output::checkpoint::{content_hash, Checkpoint, CheckpointError};
+use crate::scene::{OutputSpec, Scene};
+use crate::stepper::Energies;
+
+/// Halvings of the time step tried before a recoverable step failure is
+/// given up.
+pub const MAX_RETRIES: u32 = 20;
+
+/// A time reached "at" a target within this relative round-off.
+const NEAR: f64 = 1.0 - 1e-12;
+
+/// How to run a scene.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output folder (created if missing).
+    pub out_dir: PathBuf,
+    /// Worker threads (0: rayon's default, all cores).
+    pub threads: usize,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+    /// Continue from this checkpoint folder instead of the initial state.
+    pub restart: Option<PathBuf>,
+    /// Set (e.g. by a Ctrl-C handler) to stop cleanly at the end of the
+    /// current step, with a checkpoint.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// The content hash of a scene's physics: everything but its description,
+/// outputs, end time, step limit and watchdog interval (a checkpoint may be
+/// continued with those changed, never with another set-up).
+pub fn scene_hash(scene: &Scene) -> String {
+    let mut s = scene.clone();
+    s.description = String::new();
+    s.output = OutputSpec::default();
+    s.time.end = 0.0;
+    s.time.max_steps = None;
+    s.time.watchdog_interval = 0;
+    // A scene always serialises (plain data); an error would hash as empty.
+    content_hash(&serde_json::to_vec(&s).unwrap_or_default())
+}
+
+/// Time control and output cadence from the scene.
+struct Cadence {
+    end: f64,
+    fixed_dt: Option<f64>,
+    max_steps: u64,
+    interval: Option<f64>,
+    history: Option<f64>,
+    checkpoint: Option<f64>,
+    keep: usize,
+    watchdog: u64,
+}
+
+impl Cadence {
+    fn of(scene: &Scene) -> Self {
+        let o = &scene.output;
+        Self {
+            end: scene.time.end,
+            fixed_dt: scene.time.dt,
+            max_steps: scene.time.max_steps.unwrap_or(u64::MAX),
+            interval: o.interval,
+            history: o.history_interval.or(o.interval.map(|i| i / 20.0)),
+            checkpoint: o.checkpoint_interval,
+            keep: o.checkpoint_keep,
+            watchdog: scene.time.watchdog_interval,
+        }
+    }
+
+    fn finished(&self, t: f64, steps: u64) -> bool {
+        t >= self.end * NEAR || steps >= self.max_steps
+    }
+}
+
+/// The loop's own state: saved in every checkpoint, so that a restarted run
+/// continues its cadence, statistics and drifts.
+#[derive(Debug, Clone)]
+struct LoopState {
+    next_out: f64,
+    next_hist: f64,
+    next_ckpt: f64,
+    dt_min: f64,
+    dt_max: f64,
+    /// The loop's retries (steps repeated with a smaller Δt).
+    retries: u64,
+    iters: IterationStats,
+    initial: Conserved,
+}
+
+impl LoopState {
+    fn fresh(c: &Cadence, initial: Conserved) -> Self {
+        Self {
+            next_out: c.interval.unwrap_or(f64::INFINITY),
+            next_hist: c.history.unwrap_or(0.0),
+            next_ckpt: c.checkpoint.unwrap_or(f64::INFINITY),
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+            retries: 0,
+            iters: IterationStats::default(),
+            initial,
+        }
+    }
+
+    fn save(&self, ck: &mut Checkpoint) {
+        let e = &self.initial.energies;
+        ck.put_f64(
+            "loop.scalars",
+            vec![11],
+            vec![
+                self.next_out,
+                self.next_hist,
+                self.next_ckpt,
+                self.dt_min,
+                self.dt_max,
+                self.iters.nonlinear_mean,
+                self.iters.linear_mean,
+                self.initial.momentum_scale,
+                e.kinetic,
+                e.strain,
+                e.potential,
+            ],
+        );
+        ck.put_u64(
+            "loop.counters",
+            vec![4],
+            vec![
+                self.retries,
+                self.iters.nonlinear_max as u64,
+                self.iters.linear_max as u64,
+                self.iters.retries,
+            ],
+        );
+        let m = &self.initial.materials;
+        let data = m
+            .iter()
+            .flat_map(|t| {
+                [
+                    t.mass,
+                    t.momentum[0],
+                    t.momentum[1],
+                    t.momentum[2],
+                    t.kinetic,
+                    t.internal,
+                ]
+            })
+            .collect();
+        ck.put_f64("loop.initial_materials", vec![m.len(), 6], data);
+    }
+
+    /// Restores the state saved by [`Self::save`]; `names` are the model's
+    /// material names, in order.
+    fn load(ck: &mut Checkpoint, names: &[String]) -> Result<Self, CheckpointError> {
+        let s = ck.take_f64("loop.scalars", Some(&[11]))?;
+        let c = ck.take_u64("loop.counters", Some(&[4]))?;
+        let m = ck.take_f64("loop.initial_materials", Some(&[names.len(), 6]))?;
+        let materials = names
+            .iter()
+            .zip(m.chunks_exact(6))
+            .map(|(name, v)| MaterialTotals {
+                name: name.clone(),
+                mass: v[0],
+                momentum: [v[1], v[2], v[3]],
+                kinetic: v[4],
+                internal: v[5],
+            })
+            .collect();
+        Ok(Self {
+            next_out: s[0],
+            next_hist: s[1],
+            next_ckpt: s[2],
+            dt_min: s[3],
+            dt_max: s[4],
+            retries: c[0],
+            iters: IterationStats {
+                nonlinear_mean: s[5],
+                linear_mean: s[6],
+                nonlinear_max: c[1] as usize,
+                linear_max: c[2] as usize,
+                retries: c[3],
+                ..Default::default()
+            },
+            initial: Conserved {
+                materials,
+                energies: Energies {
+                    kinetic: s[8],
+                    strain: s[9],
+                    potential: s[10],
+                },
+                momentum_scale: s[7],
+            },
+        })
+    }
+}
+
+/// A model's state and the loop's, held in memory (the last good state) or
+/// on its way to a checkpoint folder.
+fn capture<M: Model>(model: &M, hash: &str, ls: &LoopState, out: &Outputs) -> Checkpoint {
+    let mut ck = Checkpoint::new(&model.kind(), hash, model.steps(), model.time());
+    model.save(&mut ck);
+    ls.save(&mut ck);
+    ck.set_meta(
+        "history_rows",
+        (out.history.len() / out.history_width()).into(),
+    );
+    ck.set_meta("snapshots", out.snapshots().into());
+    ck
+}
+
+/// Writes a captured state as `DIR/checkpoints/step_NNNNNNNNNN`, with the
+/// history and snapshot times as they were at its capture; returns the
+/// folder.
+fn write_checkpoint(mut ck: Checkpoint, out: &Outputs, dir: &Path) -> Result<PathBuf> {
+    let rows = ck.meta_u64("history_rows")? as usize;
+    let snaps = ck.meta_u64("snapshots")? as usize;
+    let w = out.history_width();
+    ck.put_f64(
+        "loop.history",
+        vec![rows, w],
+        out.history[..rows * w].to_vec(),
+    );
+    ck.put_f64(
+        "loop.snapshot_times",
+        vec![snaps],
+        out.times[..snaps].to_vec(),
+    );
+    let root = dir.join("checkpoints");
+    std::fs::create_dir_all(&root).map_err(|e| Error::io(&root, e))?;
+    let path = root.join(format!("step_{:010}", ck.step()));
+    if path.exists() {
+        // The same step of the same scene (a restarted run passing a step
+        // its predecessor already saved).
+        std::fs::remove_dir_all(&path).map_err(|e| Error::io(&path, e))?;
+    }
+    ck.write(&path)?;
+    Ok(path)
+}
+
+/// Restores a model and the loop from checkpoint folder `dir`.
+fn restore<M: Model>(
+    model: &mut M,
+    dir: &Path,
+    hash: &str,
+    out: &mut Outputs,
+) -> Result<LoopState> {
+    let mut ck = Checkpoint::read(dir, Some(hash))?;
+    if ck.model() != model.kind() {
+        return Err(CheckpointError::Malformed {
+            what: format!("checkpoint {}", dir.display()),
+            reason: format!(
+                "it holds a `{}` model, this scene runs `{}`",
+                ck.model(),
+                model.kind()
+            ),
+        }
+        .into());
+    }
+    model.load(&mut ck)?;
+    if model.time().to_bits() != ck.time().to_bits() || model.steps() != ck.step() {
+        return Err(CheckpointError::Malformed {
+            what: format!("checkpoint {}", dir.display()),
+            reason: format!(
+                "the manifest says step {} at t = {:e}, the arrays step {} at t = {:e}",
+                ck.step(),
+                ck.time(),
+                model.steps(),
+                model.time()
+            ),
+        }
+        .into());
+    }
+    let names: Vec<String> = model
+        .conserved()
+        .materials
+        .into_iter()
+        .map(|m| m.name)
+        .collect();
+    let ls = LoopState::load(&mut ck, &names)?;
+    let w = out.history_width();
+    let rows = ck.shape("loop.history").map_or(0, |s| s[0]);
+    let history = ck.take_f64("loop.history", Some(&[rows, w]))?;
+    let k = ck.shape("loop.snapshot_times").map_or(0, |s| s[0]);
+    let times = ck.take_f64("loop.snapshot_times", Some(&[k]))?;
+    out.restore(times, history, &model.field_sets())?;
+    Ok(ls)
+}
+
+/// Removes the oldest interval checkpoints beyond `keep` (0: keep all).
+fn prune(written: &mut Vec<PathBuf>, keep: usize) -> Result<()> {
+    while keep > 0 && written.len() > keep {
+        let old = written.remove(0);
+        std::fs::remove_dir_all(&old).map_err(|e| Error::io(&old, e))?;
+    }
+    Ok(())
+}
+
+/// One step, repeated with half the failed Δt (up to [`MAX_RETRIES`]
+/// times) where the error says a smaller step may help; returns the step's
+/// statistics and the retries used.
+fn step_with_retries<M: Model>(
+    model: &mut M,
+    mut req: DtRequest,
+) -> Result<(crate::driver::model::StepStats, u32)> {
+    let mut tries = 0;
+    loop {
+        match model.step(req) {
+            Ok(st) => return Ok((st, tries)),
+            Err(e) => match model.retry_dt(&e) {
+                Some(dt) if tries < MAX_RETRIES => {
+                    req.value = 0.5 * dt;
+                    tries += 1;
+                }
+                _ => return Err(e),
+            },
+        }
+    }
+}
+
+/// A progress bar over simulation time (0–1000 ‰), hidden unless `show`.
+fn progress_bar(show: bool) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::new(1000);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {percent:>3}% t = {msg} [{elapsed_precise} < {eta_precise}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    b
+}
+
+/// Runs `model` (built from `scene`) to the scene's end, writing outputs
+/// into `opts.out_dir`; `threads` is reported in the summary.
+///
+/// # Errors
+/// A step failure (after retries), a watchdog finding or an interrupt stop
+/// the run with [`Error::Stopped`] naming the cause and the checkpoint of
+/// the last good state; everything already written stays whole. A bad
+/// restart checkpoint is [`Error::Checkpoint`]; an output failure
+/// [`Error::Io`].
+pub fn run_model<M: Model>(
+    model: &mut M,
+    scene: &Scene,
+    opts: &RunOptions,
+    threads: usize,
+) -> Result<Summary> {
+    let dir = &opts.out_dir;
+    let cad = Cadence::of(scene);
+    let hash = scene_hash(scene);
+    let mut out = Outputs::new(
+        dir,
+        &scene.output.formats,
+        scene.grid.dim,
+        &model.history_columns(),
+    )?;
+    let mut ls = match &opts.restart {
+        Some(ck_dir) => restore(model, ck_dir, &hash, &mut out)?,
+        None => {
+            let ls = LoopState::fresh(&cad, model.conserved());
+            out.snapshot(model.time(), &model.field_sets())?;
+            out.history_row(model.time(), |r| model.history_row(r));
+            out.flush_history()?;
+            ls
+        }
+    };
+    let mut last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out));
+    let mut written: Vec<PathBuf> = Vec::new();
+    let bar = progress_bar(opts.progress);
+    let start = Instant::now();
+    let steps0 = model.steps();
+    let mut step_s = 0.0;
+    let mut failure: Option<Error> = None;
+    while !cad.finished(model.time(), model.steps()) {
+        let s = Instant::now();
+        let left = cad.end - model.time();
+        let req = match cad.fixed_dt {
+            Some(dt) => DtRequest {
+                value: dt.min(left),
+                exact: true,
+            },
+            None => DtRequest {
+                value: left,
+                exact: false,
+            },
+        };
+        match step_with_retries(model, req) {
+            Ok((st, tries)) => {
+                ls.dt_min = ls.dt_min.min(st.dt);
+                ls.dt_max = ls.dt_max.max(st.dt);
+                ls.iters.add(st.nonlinear_iterations, st.linear_iterations);
+                ls.iters.retries += st.retries as u64 + tries as u64;
+                ls.retries += tries as u64;
+            }
+            Err(e) => {
+                failure = Some(model.annotate(e));
+                break;
+            }
+        }
+        step_s += s.elapsed().as_secs_f64();
+        let (t, steps) = (model.time(), model.steps());
+        let done = cad.finished(t, steps);
+        if t >= ls.next_hist * NEAR {
+            out.history_row(t, |r| model.history_row(r));
+            ls.next_hist += cad.history.unwrap_or(0.0);
+        }
+        if t >= ls.next_out * NEAR && !done {
+            out.snapshot(t, &model.field_sets())?;
+            out.flush_history()?;
+            ls.next_out += cad.interval.unwrap_or(f64::INFINITY);
+        }
+        let checkpoint_due = t >= ls.next_ckpt * NEAR && !done;
+        if checkpoint_due {
+            ls.next_ckpt += cad.checkpoint.unwrap_or(f64::INFINITY);
+        }
+        let watch = cad.watchdog > 0 && (steps % cad.watchdog == 0 || checkpoint_due);
+        if watch {
+            if let Some(v) = model.watchdog() {
+                failure = Some(Error::Watchdog {
+                    step: steps,
+                    time: t,
+                    what: v.to_string(),
+                });
+                break;
+            }
+            last_good = Some(capture(model, &hash, &ls, &out));
+        }
+        if checkpoint_due {
+            let ck = capture(model, &hash, &ls, &out);
+            written.push(write_checkpoint(ck, &out, dir)?);
+            prune(&mut written, cad.keep)?;
+        }
+        if opts
+            .interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::SeqCst))
+        {
+            failure = Some(Error::Interrupted {
+                step: steps,
+                time: t,
+            });
+            break;
+        }
+        if steps % 16 == 0 {
+            bar.set_position((1000.0 * t / cad.end) as u64);
+            bar.set_message(format!("{t:.4e}"));
+        }
+    }
+    bar.finish_and_clear();
+    // The state to save after a stop: after an interrupt the current one
+    // (if it passes the watchdog), after a failure the last good one.
+    let saved = match failure.take() {
+        None => None,
+        Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
+            None => Some((e, Some(capture(model, &hash, &ls, &out)))),
+            Some(v) => Some((
+                Error::Watchdog {
+                    step: model.steps(),
+                    time: model.time(),
+                    what: v.to_string(),
+                },
+                last_good.take(),
+            )),
+        },
+        Some(e) => Some((e, last_good.take())),
+    };
+    let interrupted = matches!(saved, Some((Error::Interrupted { .. }, _)));
+    // The last state is written, also after a failure (it shows where the
+    // run broke down); not after an interrupt (the checkpoint holds it).
+    if !interrupted {
+        let t = model.time();
+        out.snapshot(t, &model.field_sets())?;
+        if out.last_history_time() != Some(t) {
+            out.history_row(t, |r| model.history_row(r));
+        }
+    }
+    out.flush_history()?;
+    let stopped = match saved {
+        None => None,
+        Some((e, ck)) => Some(match ck {
+            Some(ck) => {
+                let (step, time) = (ck.step(), ck.time());
+                let path = write_checkpoint(ck, &out, dir)?;
+                written.push(path.clone());
+                Error::Stopped {
+                    source: Box::new(e),
+                    checkpoint: path,
+                    step,
+                    time,
+                }
+            }
+            None => e,
+        }),
+    };
+    let wall_s = start.elapsed().as_secs_f64();
+    let summary = summarise(
+        model,
+        scene,
+        &ls,
+        threads,
+        wall_s,
+        (step_s, model.steps() - steps0),
+        out.output_s,
+        &written,
+        opts.restart.as_deref(),
+        stopped.as_ref(),
+    );
+    write_summary(dir, &summary)?;
+    match stopped {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+/// The summary of a finished or stopped run.
+#[allow(clippy::too_many_arguments)]
+fn summarise<M: Model>(
+    model: &M,
+    scene: &Scene,
+    ls: &LoopState,
+    threads: usize,
+    wall_s: f64,
+    (step_s, run_steps): (f64, u64),
+    output_s: f64,
+    written: &[PathBuf],
+    restart: Option<&Path>,
+    error: Option<&Error>,
+) -> Summary {
+    let end = model.conserved();
+    let desc = model.describe();
+    let counts = model.counts();
+    let steps = model.steps();
+    let per_step = |n: usize| {
+        if step_s > 0.0 {
+            n as f64 * run_steps as f64 / step_s
+        } else {
+            0.0
+        }
+    };
+    let (m0, m1) = (ls.initial.mass(), end.mass());
+    let (p0, p1) = (ls.initial.momentum(), end.momentum());
+    let dp = (0..3).map(|d| (p1[d] - p0[d]).powi(2)).sum::<f64>().sqrt();
+    let (e0, e1) = (ls.initial.energies, end.energies);
+    let e_scale = if e0.total().abs() > 0.0 {
+        e0.total().abs()
+    } else {
+        e1.kinetic.max(e1.strain).max(f64::MIN_POSITIVE)
+    };
+    let p_scale = ls.initial.momentum_scale;
+    let iterations = desc.iterative.then(|| {
+        let mut it = ls.iters.clone();
+        if let Some([a, f, s, p]) = desc.implicit_split {
+            (it.assembly_s, it.factor_s, it.solve_s, it.particles_s) = (a, f, s, p);
+        }
+        // Sums over all steps of a restarted chain: means over all steps.
+        it.finish(steps)
+    });
+    Summary {
+        dim: scene.grid.dim,
+        mode: scene.time.mode.name().to_string(),
+        model: model.kind(),
+        shape: desc.shape,
+        update: desc.update,
+        steps,
+        final_time: model.time(),
+        wall_s,
+        output_s,
+        n_particles: counts.particles,
+        n_cells: counts.cells,
+        particle_steps_per_s: per_step(counts.particles),
+        cell_steps_per_s: if counts.fluid_materials > 0 {
+            per_step(counts.cells)
+        } else {
+            0.0
+        },
+        n_fluid_materials: counts.fluid_materials,
+        retries: ls.iters.retries,
+        threads,
+        dt_min: if ls.dt_min.is_finite() {
+            ls.dt_min
+        } else {
+            0.0
+        },
+        dt_max: ls.dt_max,
+        mass_drift: if m0 > 0.0 { (m1 - m0) / m0 } else { m1 - m0 },
+        momentum_drift: if !desc.momentum_conserved {
+            f64::NAN
+        } else if p_scale > 0.0 {
+            dp / p_scale
+        } else {
+            dp
+        },
+        energy_drift: (e1.total() - e0.total()) / e_scale,
+        initial_energy: e0,
+        final_energy: e1,
+        initial_materials: ls.initial.materials.clone(),
+        final_materials: end.materials,
+        phase_times: desc.phase_times,
+        iterations,
+        watchdog_interval: scene.time.watchdog_interval,
+        checkpoints: written.iter().map(|p| p.display().to_string()).collect(),
+        restarted_from: restart.map(|p| p.display().to_string()),
+        error: error.map(|e| e.to_string()),
+    }
+}

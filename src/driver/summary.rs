@@ -1,0 +1,140 @@
+//! The end-of-run summary (`summary.json`).
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::driver::model::MaterialTotals;
+use crate::error::{Error, Result};
+use crate::output::atomic_write;
+use crate::stepper::Energies;
+
+/// The end-of-run summary written to `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Integration mode.
+    pub mode: String,
+    /// The model the loop drove (checkpoint kind).
+    pub model: String,
+    /// Shape function.
+    pub shape: String,
+    /// MPM update scheme.
+    pub update: String,
+    /// Steps taken (in all runs of a restarted chain).
+    pub steps: u64,
+    /// Simulation time reached.
+    pub final_time: f64,
+    /// Wall-clock seconds of this run's time loop (output included).
+    pub wall_s: f64,
+    /// Wall-clock seconds spent writing output.
+    pub output_s: f64,
+    /// Number of particles.
+    pub n_particles: usize,
+    /// Number of grid cells.
+    pub n_cells: usize,
+    /// Particle updates per second of stepping (output excluded; 0 without
+    /// particles).
+    pub particle_steps_per_s: f64,
+    /// Cell updates per second of stepping, all fluid materials of a cell
+    /// counted once (0 without fluids).
+    pub cell_steps_per_s: f64,
+    /// Fluid materials.
+    pub n_fluid_materials: usize,
+    /// Steps repeated with a smaller timestep (the loop's retries and the
+    /// model's own cuts).
+    pub retries: u64,
+    /// Worker threads.
+    pub threads: usize,
+    /// Smallest timestep.
+    pub dt_min: f64,
+    /// Largest timestep.
+    pub dt_max: f64,
+    /// (M_end − M_0)/M_0.
+    pub mass_drift: f64,
+    /// |P_end − P_0| / Σ m|v| at the start (|P_end − P_0| if that is zero);
+    /// NaN (JSON null) where walls exchange momentum with the system.
+    pub momentum_drift: f64,
+    /// (E_end − E_0)/|E_0| of kinetic + stored + body-force potential energy
+    /// (relative to the largest end energy if E_0 = 0).
+    pub energy_drift: f64,
+    /// Energies at the start (kinetic, strain, potential for solids; for
+    /// fluids `strain` holds the internal energy).
+    pub initial_energy: Energies,
+    /// Energies at the end.
+    pub final_energy: Energies,
+    /// Per material at the start: mass, momentum, kinetic and stored energy.
+    pub initial_materials: Vec<MaterialTotals>,
+    /// Per material at the end.
+    pub final_materials: Vec<MaterialTotals>,
+    /// Wall time per phase of the explicit MPM step (binning, P2G, grid,
+    /// G2P + stress).
+    pub phase_times: crate::mpm::PhaseTimes,
+    /// Iteration counts and time split of implicit modes (absent for
+    /// explicit runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<IterationStats>,
+    /// Steps between watchdog scans (0: off).
+    pub watchdog_interval: u64,
+    /// Checkpoint folders this run wrote.
+    pub checkpoints: Vec<String>,
+    /// The checkpoint this run continued from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restarted_from: Option<String>,
+    /// Error that stopped the run early, if any.
+    pub error: Option<String>,
+}
+
+/// Iterations per step of an implicit mode: Newton iterations (implicit MPM)
+/// or outer pressure iterations (semi-implicit ICE), and the linear
+/// iterations behind them; plus the time split where measured.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct IterationStats {
+    /// Mean nonlinear (Newton / outer) iterations per step.
+    pub nonlinear_mean: f64,
+    /// Largest nonlinear iterations in a step.
+    pub nonlinear_max: usize,
+    /// Mean Krylov iterations per step (0 with a direct solver).
+    pub linear_mean: f64,
+    /// Largest Krylov iterations in a step.
+    pub linear_max: usize,
+    /// Steps retried with a smaller timestep.
+    pub retries: u64,
+    /// Seconds assembling (implicit MPM).
+    pub assembly_s: f64,
+    /// Seconds factorising (implicit MPM).
+    pub factor_s: f64,
+    /// Seconds in linear solves (implicit MPM).
+    pub solve_s: f64,
+    /// Seconds in particle updates (implicit MPM).
+    pub particles_s: f64,
+}
+
+impl IterationStats {
+    /// Accumulates one step.
+    pub fn add(&mut self, nonlinear: usize, linear: usize) {
+        self.nonlinear_mean += nonlinear as f64;
+        self.linear_mean += linear as f64;
+        self.nonlinear_max = self.nonlinear_max.max(nonlinear);
+        self.linear_max = self.linear_max.max(linear);
+    }
+
+    /// Turns the sums into means over `steps`.
+    pub fn finish(mut self, steps: u64) -> Self {
+        let n = steps.max(1) as f64;
+        self.nonlinear_mean /= n;
+        self.linear_mean /= n;
+        self
+    }
+}
+
+/// Writes `summary.json` atomically.
+pub(crate) fn write_summary(dir: &Path, summary: &Summary) -> Result<()> {
+    let path = dir.join("summary.json");
+    atomic_write(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, summary).map_err(std::io::Error::other)?;
+        std::io::Write::write_all(w, b"\n")
+    })
+    .map_err(|e| Error::io(&path, e))
+}
