@@ -2,6 +2,7 @@
 //! (`eos`). Imports no physics module.
 
 pub mod eos;
+pub mod equation_of_state;
 pub mod solid;
 pub mod solid_eos;
 

@@ -34,7 +34,7 @@
 //! so the isentropic and isothermal compressibilities agree); `c_v` only
 //! enters a heat exchange.
 
-use super::eos::{EosError, EquationOfState};
+use super::equation_of_state::{EosError, EquationOfState};
 
 /// Bulk equation of state of a solid in the multifield equations, with the
 /// threshold modification of Guilkey Fig. 1.
