@@ -83,11 +83,11 @@ pub enum Error {
         /// Simulation time.
         time: f64,
     },
-    /// A run stopped by `source`; the last good state was saved.
-    #[error("{source}; last good state (step {step}, t = {time:.6e}) saved in {}", checkpoint.display())]
+    /// A run stopped by `cause`; the last good state was saved.
+    #[error("{cause}; {} saved in {}", saved_what(cause, *step, *time), checkpoint.display())]
     Stopped {
         /// Why it stopped.
-        source: Box<Error>,
+        cause: Box<Error>,
         /// The checkpoint folder of the last good state.
         checkpoint: PathBuf,
         /// Its step.
@@ -106,6 +106,14 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
+}
+
+/// What a stop saved: the state at the interrupt, or the last good one.
+fn saved_what(cause: &Error, step: u64, time: f64) -> String {
+    match cause {
+        Error::Interrupted { .. } => "checkpoint".into(),
+        _ => format!("last good state (step {step}, t = {time:.6e})"),
+    }
 }
 
 impl Error {

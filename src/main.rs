@@ -66,7 +66,6 @@ fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
         if f.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\ninterrupt: stopping at the end of this step (Ctrl-C again to abort)");
     })?;
     Ok(flag)
 }

@@ -392,7 +392,7 @@ fn the_watchdog_stops_a_nan_and_keeps_the_last_checked_state() {
         let msg = err.to_string();
         println!("{msg}");
         let Error::Stopped {
-            source,
+            cause,
             step,
             checkpoint,
             ..
@@ -401,7 +401,7 @@ fn the_watchdog_stops_a_nan_and_keeps_the_last_checked_state() {
             panic!("{msg}");
         };
         assert!(
-            matches!(**source, Error::Watchdog { step, .. } if step == expect_found),
+            matches!(**cause, Error::Watchdog { step, .. } if step == expect_found),
             "{msg}"
         );
         assert!(

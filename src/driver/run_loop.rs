@@ -495,7 +495,7 @@ pub fn run_model<M: Model>(
                 let path = write_checkpoint(ck, &out, dir)?;
                 written.push(path.clone());
                 Error::Stopped {
-                    source: Box::new(e),
+                    cause: Box::new(e),
                     checkpoint: path,
                     step,
                     time,

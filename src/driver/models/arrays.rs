@@ -50,10 +50,7 @@ pub fn take_matrices(
     n: usize,
 ) -> Result<Vec<Matrix3<f64>>, CheckpointError> {
     let data = ck.take_f64(name, Some(&[n, 3, 3]))?;
-    Ok(data
-        .chunks_exact(9)
-        .map(Matrix3::from_row_slice)
-        .collect())
+    Ok(data.chunks_exact(9).map(Matrix3::from_row_slice).collect())
 }
 
 /// Stores a scalar array as `[n]`.
