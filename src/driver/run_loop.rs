@@ -357,36 +357,100 @@ pub fn run_model<M: Model>(
     opts: &RunOptions,
     threads: usize,
 ) -> Result<Summary> {
-    let dir = &opts.out_dir;
-    let cad = Cadence::of(scene);
-    let hash = scene_hash(scene);
-    let mut out = Outputs::new(
-        dir,
-        &scene.output.formats,
-        scene.grid.dim,
-        &model.history_columns(),
-    )?;
-    let mut ls = match &opts.restart {
-        Some(ck_dir) => restore(model, ck_dir, &hash, &mut out)?,
-        None => {
-            let ls = LoopState::fresh(&cad, model.conserved());
-            out.snapshot(model.time(), &model.field_sets())?;
-            out.history_row(model.time(), |r| model.history_row(r));
-            out.flush_history()?;
-            ls
-        }
-    };
-    let mut last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out));
-    let mut written: Vec<PathBuf> = Vec::new();
+    let mut run = Run::begin(model, scene, opts)?;
     let bar = progress_bar(opts.progress);
     let start = Instant::now();
     let steps0 = model.steps();
     let mut step_s = 0.0;
     let mut failure: Option<Error> = None;
-    while !cad.finished(model.time(), model.steps()) {
+    while failure.is_none() && !run.cad.finished(model.time(), model.steps()) {
         let s = Instant::now();
-        let left = cad.end - model.time();
-        let req = match cad.fixed_dt {
+        if let Err(e) = run.step(model) {
+            failure = Some(model.annotate(e));
+            break;
+        }
+        step_s += s.elapsed().as_secs_f64();
+        failure = run.after_step(model, opts)?;
+        if model.steps() % 16 == 0 {
+            let t = model.time();
+            bar.set_position((1000.0 * t / run.cad.end) as u64);
+            bar.set_message(format!("{t:.4e}"));
+        }
+    }
+    bar.finish_and_clear();
+    let stopped = run.finish(model, failure)?;
+    let summary = summarise(
+        model,
+        scene,
+        &run.ls,
+        threads,
+        start.elapsed().as_secs_f64(),
+        (step_s, model.steps() - steps0),
+        run.out.output_s,
+        &run.written,
+        opts.restart.as_deref(),
+        stopped.as_ref(),
+    );
+    write_summary(&run.dir, &summary)?;
+    match stopped {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+/// What the loop carries from step to step besides the model: the cadence,
+/// the loop state, the writers, the last good state and the checkpoints
+/// written.
+struct Run {
+    cad: Cadence,
+    hash: String,
+    dir: PathBuf,
+    out: Outputs,
+    ls: LoopState,
+    last_good: Option<Checkpoint>,
+    written: Vec<PathBuf>,
+}
+
+impl Run {
+    /// Opens the outputs and starts from the initial state (writing its
+    /// snapshot and history row) or from the restart checkpoint.
+    fn begin<M: Model>(model: &mut M, scene: &Scene, opts: &RunOptions) -> Result<Self> {
+        let dir = opts.out_dir.clone();
+        let cad = Cadence::of(scene);
+        let hash = scene_hash(scene);
+        let mut out = Outputs::new(
+            &dir,
+            &scene.output.formats,
+            scene.grid.dim,
+            &model.history_columns(),
+        )?;
+        let ls = match &opts.restart {
+            Some(ck_dir) => restore(model, ck_dir, &hash, &mut out)?,
+            None => {
+                let ls = LoopState::fresh(&cad, model.conserved());
+                out.snapshot(model.time(), &model.field_sets())?;
+                out.history_row(model.time(), |r| model.history_row(r));
+                out.flush_history()?;
+                ls
+            }
+        };
+        let last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out));
+        Ok(Self {
+            cad,
+            hash,
+            dir,
+            out,
+            ls,
+            last_good,
+            written: Vec::new(),
+        })
+    }
+
+    /// One step of the model (with retries) to the end time or by the fixed
+    /// Δt, its statistics added to the loop's.
+    fn step<M: Model>(&mut self, model: &mut M) -> Result<()> {
+        let left = self.cad.end - model.time();
+        let req = match self.cad.fixed_dt {
             Some(dt) => DtRequest {
                 value: dt.min(left),
                 exact: true,
@@ -396,29 +460,30 @@ pub fn run_model<M: Model>(
                 exact: false,
             },
         };
-        match step_with_retries(model, req) {
-            Ok((st, tries)) => {
-                ls.dt_min = ls.dt_min.min(st.dt);
-                ls.dt_max = ls.dt_max.max(st.dt);
-                ls.iters.add(st.nonlinear_iterations, st.linear_iterations);
-                ls.iters.retries += st.retries as u64 + tries as u64;
-                ls.retries += tries as u64;
-            }
-            Err(e) => {
-                failure = Some(model.annotate(e));
-                break;
-            }
-        }
-        step_s += s.elapsed().as_secs_f64();
+        let (st, tries) = step_with_retries(model, req)?;
+        let ls = &mut self.ls;
+        ls.dt_min = ls.dt_min.min(st.dt);
+        ls.dt_max = ls.dt_max.max(st.dt);
+        ls.iters.add(st.nonlinear_iterations, st.linear_iterations);
+        ls.iters.retries += st.retries as u64 + tries as u64;
+        ls.retries += tries as u64;
+        Ok(())
+    }
+
+    /// After a step: history row, snapshot, the watchdog scan (keeping the
+    /// state as the last good one when it passes), an interval checkpoint
+    /// and the interrupt flag. Returns the reason to stop, if any.
+    fn after_step<M: Model>(&mut self, model: &M, opts: &RunOptions) -> Result<Option<Error>> {
         let (t, steps) = (model.time(), model.steps());
+        let (cad, ls) = (&self.cad, &mut self.ls);
         let done = cad.finished(t, steps);
         if t >= ls.next_hist * NEAR {
-            out.history_row(t, |r| model.history_row(r));
+            self.out.history_row(t, |r| model.history_row(r));
             ls.next_hist += cad.history.unwrap_or(0.0);
         }
         if t >= ls.next_out * NEAR && !done {
-            out.snapshot(t, &model.field_sets())?;
-            out.flush_history()?;
+            self.out.snapshot(t, &model.field_sets())?;
+            self.out.flush_history()?;
             ls.next_out += cad.interval.unwrap_or(f64::INFINITY);
         }
         let checkpoint_due = t >= ls.next_ckpt * NEAR && !done;
@@ -428,99 +493,77 @@ pub fn run_model<M: Model>(
         let watch = cad.watchdog > 0 && (steps % cad.watchdog == 0 || checkpoint_due);
         if watch {
             if let Some(v) = model.watchdog() {
-                failure = Some(Error::Watchdog {
+                return Ok(Some(Error::Watchdog {
                     step: steps,
                     time: t,
                     what: v.to_string(),
-                });
-                break;
+                }));
             }
-            last_good = Some(capture(model, &hash, &ls, &out));
+            self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out));
         }
         if checkpoint_due {
-            let ck = capture(model, &hash, &ls, &out);
-            written.push(write_checkpoint(ck, &out, dir)?);
-            prune(&mut written, cad.keep)?;
+            let ck = capture(model, &self.hash, &self.ls, &self.out);
+            self.written
+                .push(write_checkpoint(ck, &self.out, &self.dir)?);
+            prune(&mut self.written, self.cad.keep)?;
         }
-        if opts
+        let interrupted = opts
             .interrupt
             .as_ref()
-            .is_some_and(|f| f.load(Ordering::SeqCst))
-        {
-            failure = Some(Error::Interrupted {
-                step: steps,
-                time: t,
-            });
-            break;
-        }
-        if steps % 16 == 0 {
-            bar.set_position((1000.0 * t / cad.end) as u64);
-            bar.set_message(format!("{t:.4e}"));
-        }
+            .is_some_and(|f| f.load(Ordering::SeqCst));
+        Ok(interrupted.then_some(Error::Interrupted {
+            step: steps,
+            time: t,
+        }))
     }
-    bar.finish_and_clear();
-    // The state to save after a stop: after an interrupt the current one
-    // (if it passes the watchdog), after a failure the last good one.
-    let saved = match failure.take() {
-        None => None,
-        Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
-            None => Some((e, Some(capture(model, &hash, &ls, &out)))),
-            Some(v) => Some((
-                Error::Watchdog {
-                    step: model.steps(),
-                    time: model.time(),
-                    what: v.to_string(),
-                },
-                last_good.take(),
-            )),
-        },
-        Some(e) => Some((e, last_good.take())),
-    };
-    let interrupted = matches!(saved, Some((Error::Interrupted { .. }, _)));
-    // The last state is written, also after a failure (it shows where the
-    // run broke down); not after an interrupt (the checkpoint holds it).
-    if !interrupted {
-        let t = model.time();
-        out.snapshot(t, &model.field_sets())?;
-        if out.last_history_time() != Some(t) {
-            out.history_row(t, |r| model.history_row(r));
-        }
-    }
-    out.flush_history()?;
-    let stopped = match saved {
-        None => None,
-        Some((e, ck)) => Some(match ck {
-            Some(ck) => {
-                let (step, time) = (ck.step(), ck.time());
-                let path = write_checkpoint(ck, &out, dir)?;
-                written.push(path.clone());
-                Error::Stopped {
-                    cause: Box::new(e),
-                    checkpoint: path,
-                    step,
-                    time,
-                }
+
+    /// Ends the run: the last snapshot and history row (not after an
+    /// interrupt, whose checkpoint holds the state), and after a stop the
+    /// checkpoint — of the current state after an interrupt (if it passes
+    /// the watchdog), of the last good one after a failure. Returns the
+    /// stop as [`Error::Stopped`] when a checkpoint was written.
+    fn finish<M: Model>(&mut self, model: &M, failure: Option<Error>) -> Result<Option<Error>> {
+        let saved = match failure {
+            None => None,
+            Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
+                None => Some((e, Some(capture(model, &self.hash, &self.ls, &self.out)))),
+                Some(v) => Some((
+                    Error::Watchdog {
+                        step: model.steps(),
+                        time: model.time(),
+                        what: v.to_string(),
+                    },
+                    self.last_good.take(),
+                )),
+            },
+            Some(e) => Some((e, self.last_good.take())),
+        };
+        let interrupted = matches!(saved, Some((Error::Interrupted { .. }, _)));
+        // The last state is written, also after a failure (it shows where
+        // the run broke down).
+        if !interrupted {
+            let t = model.time();
+            self.out.snapshot(t, &model.field_sets())?;
+            if self.out.last_history_time() != Some(t) {
+                self.out.history_row(t, |r| model.history_row(r));
             }
-            None => e,
-        }),
-    };
-    let wall_s = start.elapsed().as_secs_f64();
-    let summary = summarise(
-        model,
-        scene,
-        &ls,
-        threads,
-        wall_s,
-        (step_s, model.steps() - steps0),
-        out.output_s,
-        &written,
-        opts.restart.as_deref(),
-        stopped.as_ref(),
-    );
-    write_summary(dir, &summary)?;
-    match stopped {
-        Some(e) => Err(e),
-        None => Ok(summary),
+        }
+        self.out.flush_history()?;
+        let Some((e, ck)) = saved else {
+            return Ok(None);
+        };
+        let Some(ck) = ck else {
+            return Ok(Some(e));
+        };
+        let (step, time) = (ck.step(), ck.time());
+        let path = write_checkpoint(ck, &self.out, &self.dir)?;
+        self.written.push(path.clone());
+        Ok(Some(Error::Stopped {
+            cause: Box::new(e),
+            checkpoint: path,
+            step,
+            time,
+        }))
     }
 }
 
