@@ -205,9 +205,22 @@ impl LoopState {
 }
 
 /// A model's state and the loop's, held in memory (the last good state) or
-/// on its way to a checkpoint folder.
-fn capture<M: Model>(model: &M, hash: &str, ls: &LoopState, out: &Outputs) -> Checkpoint {
-    let mut ck = Checkpoint::new(&model.kind(), hash, model.steps(), model.time());
+/// on its way to a checkpoint folder; `reuse` (an earlier capture) lends
+/// its buffers, so that the watchdog's regular capture does not allocate.
+fn capture<M: Model>(
+    model: &M,
+    hash: &str,
+    ls: &LoopState,
+    out: &Outputs,
+    reuse: Option<Checkpoint>,
+) -> Checkpoint {
+    let mut ck = match reuse {
+        Some(mut ck) => {
+            ck.recycle(&model.kind(), hash, model.steps(), model.time());
+            ck
+        }
+        None => Checkpoint::new(&model.kind(), hash, model.steps(), model.time()),
+    };
     model.save(&mut ck);
     ls.save(&mut ck);
     ck.set_meta(
@@ -434,7 +447,7 @@ impl Run {
                 ls
             }
         };
-        let last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out));
+        let last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out, None));
         Ok(Self {
             cad,
             hash,
@@ -499,10 +512,11 @@ impl Run {
                     what: v.to_string(),
                 }));
             }
-            self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out));
+            let reuse = self.last_good.take();
+            self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out, reuse));
         }
         if checkpoint_due {
-            let ck = capture(model, &self.hash, &self.ls, &self.out);
+            let ck = capture(model, &self.hash, &self.ls, &self.out, None);
             self.written
                 .push(write_checkpoint(ck, &self.out, &self.dir)?);
             prune(&mut self.written, self.cad.keep)?;
@@ -526,7 +540,10 @@ impl Run {
         let saved = match failure {
             None => None,
             Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
-                None => Some((e, Some(capture(model, &self.hash, &self.ls, &self.out)))),
+                None => Some((
+                    e,
+                    Some(capture(model, &self.hash, &self.ls, &self.out, None)),
+                )),
                 Some(v) => Some((
                     Error::Watchdog {
                         step: model.steps(),

@@ -469,6 +469,71 @@ impl Checkpoint {
         }
     }
 
+    /// Starts this checkpoint over as one of `model` at `step` and `time`,
+    /// keeping its arrays' buffers for the `put_*_with` calls that follow
+    /// (the run loop captures its last good state again and again without
+    /// allocating). Meta values are cleared; a caller must put every array
+    /// again, as a model's `save` does.
+    pub fn recycle(&mut self, model: &str, scene_hash: &str, step: u64, time: f64) {
+        if self.model != model {
+            self.model = model.to_string();
+            self.arrays.clear();
+        }
+        if self.scene_hash != scene_hash {
+            self.scene_hash = scene_hash.to_string();
+        }
+        self.step = step;
+        self.time = time;
+        self.meta.clear();
+        self.source = None;
+    }
+
+    /// Adds (or replaces) an `f64` array of `shape`, filled by `fill` into
+    /// an empty buffer — the one the array of that name already had, if
+    /// any, so that refilling a recycled checkpoint does not allocate.
+    pub fn put_f64_with(
+        &mut self,
+        name: &str,
+        shape: Vec<usize>,
+        fill: impl FnOnce(&mut Vec<f64>),
+    ) {
+        match self.arrays.get_mut(name) {
+            Some((s, ArrayData::F64(buf))) => {
+                buf.clear();
+                fill(buf);
+                debug_assert_eq!(element_count(&shape), Some(buf.len()), "`{name}`");
+                *s = shape;
+            }
+            _ => {
+                let mut buf = Vec::new();
+                fill(&mut buf);
+                self.put_f64(name, shape, buf);
+            }
+        }
+    }
+
+    /// The `u64` counterpart of [`Checkpoint::put_f64_with`].
+    pub fn put_u64_with(
+        &mut self,
+        name: &str,
+        shape: Vec<usize>,
+        fill: impl FnOnce(&mut Vec<u64>),
+    ) {
+        match self.arrays.get_mut(name) {
+            Some((s, ArrayData::U64(buf))) => {
+                buf.clear();
+                fill(buf);
+                debug_assert_eq!(element_count(&shape), Some(buf.len()), "`{name}`");
+                *s = shape;
+            }
+            _ => {
+                let mut buf = Vec::new();
+                fill(&mut buf);
+                self.put_u64(name, shape, buf);
+            }
+        }
+    }
+
     /// Adds an `f64` array of `shape` (C order).
     ///
     /// `shape`'s product must equal `data.len()` and the name must match

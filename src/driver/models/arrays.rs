@@ -16,8 +16,9 @@ use crate::output::checkpoint::{Checkpoint, CheckpointError};
 
 /// Stores `D`-vectors as an `[n, D]` array.
 pub fn put_vectors<const D: usize>(ck: &mut Checkpoint, name: &str, v: &[SVector<f64, D>]) {
-    let data = v.iter().flat_map(|x| x.iter().copied()).collect();
-    ck.put_f64(name, vec![v.len(), D], data);
+    ck.put_f64_with(name, vec![v.len(), D], |buf| {
+        buf.extend(v.iter().flat_map(|x| x.iter().copied()));
+    });
 }
 
 /// Reads an `[n, D]` array back into `D`-vectors.
@@ -36,11 +37,12 @@ pub fn take_vectors<const D: usize>(
 /// Stores 3×3 matrices as an `[n, 3, 3]` array (row-major, as NumPy reads
 /// it).
 pub fn put_matrices(ck: &mut Checkpoint, name: &str, m: &[Matrix3<f64>]) {
-    let data = m
-        .iter()
-        .flat_map(|a| (0..9).map(move |k| a[(k / 3, k % 3)]))
-        .collect();
-    ck.put_f64(name, vec![m.len(), 3, 3], data);
+    ck.put_f64_with(name, vec![m.len(), 3, 3], |buf| {
+        buf.extend(
+            m.iter()
+                .flat_map(|a| (0..9).map(move |k| a[(k / 3, k % 3)])),
+        );
+    });
 }
 
 /// Reads an `[n, 3, 3]` array back into matrices.
@@ -55,7 +57,7 @@ pub fn take_matrices(
 
 /// Stores a scalar array as `[n]`.
 pub fn put_scalars(ck: &mut Checkpoint, name: &str, v: &[f64]) {
-    ck.put_f64(name, vec![v.len()], v.to_vec());
+    ck.put_f64_with(name, vec![v.len()], |buf| buf.extend_from_slice(v));
 }
 
 /// Reads an `[n]` array.
@@ -89,8 +91,9 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     put_matrices(ck, &n("f"), &p.f);
     put_matrices(ck, &n("stress"), &p.stress);
     put_scalars(ck, &n("work"), &p.work);
-    let mat = p.material.iter().map(|&m| m as u64).collect();
-    ck.put_u64(&n("material"), vec![p.len()], mat);
+    ck.put_u64_with(&n("material"), vec![p.len()], |buf| {
+        buf.extend(p.material.iter().map(|&m| m as u64));
+    });
     put_scalars(ck, &n("temperature"), &p.temperature);
 }
 
