@@ -1,5 +1,6 @@
 //! The `mpmice` command-line program.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -49,6 +50,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        // A closed stdout (`mpmice run … | head -1`) is no failure of the run.
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -74,7 +82,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene } => {
             let s = mpmice::scene::load(&scene)?;
-            println!(
+            writeln!(
+                std::io::stdout(),
                 "{}: ok ({}D, {} cells, {} materials, {} objects, mode {})",
                 scene.display(),
                 s.grid.dim,
@@ -82,7 +91,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 s.materials.len(),
                 s.objects.len(),
                 s.time.mode.name()
-            );
+            )?;
             Ok(())
         }
         Command::Run {
@@ -115,14 +124,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     sum.n_cells, sum.n_fluid_materials, sum.cell_steps_per_s
                 )
             };
-            println!(
+            writeln!(
+                std::io::stdout(),
                 "{}: {} steps to t = {:.6e} in {:.2} s ({rate} on {} threads)",
                 scene.display(),
                 sum.steps,
                 sum.final_time,
                 sum.wall_s,
                 sum.threads
-            );
+            )?;
             // A drift a mode does not report (NaN, JSON null) prints "n/a".
             let show = |x: f64| {
                 if x.is_nan() {
@@ -131,13 +141,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     format!("{x:.2e}")
                 }
             };
-            println!(
+            writeln!(
+                std::io::stdout(),
                 "drift: mass {}, momentum {}, energy {}; outputs in {}",
                 show(sum.mass_drift),
                 show(sum.momentum_drift),
                 show(sum.energy_drift),
                 out_dir.display()
-            );
+            )?;
             Ok(())
         }
     }
