@@ -2,7 +2,7 @@
 //! ([`super::IceParams::implicit`]): the outer iteration on Guilkey Eq. 29
 //! ([`SemiImplicit`]) and the linear solver of its pressure matrix
 //! ([`LinearSolver`], [`pressure_mg_options`]). The iteration itself is in
-//! [`super::implicit`], the matrix in [`super::pressure_system`].
+//! [`super::implicit`], the matrix in `pressure_system`.
 
 use std::str::FromStr;
 

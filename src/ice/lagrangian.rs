@@ -48,14 +48,60 @@ pub fn stage_lagrangian<const D: usize>(
 ) -> Result<(), IceError> {
     let nm = state.num_materials();
     let layout = &state.layout;
-    let mu = params
-        .viscosity
-        .as_deref()
-        .filter(|m| m.iter().any(|&x| x > 0.0));
     let exchange = params.exchange.as_ref().filter(|_| nm > 1);
     let k_on = exchange.filter(|e| e.momentum.iter().any(|&k| k > 0.0));
     let h_on = exchange.filter(|e| !e.heat_off());
     let conservative = params.energy == EnergyForm::Conservative;
+    let (inp, out) = split_workspace(state, params, ws, dt, particle_velocity);
+    let any_lagr = inp.lagr[..nm].iter().any(|&l| l);
+    // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
+    // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
+    // Appendix Eq. 53), per cell and all materials at once.
+    try_rows(layout, |row| {
+        let mut cell = LagrangianCell::<D>::new();
+        for c in row {
+            // Cells a solid occupies, and their face neighbours, use
+            // Guilkey Eq. 34 as written. In the total-energy form the
+            // face work `p* θ_s u*_s` of the solid's volume flux goes
+            // into the fluid's energy, but the solid does not pay for
+            // it (its force is `−θ_s ∇p` on the nodes): in the solid's
+            // own cells the fluid floor cannot absorb it, and in a
+            // fluid cell beside the solid it is a steady source (the
+            // held pressurised cylinder heated the air beside its
+            // outer surface from 300 to 326 K by 8 ms and blew up at
+            // 15 ms). Eq. 34 gives each material the work of its own
+            // compression, `p κ_r θ_r Δp`.
+            let cons = conservative && !(any_lagr && solid_near(&inp, c));
+            let dke_src = cell_sources(&inp, c, cons, &mut cell);
+            let stk_e = eulerian_theta_kappa(&inp, c, &cell);
+            if cons {
+                conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
+            }
+            if let Some(ex) = k_on {
+                momentum_exchange(&inp, &ex.momentum, cons, c, stk_e, &mut cell);
+            }
+            let sum_tb = heat_exchange(&inp, h_on.map(|ex| &ex.heat[..]), &mut cell);
+            store_cell(&inp, &out, c, h_on.map(|_| sum_tb), &cell)?;
+        }
+        Ok(())
+    })
+}
+
+/// The inputs of the Lagrangian phase (the state, the parameters, the
+/// pressure stage's results in the workspace and per-material constants)
+/// and its outputs (the workspace's Lagrangian values).
+fn split_workspace<'a, const D: usize>(
+    state: &'a IceState<D>,
+    params: &'a IceParams<D>,
+    ws: &'a mut IceWorkspace<D>,
+    dt: f64,
+    particle_velocity: &'a [Vec<SVector<f64, D>>],
+) -> (LagrangianInputs<'a, D>, LagrangianOut<'a, D>) {
+    let nm = state.num_materials();
+    let mu = params
+        .viscosity
+        .as_deref()
+        .filter(|m| m.iter().any(|&x| x > 0.0));
     let mut cv = [0.0; MAX_MATERIALS];
     let mut lagr = [false; MAX_MATERIALS];
     let mut fixed = [false; MAX_MATERIALS];
@@ -95,64 +141,12 @@ pub fn stage_lagrangian<const D: usize>(
         any_fixed: fixed[..nm].iter().any(|&f| f),
         nm,
         dt,
-        vol: layout.cell_volume(),
+        vol: state.layout.cell_volume(),
         t0: state.time,
         t1: state.time + dt,
     };
-    let mut out = LagrangianOut {
-        vel: [Out::empty(); MAX_MATERIALS],
-        temp: [Out::empty(); MAX_MATERIALS],
-        e: [Out::empty(); MAX_MATERIALS],
-        ke: [Out::empty(); MAX_MATERIALS],
-        v: [Out::empty(); MAX_MATERIALS],
-    };
-    for (o, a) in out.vel.iter_mut().zip(vel_l.iter_mut()) {
-        *o = Out::new(a);
-    }
-    for (o, a) in out.temp.iter_mut().zip(temp_l.iter_mut()) {
-        *o = Out::new(a);
-    }
-    for (o, a) in out.e.iter_mut().zip(e_l.iter_mut()) {
-        *o = Out::new(a);
-    }
-    for (o, a) in out.ke.iter_mut().zip(ke.iter_mut()) {
-        *o = Out::new(a);
-    }
-    for (o, a) in out.v.iter_mut().zip(v_l.iter_mut()) {
-        *o = Out::new(a);
-    }
-    let any_lagr = lagr[..nm].iter().any(|&l| l);
-    // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
-    // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
-    // Appendix Eq. 53), per cell and all materials at once.
-    try_rows(layout, |row| {
-        let mut cell = LagrangianCell::<D>::new();
-        for c in row {
-            // Cells a solid occupies, and their face neighbours, use
-            // Guilkey Eq. 34 as written. In the total-energy form the
-            // face work `p* θ_s u*_s` of the solid's volume flux goes
-            // into the fluid's energy, but the solid does not pay for
-            // it (its force is `−θ_s ∇p` on the nodes): in the solid's
-            // own cells the fluid floor cannot absorb it, and in a
-            // fluid cell beside the solid it is a steady source (the
-            // held pressurised cylinder heated the air beside its
-            // outer surface from 300 to 326 K by 8 ms and blew up at
-            // 15 ms). Eq. 34 gives each material the work of its own
-            // compression, `p κ_r θ_r Δp`.
-            let cons = conservative && !(any_lagr && solid_near(&inp, c));
-            let dke_src = cell_sources(&inp, c, cons, &mut cell);
-            let stk_e = eulerian_theta_kappa(&inp, c, &cell);
-            if cons {
-                conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
-            }
-            if let Some(ex) = k_on {
-                momentum_exchange(&inp, &ex.momentum, cons, c, stk_e, &mut cell);
-            }
-            let sum_tb = heat_exchange(&inp, h_on.map(|ex| &ex.heat[..]), &mut cell);
-            store_cell(&inp, &out, c, h_on.map(|_| sum_tb), &cell)?;
-        }
-        Ok(())
-    })
+    let out = LagrangianOut::new(vel_l, temp_l, e_l, ke, v_l);
+    (inp, out)
 }
 
 /// Where the Lagrangian phase writes, per material: velocity, temperature,
@@ -163,6 +157,41 @@ struct LagrangianOut<'a, const D: usize> {
     e: [Out<'a, f64>; MAX_MATERIALS],
     ke: [Out<'a, f64>; MAX_MATERIALS],
     v: [Out<'a, f64>; MAX_MATERIALS],
+}
+
+impl<'a, const D: usize> LagrangianOut<'a, D> {
+    /// Writes into the workspace's per-material buffers.
+    fn new(
+        vel: &'a mut [Vec<SVector<f64, D>>],
+        temp: &'a mut [Vec<f64>],
+        e: &'a mut [Vec<f64>],
+        ke: &'a mut [Vec<f64>],
+        v: &'a mut [Vec<f64>],
+    ) -> Self {
+        let mut out = Self {
+            vel: [Out::empty(); MAX_MATERIALS],
+            temp: [Out::empty(); MAX_MATERIALS],
+            e: [Out::empty(); MAX_MATERIALS],
+            ke: [Out::empty(); MAX_MATERIALS],
+            v: [Out::empty(); MAX_MATERIALS],
+        };
+        for (o, a) in out.vel.iter_mut().zip(vel.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.temp.iter_mut().zip(temp.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.e.iter_mut().zip(e.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.ke.iter_mut().zip(ke.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.v.iter_mut().zip(v.iter_mut()) {
+            *o = Out::new(a);
+        }
+        out
+    }
 }
 
 /// `true` when a particle-borne material fills more than

@@ -12,7 +12,7 @@
 //! 1. ghost cells from the boundary conditions ([`boundary`]);
 //! 2. equilibration pressure per cell, Newton on Guilkey Eq. 13
 //!    ([`pressure::equilibrate`], per cell [`equilibration`]);
-//! 3. the time step ([`timestep`]), face velocities (Guilkey Eq. 28) and
+//! 3. the time step ([`mod@timestep`]), face velocities (Guilkey Eq. 28) and
 //!    the face momentum exchange ([`pressure`], with the kernels of
 //!    [`faces`] and [`exchange`]);
 //! 4. `Δp` (Guilkey Eq. 29, from the volume fluxes of [`volume_flux`]),

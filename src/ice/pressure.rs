@@ -281,7 +281,7 @@ fn fill_equilibrium_ghosts<const D: usize>(state: &mut IceState<D>, bcs: &Bounda
 /// equilibrated `p_eq`, `sp_vol` and `vol_frac`.
 ///
 /// # Errors
-/// As [`super::step`].
+/// As [`super::step()`].
 pub fn stage_pressure<const D: usize>(
     state: &mut IceState<D>,
     params: &IceParams<D>,

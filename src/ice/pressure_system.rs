@@ -404,7 +404,7 @@ pub(crate) struct ImplicitWorkspace<const D: usize> {
     pub(super) dp: Vec<f64>,
 }
 
-/// Holder of the lazily created [`ImplicitWorkspace`] inside
+/// Holder of the lazily created `ImplicitWorkspace` inside
 /// [`super::IceWorkspace`]; a clone starts empty (the solver is set up again).
 pub struct ImplicitSlot<const D: usize>(pub(super) Option<Box<ImplicitWorkspace<D>>>);
 

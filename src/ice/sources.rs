@@ -4,7 +4,7 @@
 //! total-energy-conservative form of [`super::EnergyForm::Conservative`]),
 //! the viscous heating, and the internal-energy sources
 //! ([`super::HeatSource`]). The values they produce per material of a cell
-//! ([`LagrangianCell`]) go on to the exchange and the specific-volume
+//! (`LagrangianCell`) go on to the exchange and the specific-volume
 //! evolution ([`super::lagrangian`]).
 
 use nalgebra::SVector;

@@ -21,7 +21,7 @@ pub fn timestep<const D: usize>(state: &IceState<D>, cfl: f64) -> f64 {
 /// [`timestep`] with the sound speed scaled by `sound_factor`
 /// (`cfl / max_c Σ_d max_r (|u_r,d| + sound_factor c̃_r)/h_d`): `0` is the
 /// advective limit of the semi-implicit pressure. Materials with
-/// `rigid[r]` (a prescribed velocity, [`Frame::Rigid`]) add their velocity
+/// `rigid[r]` (a prescribed velocity, [`super::Frame::Rigid`]) add their velocity
 /// but not their sound speed: their face velocities do not respond to the
 /// pressure (Eq. 28 is replaced by the prescribed value and the exchange
 /// locks the fluid to it where they are present), so no acoustic wave
