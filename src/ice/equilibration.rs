@@ -14,6 +14,7 @@
 
 use crate::material::eos::{EquationOfState, FluidEos};
 
+use super::state::IceState;
 use super::MAX_MATERIALS;
 
 /// Settings of the equilibration iteration.
@@ -162,6 +163,15 @@ pub fn equilibrate_cell(
         p = p_new;
     }
     Err(fail(last_res, settings.max_iterations, p))
+}
+
+/// Largest of the materials' lowest admissible pressures ([`min_pressure`]).
+pub(super) fn min_pressure_all<const D: usize>(state: &IceState<D>) -> f64 {
+    state
+        .materials
+        .iter()
+        .map(|m| min_pressure(&m.eos))
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 #[cfg(test)]

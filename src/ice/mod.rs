@@ -7,28 +7,32 @@
 //! the equilibration pressure `p_eq` (Guilkey Eq. 13) and the time-advanced
 //! pressure `p = p_eq + Δp` (Guilkey Eqs. 29–30).
 //!
-//! One explicit step ([`step::step`]) is, in order:
+//! One explicit step ([`step::step`], [`mod@step`]) is, in order:
 //!
 //! 1. ghost cells from the boundary conditions ([`boundary`]);
 //! 2. equilibration pressure per cell, Newton on Guilkey Eq. 13
-//!    ([`equilibration`]);
-//! 3. face velocities (Guilkey Eq. 28) and the face momentum exchange
-//!    ([`faces`], [`exchange`]);
-//! 4. `Δp` (Guilkey Eq. 29), `p = p_eq + Δp` (Eq. 30), face pressure
-//!    (Eq. 31) ([`faces`]);
-//! 5. momentum and energy sources (Eqs. 33–34) and Lagrangian values
-//!    (Eqs. 35–37) ([`mod@step`]);
+//!    ([`pressure::equilibrate`], per cell [`equilibration`]);
+//! 3. the time step ([`mod@timestep`]), face velocities (Guilkey Eq. 28) and
+//!    the face momentum exchange ([`pressure`], with the kernels of
+//!    [`faces`] and [`exchange`]);
+//! 4. `Δp` (Guilkey Eq. 29, from the volume fluxes of [`volume_flux`]),
+//!    `p = p_eq + Δp` (Eq. 30), face pressure (Eq. 31) ([`pressure`]);
+//! 5. momentum and energy sources (Eqs. 33–34, [`sources`]) and Lagrangian
+//!    values (Eqs. 35–37) ([`lagrangian`]);
 //! 6. pointwise-implicit momentum and heat exchange (Eqs. 38–39)
-//!    ([`exchange`]);
-//! 7. specific-volume evolution (Eqs. 40–41, Appendix Eq. 53) ([`mod@step`]);
+//!    ([`lagrangian`], with the kernels of [`exchange`]);
+//! 7. specific-volume evolution (Eqs. 40–41, Appendix Eq. 53)
+//!    ([`specific_volume`]);
 //! 8. advection of mass, momentum, energy and material volume with
 //!    compatible fluxes, first-order donor cell or second-order limited
-//!    ([`advection`]).
+//!    ([`advect`], with the kernels of [`advection`]).
 //!
+//! The knobs are in [`params`], the scratch memory in [`workspace`].
 //! With [`IceParams::implicit`] set, step 4 is the semi-implicit pressure
-//! ([`implicit`]): Guilkey Eq. 29 solved implicitly for the pressure
-//! increment by an outer iteration on a 5-/7-point SPD matrix, so that the
-//! time step is limited by advection only.
+//! ([`implicit`], settings in [`implicit_params`]): Guilkey Eq. 29 solved
+//! implicitly for the pressure increment by an outer iteration on a
+//! 5-/7-point SPD matrix, so that the time step is limited by advection
+//! only.
 //!
 //! Cells are indexed with the module's own ghost layers ([`CellLayout`]);
 //! [`crate::grid::Grid`] is used for geometry only.
@@ -36,6 +40,7 @@
 // Per-direction and per-material index loops (`for d in 0..D`) mirror the
 // equations and index several arrays at once.
 #![allow(clippy::needless_range_loop)]
+pub mod advect;
 pub mod advection;
 pub mod boundary;
 mod carried;
@@ -43,25 +48,37 @@ pub mod equilibration;
 pub mod exchange;
 pub mod faces;
 pub mod implicit;
+pub mod implicit_params;
+pub mod lagrangian;
 mod par;
+pub mod params;
+pub mod pressure;
+mod pressure_system;
 pub mod setups;
+pub mod sources;
+pub mod specific_volume;
 pub mod state;
 pub mod step;
+pub mod timestep;
+pub mod volume_flux;
+pub mod workspace;
 
 use crate::material::eos::{EosError, FluidEos};
 
+pub use advect::stage_advect;
 pub use advection::{Advection, Limiter};
 pub use boundary::{IceBoundary, InflowState};
 pub use equilibration::EquilibrationSettings;
 pub use exchange::ExchangeCoefficients;
-pub use implicit::{pressure_mg_options, LinearSolver, SemiImplicit};
+pub use implicit_params::{pressure_mg_options, LinearSolver, SemiImplicit};
+pub use lagrangian::stage_lagrangian;
+pub use params::{EnergyForm, Frame, HeatSource, IceParams, TimeIntegration};
+pub use pressure::{equilibrate, stage_pressure};
 pub use setups::{periodic_vortex, periodic_vortex_exact, shock_tube};
 pub use state::{CellLayout, IceState, MaterialCells, MaterialInit, NGHOST};
-pub use step::{
-    equilibrate, run_fluid, stage_advect, stage_lagrangian, stage_pressure, step, step_with_dt,
-    timestep, timestep_with, EnergyForm, FluidRun, Frame, HeatSource, IceParams, IceWorkspace,
-    StepInfo, TimeIntegration,
-};
+pub use step::{run_fluid, step, step_with_dt, FluidRun};
+pub use timestep::{timestep, timestep_with};
+pub use workspace::{IceWorkspace, StepInfo};
 
 /// Largest number of fluid materials in one scene (per-cell kernels use
 /// fixed-size stack arrays of this length, so they never allocate).
@@ -209,6 +226,16 @@ impl IceError {
             } => Some(*dt),
             _ => None,
         }
+    }
+}
+
+/// The [`Site`] of cell `c` (and `material`) at the state's step and time.
+pub(crate) fn site<const D: usize>(state: &IceState<D>, c: usize, material: Option<usize>) -> Site {
+    Site {
+        step: state.steps,
+        time: state.time,
+        cell: state.layout.coords(c).to_vec(),
+        material,
     }
 }
 

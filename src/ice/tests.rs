@@ -821,8 +821,8 @@ fn normalised_equilibration_is_bounded_without_solid() {
     })
     .unwrap();
     let (r, f) = (
-        step::FLUID_NORMALISING_RANGE,
-        step::SOLID_FILL_FOR_NORMALISING,
+        pressure::FLUID_NORMALISING_RANGE,
+        pressure::SOLID_FILL_FOR_NORMALISING,
     );
     // Per cell: (fluid M v, solid M v) as fractions of V, and the expected
     // V_t / V.

@@ -3,7 +3,7 @@
 use nalgebra::SVector;
 use solvers::SolverError;
 
-use super::implicit::PressureSystem;
+use super::pressure_system::PressureSystem;
 use super::tests::{closed2, shock_bubble, shock_tube_l1};
 use super::*;
 use crate::material::eos::{IdealGas, StiffenedGas};

@@ -1,0 +1,375 @@
+//! The Lagrangian phase of the ICE step (Guilkey Sec. 3.3 steps 8–11),
+//! per cell and all materials at once: momentum and energy sources
+//! (Eqs. 33–34, [`super::sources`]), Lagrangian values (Eqs. 35–37), the
+//! pointwise-implicit momentum and heat exchange (Eqs. 38–39,
+//! [`super::exchange`]) and the specific-volume evolution (Eqs. 40–41,
+//! [`super::specific_volume`]) ([`stage_lagrangian`]).
+
+use nalgebra::SVector;
+
+use super::exchange::{exchange_heat, exchange_momentum_fixed};
+use super::par::{try_rows, Out};
+use super::params::{EnergyForm, Frame, IceParams};
+use super::sources::{
+    cell_sources, conservative_energy, eulerian_theta_kappa, LagrangianCell, LagrangianInputs,
+};
+use super::specific_volume::{lagrangian_volume, CellShare, MaterialShare};
+use super::state::IceState;
+use super::workspace::IceWorkspace;
+use super::{site, IceError, MAX_MATERIALS};
+use crate::material::eos::EquationOfState;
+
+/// Volume fraction above which a particle-borne material makes a cell (and
+/// its face neighbours) use Guilkey Eq. 34's flow work instead of the
+/// total-energy form.
+const SOLID_FRACTION_FOR_FLOW_WORK: f64 = 1e-9;
+
+/// Steps 8–11 (Guilkey Sec. 3.3): momentum and energy sources (Eqs. 33–34),
+/// heat sources, Lagrangian values (Eqs. 35–37), the pointwise-implicit
+/// exchange (Eqs. 38–39) and the specific-volume evolution (Eqs. 40–41),
+/// after [`super::stage_pressure`]. The Lagrangian values are left in the
+/// workspace ([`IceWorkspace::lagrangian_velocity`]).
+///
+/// `particle_velocity[r]`, for a material carried by particles
+/// ([`Frame::Particles`] or [`Frame::Rigid`]), is its Lagrangian cell
+/// velocity computed on the nodes (Guilkey Sec. 3.3: "the time advanced
+/// solid material momentum is then aggregated at the cell centers for
+/// momentum exchange"); its momentum source is not recomputed here. Empty
+/// for fluid-only scenes.
+///
+/// # Errors
+/// [`IceError::NonPhysical`] naming the cell.
+pub fn stage_lagrangian<const D: usize>(
+    state: &IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    dt: f64,
+    particle_velocity: &[Vec<SVector<f64, D>>],
+) -> Result<(), IceError> {
+    let nm = state.num_materials();
+    let layout = &state.layout;
+    let exchange = params.exchange.as_ref().filter(|_| nm > 1);
+    let k_on = exchange.filter(|e| e.momentum.iter().any(|&k| k > 0.0));
+    let h_on = exchange.filter(|e| !e.heat_off());
+    let conservative = params.energy == EnergyForm::Conservative;
+    let (inp, out) = split_workspace(state, params, ws, dt, particle_velocity);
+    let any_lagr = inp.lagr[..nm].iter().any(|&l| l);
+    // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
+    // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
+    // Appendix Eq. 53), per cell and all materials at once.
+    try_rows(layout, |row| {
+        let mut cell = LagrangianCell::<D>::new();
+        for c in row {
+            // Cells a solid occupies, and their face neighbours, use
+            // Guilkey Eq. 34 as written. In the total-energy form the
+            // face work `p* θ_s u*_s` of the solid's volume flux goes
+            // into the fluid's energy, but the solid does not pay for
+            // it (its force is `−θ_s ∇p` on the nodes): in the solid's
+            // own cells the fluid floor cannot absorb it, and in a
+            // fluid cell beside the solid it is a steady source (the
+            // held pressurised cylinder heated the air beside its
+            // outer surface from 300 to 326 K by 8 ms and blew up at
+            // 15 ms). Eq. 34 gives each material the work of its own
+            // compression, `p κ_r θ_r Δp`.
+            let cons = conservative && !(any_lagr && solid_near(&inp, c));
+            let dke_src = cell_sources(&inp, c, cons, &mut cell);
+            let stk_e = eulerian_theta_kappa(&inp, c, &cell);
+            if cons {
+                conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
+            }
+            if let Some(ex) = k_on {
+                momentum_exchange(&inp, &ex.momentum, cons, c, stk_e, &mut cell);
+            }
+            let sum_tb = heat_exchange(&inp, h_on.map(|ex| &ex.heat[..]), &mut cell);
+            store_cell(&inp, &out, c, h_on.map(|_| sum_tb), &cell)?;
+        }
+        Ok(())
+    })
+}
+
+/// The inputs of the Lagrangian phase (the state, the parameters, the
+/// pressure stage's results in the workspace and per-material constants)
+/// and its outputs (the workspace's Lagrangian values).
+fn split_workspace<'a, const D: usize>(
+    state: &'a IceState<D>,
+    params: &'a IceParams<D>,
+    ws: &'a mut IceWorkspace<D>,
+    dt: f64,
+    particle_velocity: &'a [Vec<SVector<f64, D>>],
+) -> (LagrangianInputs<'a, D>, LagrangianOut<'a, D>) {
+    let nm = state.num_materials();
+    let mu = params
+        .viscosity
+        .as_deref()
+        .filter(|m| m.iter().any(|&x| x > 0.0));
+    let mut cv = [0.0; MAX_MATERIALS];
+    let mut lagr = [false; MAX_MATERIALS];
+    let mut fixed = [false; MAX_MATERIALS];
+    for r in 0..nm {
+        cv[r] = state.materials[r].eos.specific_heat_cv();
+        lagr[r] = params.frame(r) != Frame::Eulerian && !particle_velocity.is_empty();
+        fixed[r] = params.frame(r) == Frame::Rigid;
+    }
+    let IceWorkspace {
+        kappa,
+        div_sum,
+        sum_theta_kappa,
+        press,
+        pstar,
+        mix_vflux,
+        ke,
+        vel_l,
+        temp_l,
+        e_l,
+        v_l,
+        ..
+    } = ws;
+    let inp = LagrangianInputs {
+        st: state,
+        params,
+        kappa,
+        div_sum,
+        stk: sum_theta_kappa,
+        press,
+        pstar,
+        mix_vflux,
+        particle_velocity,
+        mu,
+        cv,
+        lagr,
+        fixed,
+        any_fixed: fixed[..nm].iter().any(|&f| f),
+        nm,
+        dt,
+        vol: state.layout.cell_volume(),
+        t0: state.time,
+        t1: state.time + dt,
+    };
+    let out = LagrangianOut::new(vel_l, temp_l, e_l, ke, v_l);
+    (inp, out)
+}
+
+/// Where the Lagrangian phase writes, per material: velocity, temperature,
+/// internal energy `c_v T`, kinetic energy `|u|²/2` and specific volume.
+struct LagrangianOut<'a, const D: usize> {
+    vel: [Out<'a, SVector<f64, D>>; MAX_MATERIALS],
+    temp: [Out<'a, f64>; MAX_MATERIALS],
+    e: [Out<'a, f64>; MAX_MATERIALS],
+    ke: [Out<'a, f64>; MAX_MATERIALS],
+    v: [Out<'a, f64>; MAX_MATERIALS],
+}
+
+impl<'a, const D: usize> LagrangianOut<'a, D> {
+    /// Writes into the workspace's per-material buffers.
+    fn new(
+        vel: &'a mut [Vec<SVector<f64, D>>],
+        temp: &'a mut [Vec<f64>],
+        e: &'a mut [Vec<f64>],
+        ke: &'a mut [Vec<f64>],
+        v: &'a mut [Vec<f64>],
+    ) -> Self {
+        let mut out = Self {
+            vel: [Out::empty(); MAX_MATERIALS],
+            temp: [Out::empty(); MAX_MATERIALS],
+            e: [Out::empty(); MAX_MATERIALS],
+            ke: [Out::empty(); MAX_MATERIALS],
+            v: [Out::empty(); MAX_MATERIALS],
+        };
+        for (o, a) in out.vel.iter_mut().zip(vel.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.temp.iter_mut().zip(temp.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.e.iter_mut().zip(e.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.ke.iter_mut().zip(ke.iter_mut()) {
+            *o = Out::new(a);
+        }
+        for (o, a) in out.v.iter_mut().zip(v.iter_mut()) {
+            *o = Out::new(a);
+        }
+        out
+    }
+}
+
+/// `true` when a particle-borne material fills more than
+/// [`SOLID_FRACTION_FOR_FLOW_WORK`] of cell `c` or of a face neighbour.
+fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
+    let layout = &inp.st.layout;
+    let solid_in = |k: usize| {
+        (0..inp.nm)
+            .any(|r| inp.lagr[r] && inp.st.cells[r].vol_frac[k] > SOLID_FRACTION_FOR_FLOW_WORK)
+    };
+    solid_in(c)
+        || (0..D).any(|d| solid_in(c - layout.strides[d]) || solid_in(c + layout.strides[d]))
+}
+
+/// The pointwise-implicit momentum exchange of cell `c` (Guilkey Eq. 38,
+/// rigid materials held at their velocity); with `cons`, the kinetic
+/// energy it dissipates (plus the work of a rigid material) becomes heat
+/// of the Eulerian materials, shared by `f_θ = θ κ/stk_e`.
+fn momentum_exchange<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    k: &[f64],
+    cons: bool,
+    c: usize,
+    stk_e: f64,
+    cell: &mut LagrangianCell<D>,
+) {
+    let nm = inp.nm;
+    let LagrangianCell {
+        theta,
+        v,
+        mass,
+        u,
+        t,
+        ..
+    } = cell;
+    let ke0: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
+    let u0 = *u;
+    exchange_momentum_fixed(
+        k,
+        inp.dt,
+        &theta[..nm],
+        &v[..nm],
+        &mass[..nm],
+        if inp.any_fixed { &inp.fixed[..nm] } else { &[] },
+        &mut u[..nm],
+    );
+    if cons {
+        // The kinetic energy dissipated by the exchange
+        // becomes heat.
+        let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
+        // A material held at a prescribed velocity U does
+        // work U · (the momentum the others gain) on the
+        // cell: the dissipation is ke0 − ke1 + that work
+        // (½ m (U − u0)² ≥ 0 for one fluid locked to it).
+        let mut work = 0.0;
+        if inp.any_fixed {
+            if let Some(s) = (0..nm).find(|&s| inp.fixed[s]) {
+                let gained: SVector<f64, D> = (0..nm)
+                    .filter(|&r| !inp.fixed[r])
+                    .map(|r| (u[r] - u0[r]) * mass[r])
+                    .sum();
+                work = u[s].dot(&gained);
+            }
+        }
+        for r in 0..nm {
+            if inp.lagr[r] {
+                continue;
+            }
+            let f_theta = theta[r] * inp.kappa[r][c] / stk_e;
+            t[r] += f_theta * (ke0 - ke1 + work) / (mass[r] * inp.cv[r]);
+        }
+    }
+}
+
+/// The pointwise-implicit heat exchange of the cell (Guilkey Eq. 39) with
+/// coefficients `h` (`None`: off). Keeps the temperatures before it and
+/// the thermal expansivities `β` there, and returns `Σ_s θ_s β_s Ṫ_s`
+/// (Eq. 40; 0 without heat exchange).
+fn heat_exchange<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    h: Option<&[f64]>,
+    cell: &mut LagrangianCell<D>,
+) -> f64 {
+    let nm = inp.nm;
+    let dt = inp.dt;
+    cell.t_before[..nm].copy_from_slice(&cell.t[..nm]);
+    let mut sum_tb = 0.0;
+    if let Some(h) = h {
+        exchange_heat(
+            h,
+            dt,
+            &cell.theta[..nm],
+            &cell.v[..nm],
+            &inp.cv[..nm],
+            &cell.mass[..nm],
+            &mut cell.t[..nm],
+        );
+        for r in 0..nm {
+            let eos = &inp.st.materials[r].eos;
+            cell.beta[r] = eos.thermal_expansivity(1.0 / cell.v[r], cell.t_before[r]);
+            sum_tb += cell.theta[r] * cell.beta[r] * (cell.t[r] - cell.t_before[r]) / dt;
+        }
+    }
+    sum_tb
+}
+
+/// Writes the Lagrangian values of cell `c` (Guilkey Eqs. 35–41): velocity,
+/// temperature, energies and, for the Eulerian materials, the evolved
+/// specific volume (`sum_tb`: the heat exchange's `Σ θ β Ṫ`, `None` without
+/// it). The cell values of a particle-borne material are rebuilt from the
+/// particles next step; its specific volume is kept.
+///
+/// # Errors
+/// [`IceError::NonPhysical`] for a non-positive temperature or specific
+/// volume of an Eulerian material.
+fn store_cell<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    out: &LagrangianOut<'_, D>,
+    c: usize,
+    sum_tb: Option<f64>,
+    cell: &LagrangianCell<D>,
+) -> Result<(), IceError> {
+    let st = inp.st;
+    let LagrangianCell { u, t, v, .. } = cell;
+    for r in 0..inp.nm {
+        let cv = inp.cv[r];
+        if inp.lagr[r] {
+            // The cell values of a particle-borne material are
+            // rebuilt from the particles next step.
+            // SAFETY: cell c is written by this task only.
+            unsafe {
+                out.vel[r].set(c, u[r]);
+                out.temp[r].set(c, t[r]);
+                out.e[r].set(c, cv * t[r]);
+                out.ke[r].set(c, 0.5 * u[r].norm_squared());
+                out.v[r].set(c, v[r]);
+            }
+            continue;
+        }
+        if !(t[r].is_finite() && t[r] > 0.0) {
+            return Err(IceError::NonPhysical {
+                site: site(st, c, Some(r)),
+                quantity: "Lagrangian temperature",
+                value: t[r],
+            });
+        }
+        let share = MaterialShare {
+            mass: cell.mass[r],
+            sp_vol: v[r],
+            theta: cell.theta[r],
+            f_theta: cell.theta[r] * inp.kappa[r][c] / inp.stk[c],
+            temp: t[r],
+            temp_before: cell.t_before[r],
+            beta: cell.beta[r],
+        };
+        let totals = CellShare {
+            div_sum: inp.div_sum[c],
+            sum_tb,
+            press: inp.press[c],
+            dt: inp.dt,
+            vol: inp.vol,
+        };
+        let mv = lagrangian_volume(&st.materials[r].eos, &share, &totals);
+        if !(mv.is_finite() && mv > 0.0) {
+            return Err(IceError::NonPhysical {
+                site: site(st, c, Some(r)),
+                quantity: "specific volume",
+                value: mv / cell.mass[r],
+            });
+        }
+        // SAFETY: cell c is written by this task only.
+        unsafe {
+            out.vel[r].set(c, u[r]);
+            out.temp[r].set(c, t[r]);
+            out.e[r].set(c, cv * t[r]);
+            out.ke[r].set(c, 0.5 * u[r].norm_squared());
+            out.v[r].set(c, mv / cell.mass[r]);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,290 @@
+//! Momentum and energy sources of the Lagrangian phase, per cell (Guilkey
+//! Sec. 3.3 step 8): the pressure force, gravity and the viscous force of
+//! Guilkey Eq. 33, the flow work of Eq. 34 (as written, or in the
+//! total-energy-conservative form of [`super::EnergyForm::Conservative`]),
+//! the viscous heating, and the internal-energy sources
+//! ([`super::HeatSource`]). The values they produce per material of a cell
+//! (`LagrangianCell`) go on to the exchange and the specific-volume
+//! evolution ([`super::lagrangian`]).
+
+use nalgebra::SVector;
+
+use super::params::IceParams;
+use super::state::{CellLayout, IceState};
+use super::MAX_MATERIALS;
+
+/// What the Lagrangian phase reads in every cell: the state, the
+/// parameters, the pressure stage's results (volume fluxes, pressures) and
+/// per-material constants.
+pub(super) struct LagrangianInputs<'a, const D: usize> {
+    /// The state at the start of the step (equilibrated).
+    pub(super) st: &'a IceState<D>,
+    /// The step's parameters.
+    pub(super) params: &'a IceParams<D>,
+    /// `κ_r` per material and cell (Guilkey Eq. 29).
+    pub(super) kappa: &'a [Vec<f64>],
+    /// `Σ_r ∇·(θu*)_r` per cell.
+    pub(super) div_sum: &'a [f64],
+    /// `Σ_r θ_r κ_r` per cell.
+    pub(super) stk: &'a [f64],
+    /// The pressure of the sources, `p_eq + w Δp` (Guilkey Eq. 30).
+    pub(super) press: &'a [f64],
+    /// Face pressures per direction (Guilkey Eq. 31).
+    pub(super) pstar: &'a [Vec<f64>; D],
+    /// Mixture volume fluxes per direction (`Δt A/V Σ_s θ_s,f u*_s,f`).
+    pub(super) mix_vflux: &'a [Vec<f64>; D],
+    /// Lagrangian cell velocities of the particle-borne materials.
+    pub(super) particle_velocity: &'a [Vec<SVector<f64, D>>],
+    /// Dynamic viscosity per material, `None` when all are zero.
+    pub(super) mu: Option<&'a [f64]>,
+    /// `c_v` per material.
+    pub(super) cv: [f64; MAX_MATERIALS],
+    /// `true` per particle-borne material (with particle velocities).
+    pub(super) lagr: [bool; MAX_MATERIALS],
+    /// `true` per rigid material (velocity held in the exchange).
+    pub(super) fixed: [bool; MAX_MATERIALS],
+    /// `true` when any material is rigid.
+    pub(super) any_fixed: bool,
+    /// Number of materials.
+    pub(super) nm: usize,
+    /// Time step.
+    pub(super) dt: f64,
+    /// Cell volume.
+    pub(super) vol: f64,
+    /// Start and end of the step (heat source windows).
+    pub(super) t0: f64,
+    /// End of the step.
+    pub(super) t1: f64,
+}
+
+/// Per material of one cell: the values the Lagrangian phase builds up
+/// (stack arrays of [`MAX_MATERIALS`], first `nm` entries used).
+pub(super) struct LagrangianCell<const D: usize> {
+    /// Volume fraction `θ_r`.
+    pub(super) theta: [f64; MAX_MATERIALS],
+    /// Specific volume `v_r` (Guilkey Eq. 13).
+    pub(super) v: [f64; MAX_MATERIALS],
+    /// Mass `M_r`.
+    pub(super) mass: [f64; MAX_MATERIALS],
+    /// Lagrangian velocity (Eqs. 35, 38).
+    pub(super) u: [SVector<f64, D>; MAX_MATERIALS],
+    /// Lagrangian temperature (Eqs. 37, 39).
+    pub(super) t: [f64; MAX_MATERIALS],
+    /// Temperature before the heat exchange.
+    pub(super) t_before: [f64; MAX_MATERIALS],
+    /// Thermal expansivity `β_r` at `t_before` (with heat exchange).
+    pub(super) beta: [f64; MAX_MATERIALS],
+    /// Viscous heating `Δt V θ τ:∇u`.
+    pub(super) heat: [f64; MAX_MATERIALS],
+}
+
+impl<const D: usize> LagrangianCell<D> {
+    /// All zero.
+    pub(super) fn new() -> Self {
+        Self {
+            theta: [0.0; MAX_MATERIALS],
+            v: [0.0; MAX_MATERIALS],
+            mass: [0.0; MAX_MATERIALS],
+            u: [SVector::<f64, D>::zeros(); MAX_MATERIALS],
+            t: [0.0; MAX_MATERIALS],
+            t_before: [0.0; MAX_MATERIALS],
+            beta: [0.0; MAX_MATERIALS],
+            heat: [0.0; MAX_MATERIALS],
+        }
+    }
+}
+
+/// The face pressure gradient `∇p*` of cell `c` (Guilkey Eq. 33).
+fn pressure_gradient<const D: usize>(
+    layout: &CellLayout<D>,
+    pstar: &[Vec<f64>; D],
+    c: usize,
+) -> SVector<f64, D> {
+    let mut grad = SVector::<f64, D>::zeros();
+    for d in 0..D {
+        grad[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
+    }
+    grad
+}
+
+/// The sources of every material in cell `c` (Guilkey Eqs. 33–34): fills
+/// `θ`, `v`, `M`, the Lagrangian velocity and temperature (Eq. 34 as
+/// written unless `cons`; with `cons` the flow work is added later by
+/// [`conservative_energy`]) and the viscous heating. A particle-borne
+/// material takes its Lagrangian velocity from the nodes, where its
+/// sources were applied (Guilkey Sec. 3.3 step 8). Returns the kinetic
+/// energy change of the pressure force and gravity, `Σ_r ½ M_r (|u_p|² −
+/// |u|²)`.
+pub(super) fn cell_sources<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    c: usize,
+    cons: bool,
+    cell: &mut LagrangianCell<D>,
+) -> f64 {
+    let st = inp.st;
+    let layout = &st.layout;
+    let (dt, vol) = (inp.dt, inp.vol);
+    let grad = pressure_gradient(layout, inp.pstar, c);
+    let mut dke_src = 0.0;
+    for r in 0..inp.nm {
+        let mc = &st.cells[r];
+        cell.theta[r] = mc.vol_frac[c];
+        cell.v[r] = mc.sp_vol[c];
+        let m = mc.mass[c];
+        cell.mass[r] = m;
+        if inp.lagr[r] {
+            // Particle-borne: the sources were applied on the
+            // nodes (Guilkey Sec. 3.3 step 8).
+            cell.u[r] = inp.particle_velocity[r][c];
+            cell.t[r] = mc.temperature[c];
+            cell.heat[r] = 0.0;
+            continue;
+        }
+        // Guilkey Eq. 33: Δ(mu) = −Δt V θ ∇p* + Δt M g
+        // (+ Δt V ∇·(θ τ) with viscosity).
+        let mut mom =
+            mc.velocity[c] * m - grad * (dt * vol * cell.theta[r]) + inp.params.gravity * (dt * m);
+        let u_p = mom / m;
+        dke_src += 0.5 * m * (u_p.norm_squared() - mc.velocity[c].norm_squared());
+        cell.heat[r] = 0.0;
+        if let Some(mu) = inp.mu {
+            if mu[r] > 0.0 {
+                let (force, q) = viscous_source(layout, st, r, mu[r], c);
+                mom += force * (dt * vol);
+                cell.heat[r] = q * dt * vol;
+            }
+        }
+        cell.u[r] = mom / m;
+        let cv = inp.cv[r];
+        let me = m * cv * mc.temperature[c];
+        cell.t[r] = if !cons {
+            // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
+            let f_theta = cell.theta[r] * inp.kappa[r][c] / inp.stk[c];
+            (me - dt * vol * f_theta * inp.press[c] * inp.div_sum[c] + cell.heat[r]) / (m * cv)
+        } else {
+            me / (m * cv)
+        };
+        add_heat_sources(inp, c, r, cell);
+    }
+    dke_src
+}
+
+/// Heat sources: internal energy added to material `r` of cell `c` at a
+/// rate per unit volume over a time window (the part of the step inside
+/// it).
+fn add_heat_sources<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    c: usize,
+    r: usize,
+    cell: &mut LagrangianCell<D>,
+) {
+    let (m, cv) = (cell.mass[r], inp.cv[r]);
+    for src in inp.params.heat_sources.iter().filter(|s| s.material == r) {
+        let overlap = (inp.t1.min(src.end) - inp.t0.max(src.start)).max(0.0);
+        if overlap > 0.0 {
+            // Per unit volume of the material (θ_r V), so a
+            // cell the material barely fills is not
+            // overheated.
+            cell.t[r] += src.power[c] * cell.theta[r] * inp.vol * overlap / (m * cv);
+        }
+    }
+}
+
+/// `Σ_r θ_r κ_r` over the materials that receive the flux work and the
+/// exchange heat (the Eulerian ones) in cell `c`: the denominator of their
+/// `f_θ`.
+pub(super) fn eulerian_theta_kappa<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    c: usize,
+    cell: &LagrangianCell<D>,
+) -> f64 {
+    let mut stk_e = 0.0;
+    for r in 0..inp.nm {
+        if !inp.lagr[r] {
+            stk_e += cell.theta[r] * inp.kappa[r][c];
+        }
+    }
+    stk_e
+}
+
+/// Conservative Guilkey Eq. 34 in cell `c`: `Δ(mE) = −Δt Σ_f A p*_f Σ_s
+/// θ_s,f u*_s,f`, of which the internal part `Δ(mE) − dke_src` (plus the
+/// viscous heating) is shared among the Eulerian materials by `f_θ =
+/// θ κ/stk_e`.
+pub(super) fn conservative_energy<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    c: usize,
+    stk_e: f64,
+    dke_src: f64,
+    cell: &mut LagrangianCell<D>,
+) {
+    let layout = &inp.st.layout;
+    // The stored fluxes carry Δt A / V.
+    let mut de = 0.0;
+    for d in 0..D {
+        let f_hi = c + layout.strides[d];
+        de += inp.pstar[d][c] * inp.mix_vflux[d][c] - inp.pstar[d][f_hi] * inp.mix_vflux[d][f_hi];
+    }
+    de *= inp.vol;
+    let de_int = de - dke_src;
+    for r in 0..inp.nm {
+        if inp.lagr[r] {
+            continue;
+        }
+        let f_theta = cell.theta[r] * inp.kappa[r][c] / stk_e;
+        cell.t[r] += (f_theta * de_int + cell.heat[r]) / (cell.mass[r] * inp.cv[r]);
+    }
+}
+
+/// Viscous momentum source `∇·(θ τ)` per unit volume of material `r` in
+/// cell `c` and the viscous heating `θ τ:∇u` per unit volume, for the
+/// Newtonian stress `τ = μ (∇u + ∇uᵀ − ⅔ (∇·u) I)` (the deviatoric stress
+/// of Guilkey Eq. 33's `σ_r − σ` term and Eq. 9's heating). The traction
+/// on a face normal to `d` uses the compact normal derivative `(u_R −
+/// u_L)/h_d` and the mean of the two cells' central tangential derivatives,
+/// `θ_f = (θ_L + θ_R)/2`; the divergence is the difference of the face
+/// tractions. Needs the velocity ghosts including corners.
+fn viscous_source<const D: usize>(
+    layout: &CellLayout<D>,
+    st: &IceState<D>,
+    r: usize,
+    mu: f64,
+    c: usize,
+) -> (SVector<f64, D>, f64) {
+    let mc = &st.cells[r];
+    let u = &mc.velocity;
+    // Central gradient G[(i, e)] = ∂u_i/∂x_e at a cell.
+    let grad = |k: usize| {
+        nalgebra::SMatrix::<f64, D, D>::from_fn(|i, e| {
+            let s = layout.strides[e];
+            (u[k + s][i] - u[k - s][i]) / (2.0 * layout.h[e])
+        })
+    };
+    let traction = |l: usize, rr: usize, d: usize| {
+        let (gl, gr) = (grad(l), grad(rr));
+        let mut g = (gl + gr) * 0.5;
+        for i in 0..D {
+            g[(i, d)] = (u[rr][i] - u[l][i]) / layout.h[d];
+        }
+        let div = g.trace();
+        let theta_f = 0.5 * (mc.vol_frac[l] + mc.vol_frac[rr]);
+        // Row d of τ (τ is symmetric): τ_{d i} = μ (∂u_d/∂x_i + ∂u_i/∂x_d) − ⅔ μ div δ_di.
+        SVector::<f64, D>::from_fn(|i, _| {
+            let mut t = mu * (g[(d, i)] + g[(i, d)]);
+            if i == d {
+                t -= 2.0 / 3.0 * mu * div;
+            }
+            theta_f * t
+        })
+    };
+    let mut force = SVector::<f64, D>::zeros();
+    for d in 0..D {
+        let s = layout.strides[d];
+        force += (traction(c, c + s, d) - traction(c - s, c, d)) / layout.h[d];
+    }
+    let g = grad(c);
+    let sym = g + g.transpose();
+    let div = g.trace();
+    let heat = mc.vol_frac[c] * mu * (0.5 * sym.norm_squared() - 2.0 / 3.0 * div * div);
+    (force, heat.max(0.0))
+}
