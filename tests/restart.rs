@@ -415,3 +415,51 @@ fn the_watchdog_stops_a_nan_and_keeps_the_last_checked_state() {
         assert!(v.iter().all(|x| x.is_finite()), "the saved state is good");
     }
 }
+
+#[test]
+fn a_fluid_torn_to_vacuum_names_the_cell_and_material_and_keeps_the_last_good_state() {
+    // Two streams of gas leaving the middle at Mach ~40: explicit ICE drives
+    // a cell's temperature through zero within a few hundred steps.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/sod.toml"))
+        .expect("case");
+    let right =
+        "pressure = 0.1\nstates = [{ material = \"gas\", volume_fraction = 1.0, density = 0.125 }]";
+    let left =
+        "pressure = 1.0\nstates = [{ material = \"gas\", volume_fraction = 1.0, density = 1.0 }]";
+    assert!(text.contains(right) && text.contains(left));
+    let text = text
+        .replace(right, "pressure = 0.4\nstates = [{ material = \"gas\", volume_fraction = 1.0, density = 1.0, velocity = [50.0] }]")
+        .replace(left, "pressure = 0.4\nstates = [{ material = \"gas\", volume_fraction = 1.0, density = 1.0, velocity = [-50.0] }]");
+    let path = tmp.path().join("vacuum.toml");
+    std::fs::write(&path, text).expect("write");
+    let mut s = mpmice::scene::load(&path).expect("scene");
+    s.time.watchdog_interval = 5;
+    let dir = tmp.path().join("run");
+    let err = run_scene(&s, &opts(&dir)).expect_err("must fail");
+    let msg = err.to_string();
+    println!("{msg}");
+    let Error::Stopped {
+        checkpoint, step, ..
+    } = &err
+    else {
+        panic!("not a stop with a checkpoint: {msg}");
+    };
+    for part in ["step ", "t = ", "cell [", "material `gas`", "temperature"] {
+        assert!(msg.contains(part), "`{part}` missing: {msg}");
+    }
+    // The checkpoint is the last state the watchdog passed, before the
+    // failing step, and it restarts into the same failure.
+    let ck = mpmice::output::checkpoint::Checkpoint::read(checkpoint, None).expect("readable");
+    assert_eq!(ck.step(), *step);
+    assert_eq!(step % 5, 0);
+    let again = run_scene(
+        &s,
+        &RunOptions {
+            restart: Some(checkpoint.clone()),
+            ..opts(&tmp.path().join("again"))
+        },
+    )
+    .expect_err("fails again");
+    assert_eq!(msg.split(';').next(), again.to_string().split(';').next());
+}

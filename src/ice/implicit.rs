@@ -172,12 +172,7 @@ pub(super) fn implicit_pressure<const D: usize>(
 }
 
 fn site_at<const D: usize>(state: &IceState<D>, c: usize) -> Site {
-    Site {
-        step: state.steps,
-        time: state.time,
-        cell: state.layout.coords(c).to_vec(),
-        material: None,
-    }
+    super::site(state, c, None)
 }
 
 /// Largest `|R_c|/V = |Σθκ Δp_c + Δt Σ∇·(θu*)|` over the interior (exact

@@ -117,6 +117,8 @@ pub struct Site {
     pub cell: Vec<isize>,
     /// Material index, `None` for a mixture quantity.
     pub material: Option<usize>,
+    /// The material's scene name (shown instead of the index when known).
+    pub material_name: Option<String>,
 }
 
 impl std::fmt::Display for Site {
@@ -126,8 +128,10 @@ impl std::fmt::Display for Site {
             "step {}, t = {:e}, cell {:?}",
             self.step, self.time, self.cell
         )?;
-        if let Some(m) = self.material {
-            write!(f, ", material {m}")?;
+        match (&self.material_name, self.material) {
+            (Some(name), _) => write!(f, ", material `{name}`")?,
+            (None, Some(m)) => write!(f, ", material {m}")?,
+            (None, None) => {}
         }
         Ok(())
     }
@@ -236,6 +240,7 @@ pub(crate) fn site<const D: usize>(state: &IceState<D>, c: usize, material: Opti
         time: state.time,
         cell: state.layout.coords(c).to_vec(),
         material,
+        material_name: material.and_then(|m| state.materials.get(m).map(|x| x.name.clone())),
     }
 }
 

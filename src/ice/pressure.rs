@@ -132,6 +132,7 @@ pub fn equilibrate<const D: usize>(
                             time: t_now,
                             cell: lay.coords(c).to_vec(),
                             material: None,
+                            material_name: None,
                         },
                         residual: e.residual,
                         iterations: e.iterations,
