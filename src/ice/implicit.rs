@@ -228,7 +228,6 @@ fn outer_iteration<const D: usize>(
 ) -> Result<(usize, usize, f64), IceError> {
     let layout = &state.layout;
     let bcs = &params.boundaries;
-    let nm = state.num_materials();
     let vol = layout.cell_volume();
     let opts = KrylovOptions {
         rel_tol: sp.linear_tolerance,
@@ -259,84 +258,13 @@ fn outer_iteration<const D: usize>(
         if res <= sp.outer_tolerance {
             return Ok((outer, linear, res));
         }
-        if !res.is_finite() {
-            return Err(fail(
-                ws,
-                &iw.dp,
-                outer,
-                res,
-                "non-finite residual".into(),
-                true,
-            ));
-        }
-        if outer == sp.max_outer_iterations {
-            return Err(fail(
-                ws,
-                &iw.dp,
-                outer,
-                res,
-                format!(
-                    "not converged in {} outer iterations",
-                    sp.max_outer_iterations
-                ),
-                true,
-            ));
-        }
-        if outer >= 2 && res > prev {
-            return Err(fail(
-                ws,
-                &iw.dp,
-                outer,
-                res,
-                format!("outer iteration diverges (residual {prev:e} → {res:e})"),
-                true,
-            ));
+        if let Some(reason) = outer_failure(sp, outer, res, prev) {
+            return Err(fail(ws, &iw.dp, outer, res, reason, true));
         }
         prev = res;
         if outer == 0 {
-            // The matrix, once per step: upwind θ̂ from the exchanged face
-            // velocities, v̂ = E v (the face exchange applied to the face
-            // specific volumes), V Σθκ on the diagonal.
-            let cells = &state.cells;
-            let ustar = &ws.ustar;
-            let stk = &ws.sum_theta_kappa;
-            let interior = &layout.interior;
-            let scale: [f64; D] =
-                std::array::from_fn(|d| dt * fdt * vol / (layout.h[d] * layout.h[d]));
-            let r = iw.system.assemble(
-                |f, d| {
-                    let l = f - layout.strides[d];
-                    let mut theta = [0.0; MAX_MATERIALS];
-                    let mut v = [0.0; MAX_MATERIALS];
-                    let mut w = [0.0; MAX_MATERIALS];
-                    let mut vv = [SVector::<f64, 1>::zeros(); MAX_MATERIALS];
-                    for m in 0..nm {
-                        let mc = &cells[m];
-                        theta[m] = 0.5 * (mc.vol_frac[l] + mc.vol_frac[f]);
-                        v[m] = v_face(mc.sp_vol[l], mc.sp_vol[f]);
-                        w[m] = theta[m] / v[m];
-                        vv[m][0] = v[m];
-                    }
-                    if let Some(k) = k_mom {
-                        exchange_momentum(k, dt, &theta[..nm], &v[..nm], &w[..nm], &mut vv[..nm]);
-                    }
-                    let mut sum = 0.0;
-                    for m in 0..nm {
-                        let mc = &cells[m];
-                        let u = ustar[m][d][f];
-                        let th = if u > 0.0 {
-                            mc.vol_frac[l]
-                        } else if u < 0.0 {
-                            mc.vol_frac[f]
-                        } else {
-                            theta[m]
-                        };
-                        sum += th * vv[m][0];
-                    }
-                    scale[d] * sum
-                },
-                |k| vol * stk[interior[k]],
-            );
+            // The matrix, once per step.
+            let r = assemble_matrix(state, ws, &mut iw.system, dt, fdt, k_mom);
             if let Err(e) = r {
                 let retryable = !matches!(e, SolverError::Singular { .. });
                 return Err(fail(
@@ -373,45 +301,139 @@ fn outer_iteration<const D: usize>(
         // Ghosts of Δp: zero gradient at walls and outflow, periodic copy,
         // zero (Dirichlet) at inflow.
         fill_scalar(layout, bcs, &mut iw.dp, |_| 0.0);
-        // Face velocities from their pre-exchange values:
-        // u* = u*_pre − Δt_f v_f ∇Δp, then the face exchange again.
-        for r in 0..nm {
-            let mc = &state.cells[r];
-            for d in 0..D {
-                let s = layout.strides[d];
-                let inv_h = 1.0 / layout.h[d];
-                let pre = &iw.ustar_pre[r][d];
-                let dp = &iw.dp;
-                let sv = &mc.sp_vol;
-                let out = Out::new(&mut ws.ustar[r][d]);
-                par_face_rows(layout, d, |row| {
-                    for f in row {
-                        let u =
-                            pre[f] - fdt * v_face(sv[f - s], sv[f]) * (dp[f] - dp[f - s]) * inv_h;
-                        // SAFETY: each face is written by one task only.
-                        unsafe { out.set(f, u) };
-                    }
-                });
-                zero_wall_faces(layout, bcs, d, &mut ws.ustar[r][d]);
-            }
-        }
-        if let Some(k) = k_mom {
-            for d in 0..D {
-                face_exchange(
-                    layout,
-                    d,
-                    k,
-                    dt,
-                    &state.cells,
-                    &params.rigid_mask(),
-                    &mut ws.ustar,
-                );
-            }
-        }
+        correct_face_velocities(state, params, ws, iw, dt, fdt, k_mom);
     }
     // The loop returns at `outer == max_outer_iterations` at the latest.
     Err(invalid(
         "implicit.max_outer_iterations",
         "outer iteration ended without a result",
     ))
+}
+
+/// Why the outer iteration must stop at iteration `outer` with residual
+/// `res` (not converged; `prev` the previous residual): a non-finite
+/// residual, the iteration cap, or a residual that grows from the third
+/// iteration on. All are retryable with a smaller `Δt`.
+fn outer_failure(sp: &SemiImplicit, outer: usize, res: f64, prev: f64) -> Option<String> {
+    if !res.is_finite() {
+        return Some("non-finite residual".into());
+    }
+    if outer == sp.max_outer_iterations {
+        return Some(format!(
+            "not converged in {} outer iterations",
+            sp.max_outer_iterations
+        ));
+    }
+    if outer >= 2 && res > prev {
+        return Some(format!(
+            "outer iteration diverges (residual {prev:e} → {res:e})"
+        ));
+    }
+    None
+}
+
+/// Assembles the pressure matrix of the step (see the module
+/// documentation): face coefficients `Δt Δt_f A/Δx Σ_r θ̂_r,f v̂_r,f` with
+/// the upwind `θ̂` from the exchanged face velocities and `v̂ = E v` (the
+/// face exchange with coefficients `k_mom` applied to the face specific
+/// volumes), `V Σθκ` on the diagonal.
+fn assemble_matrix<const D: usize>(
+    state: &IceState<D>,
+    ws: &IceWorkspace<D>,
+    system: &mut PressureSystem,
+    dt: f64,
+    fdt: f64,
+    k_mom: Option<&[f64]>,
+) -> Result<(), SolverError> {
+    let layout = &state.layout;
+    let nm = state.num_materials();
+    let vol = layout.cell_volume();
+    let cells = &state.cells;
+    let ustar = &ws.ustar;
+    let stk = &ws.sum_theta_kappa;
+    let interior = &layout.interior;
+    let scale: [f64; D] = std::array::from_fn(|d| dt * fdt * vol / (layout.h[d] * layout.h[d]));
+    system.assemble(
+        |f, d| {
+            let l = f - layout.strides[d];
+            let mut theta = [0.0; MAX_MATERIALS];
+            let mut v = [0.0; MAX_MATERIALS];
+            let mut w = [0.0; MAX_MATERIALS];
+            let mut vv = [SVector::<f64, 1>::zeros(); MAX_MATERIALS];
+            for m in 0..nm {
+                let mc = &cells[m];
+                theta[m] = 0.5 * (mc.vol_frac[l] + mc.vol_frac[f]);
+                v[m] = v_face(mc.sp_vol[l], mc.sp_vol[f]);
+                w[m] = theta[m] / v[m];
+                vv[m][0] = v[m];
+            }
+            if let Some(k) = k_mom {
+                exchange_momentum(k, dt, &theta[..nm], &v[..nm], &w[..nm], &mut vv[..nm]);
+            }
+            let mut sum = 0.0;
+            for m in 0..nm {
+                let mc = &cells[m];
+                let u = ustar[m][d][f];
+                let th = if u > 0.0 {
+                    mc.vol_frac[l]
+                } else if u < 0.0 {
+                    mc.vol_frac[f]
+                } else {
+                    theta[m]
+                };
+                sum += th * vv[m][0];
+            }
+            scale[d] * sum
+        },
+        |k| vol * stk[interior[k]],
+    )
+}
+
+/// Face velocities from their pre-exchange values with the accumulated
+/// pressure increment, `u* = u*_pre − Δt_f v_f ∇Δp` (zero at walls), then
+/// the face exchange with coefficients `k_mom` again.
+fn correct_face_velocities<const D: usize>(
+    state: &IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    iw: &ImplicitWorkspace<D>,
+    dt: f64,
+    fdt: f64,
+    k_mom: Option<&[f64]>,
+) {
+    let layout = &state.layout;
+    let bcs = &params.boundaries;
+    let nm = state.num_materials();
+    for r in 0..nm {
+        let mc = &state.cells[r];
+        for d in 0..D {
+            let s = layout.strides[d];
+            let inv_h = 1.0 / layout.h[d];
+            let pre = &iw.ustar_pre[r][d];
+            let dp = &iw.dp;
+            let sv = &mc.sp_vol;
+            let out = Out::new(&mut ws.ustar[r][d]);
+            par_face_rows(layout, d, |row| {
+                for f in row {
+                    let u = pre[f] - fdt * v_face(sv[f - s], sv[f]) * (dp[f] - dp[f - s]) * inv_h;
+                    // SAFETY: each face is written by one task only.
+                    unsafe { out.set(f, u) };
+                }
+            });
+            zero_wall_faces(layout, bcs, d, &mut ws.ustar[r][d]);
+        }
+    }
+    if let Some(k) = k_mom {
+        for d in 0..D {
+            face_exchange(
+                layout,
+                d,
+                k,
+                dt,
+                &state.cells,
+                &params.rigid_mask(),
+                &mut ws.ustar,
+            );
+        }
+    }
 }
