@@ -368,3 +368,28 @@ fn bad_gas_point_input_names_its_key() {
     assert_eq!(e.path, "objects[0].material");
     assert!(e.message.contains("frame = \"particles\""), "{e}");
 }
+
+/// York Sec. 4.2 (Eq. 27, Table I), coarse (h = 1, 40 cells): the
+/// piston–container periods for m = 0.1 and 1.0 against Eq. 27's roots
+/// (ω = 886.43 and 281.15 rad/s; York's Table I: 886.2 and 281.2).
+#[test]
+fn york_piston_container_period() {
+    use mpmice::diagnostics::york::{run_piston_container, PistonContainer};
+    for (mass, bound) in [(0.1, 2e-4), (1.0, 2e-4)] {
+        let s = PistonContainer {
+            mass,
+            h: 1.0,
+            periods: 1.4,
+            ..PistonContainer::default()
+        };
+        let r = run_piston_container(&s).expect("runs");
+        let exact = 2.0 * std::f64::consts::PI / r.omega_exact;
+        let err = (r.period / exact - 1.0).abs();
+        println!(
+            "piston m = {mass}, h = 1: omega exact {:.2}, period {:.6} vs {exact:.6} ({:.3e}), {} \
+             steps, {:.2} s",
+            r.omega_exact, r.period, err, r.steps, r.wall_s
+        );
+        assert!(err < bound, "m = {mass}: {err:e}");
+    }
+}

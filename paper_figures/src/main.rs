@@ -9,7 +9,9 @@
 //! pressure vs compression ratio against P1 (V1/V2)^γ) and `guilkey_fig5`
 //! (Mach 3 wedge: pressure field with the exact and measured shock), and
 //! `york_fig6` (York Sec. 4.1: Sod with gas material points — density,
-//! velocity, pressure and specific internal energy against exact).
+//! velocity, pressure and specific internal energy against exact) and
+//! `york_fig9` (York Sec. 4.2: piston displacement history of the
+//! piston–container with Eq. 27's periods).
 
 use std::path::PathBuf;
 
@@ -45,6 +47,10 @@ const FIGURES: &[(&str, &str)] = &[
         "Mach 3 wedge, MPM-ICE: pressure field with the exact and measured shock",
     ),
     (
+        "york_fig9",
+        "piston-container (York 4.2): piston displacement vs time, m = 0.1 and 1.0, exact periods",
+    ),
+    (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
     ),
@@ -64,6 +70,7 @@ fn main() -> anyhow::Result<()> {
         "guilkey_fig4" => guilkey_fig4(args.quick),
         "guilkey_fig5" => guilkey_fig5(args.quick),
         "york_fig6" => york_fig6(args.quick),
+        "york_fig9" => york_fig9(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -253,6 +260,60 @@ fn york_fig6(quick: bool) -> anyhow::Result<()> {
                     style: Style::Markers,
                 },
             ],
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// York Fig. 9: the piston's displacement against time in the
+/// piston–container (h = 0.5; `--quick`: h = 1), m = 0.1 and 1.0, three
+/// periods, with vertical lines at multiples of Eq. 27's period. One PNG per
+/// mass (`york_fig9_m0.1.png`, `york_fig9_m1.png`) and one CSV each.
+fn york_fig9(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::york::{run_piston_container, PistonContainer};
+    let out = out_dir()?;
+    for mass in [0.1, 1.0] {
+        let s = PistonContainer {
+            mass,
+            h: if quick { 1.0 } else { 0.5 },
+            periods: 3.0,
+            ..PistonContainer::default()
+        };
+        let r = run_piston_container(&s)?;
+        let period = 2.0 * std::f64::consts::PI / r.omega_exact;
+        let amp = r.history.iter().fold(0.0_f64, |a, p| a.max(p.1.abs()));
+        let mut csv = String::from("t [s],displacement [m]\n");
+        for (t, u) in &r.history {
+            csv.push_str(&format!("{t},{u}\n"));
+        }
+        std::fs::write(out.join(format!("york_fig9_m{mass}.csv")), csv)?;
+        let mut series = vec![PlotSeries {
+            label: format!("piston (measured period {:.6} s)", r.period),
+            points: r.history.clone(),
+            style: Style::Line,
+        }];
+        for k in 1..=3 {
+            let t = k as f64 * period;
+            series.push(PlotSeries {
+                label: if k == 1 {
+                    format!("Eq. 27 period {period:.6} s")
+                } else {
+                    String::new()
+                },
+                points: vec![(t, -amp), (t, amp)],
+                style: Style::Line,
+            });
+        }
+        let path = out.join(format!("york_fig9_m{mass}.png"));
+        plot_xy(
+            &path,
+            &format!("York Fig. 9: piston displacement, m = {mass}, h = {}", s.h),
+            "t [s]",
+            "displacement",
+            false,
+            false,
+            &series,
         )?;
         println!("wrote {}", path.display());
     }

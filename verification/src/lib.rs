@@ -68,6 +68,11 @@ pub const STUDIES: &[Study] = &[
         york_studies::york_sod,
     ),
     (
+        "york_piston_container",
+        "York 4.2 piston-container: period vs Eq. 27 for m = 0.1 and 1.0 vs h",
+        york_studies::york_piston_container,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,
