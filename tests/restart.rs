@@ -166,6 +166,24 @@ fn coupled_restarts_bit_identically() {
     assert_restart_is_bit_identical("coupled cylinder (semi-implicit)", &s);
 }
 
+#[test]
+fn gas_points_restart_bit_identically() {
+    // York Sod with gas material points (explicit MPM model): the gas
+    // state (stress, internal energy in `work`, J) travels in the
+    // checkpoint's particle arrays.
+    let mut s = case("york_sod.toml");
+    s.grid.cells = vec![50, 1];
+    s.grid.upper[1] = 0.02;
+    for o in &mut s.objects {
+        if let mpmice::scene::Geometry::Box { upper, .. } = &mut o.geometry {
+            upper[1] = 0.02;
+        }
+    }
+    s.time.end = 0.05;
+    s.output.interval = Some(0.025);
+    assert_restart_is_bit_identical("gas points (York Sod)", &s);
+}
+
 /// Runs `scene` to a checkpoint and returns it (the run stops by its step
 /// limit after the checkpoint).
 fn a_checkpoint(scene: &Scene, dir: &Path) -> PathBuf {

@@ -7,7 +7,11 @@
 //! cylinder: 3a stresses of the row nearest the x-axis vs Lamé, 3b ln error
 //! vs ln dx with the fitted slope), `guilkey_fig4` (piston: closed-end
 //! pressure vs compression ratio against P1 (V1/V2)^γ) and `guilkey_fig5`
-//! (Mach 3 wedge: pressure field with the exact and measured shock).
+//! (Mach 3 wedge: pressure field with the exact and measured shock), and
+//! `york_fig6` (York Sec. 4.1: Sod with gas material points — density,
+//! velocity, pressure and specific internal energy against exact) and
+//! `york_fig9` (York Sec. 4.2: piston displacement history of the
+//! piston–container with Eq. 27's periods).
 
 use std::path::PathBuf;
 
@@ -42,6 +46,14 @@ const FIGURES: &[(&str, &str)] = &[
         "guilkey_fig5",
         "Mach 3 wedge, MPM-ICE: pressure field with the exact and measured shock",
     ),
+    (
+        "york_fig9",
+        "piston-container (York 4.2): piston displacement vs time, m = 0.1 and 1.0, exact periods",
+    ),
+    (
+        "york_fig6",
+        "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
+    ),
 ];
 
 fn main() -> anyhow::Result<()> {
@@ -57,6 +69,8 @@ fn main() -> anyhow::Result<()> {
         "guilkey_fig3" => guilkey_fig3(args.quick),
         "guilkey_fig4" => guilkey_fig4(args.quick),
         "guilkey_fig5" => guilkey_fig5(args.quick),
+        "york_fig6" => york_fig6(args.quick),
+        "york_fig9" => york_fig9(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -176,4 +190,132 @@ fn guilkey_fig5(quick: bool) -> anyhow::Result<()> {
     let out = out_dir()?;
     verification::coupled_studies::wedge_mach3(quick)?;
     copy_study_plot("wedge_mach3_fig5.png", quick, &out)
+}
+
+/// York Fig. 6: Sod with gas material points at t = 0.143 (200 cells of
+/// 0.005, 3 points per cell per direction, `cases/york_sod.toml`; `--quick`:
+/// 100 cells): density, velocity, pressure and specific internal energy of
+/// the points of one row against the exact Riemann solution. One PNG per
+/// variable (`york_fig6_<var>.png`) and one CSV.
+fn york_fig6(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::york::{run_york_sod, sod_exact, YorkSod};
+    let out = out_dir()?;
+    let setup = YorkSod {
+        cells: if quick { 100 } else { 200 },
+        ..YorkSod::default()
+    };
+    let run = run_york_sod(&setup)?;
+    let exact = sod_exact()?;
+    let t = setup.end;
+    let gamma = 1.4;
+    let sample = |x: f64| {
+        let s = exact.sample((x - 0.5) / t);
+        let e = if s.rho > 0.0 {
+            s.p / ((gamma - 1.0) * s.rho)
+        } else {
+            0.0
+        };
+        [s.rho, s.u, s.p, e]
+    };
+    let mut csv = String::from("x,rho,u,p,e,rho_exact,u_exact,p_exact,e_exact\n");
+    for r in &run.profile {
+        let ex = sample(r[0]);
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            r[0], r[1], r[2], r[3], r[4], ex[0], ex[1], ex[2], ex[3]
+        ));
+    }
+    std::fs::write(out.join("york_fig6.csv"), csv)?;
+    let fine: Vec<f64> = (0..=2000).map(|i| i as f64 / 2000.0).collect();
+    for (k, (name, label)) in [
+        ("density", "density"),
+        ("velocity", "velocity"),
+        ("pressure", "pressure"),
+        ("energy", "specific internal energy"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let path = out.join(format!("york_fig6_{name}.png"));
+        plot_xy(
+            &path,
+            &format!(
+                "York Fig. 6: Sod with gas points, t = {t}, dx = {} (L1 rho = {:.2e})",
+                1.0 / setup.cells as f64,
+                run.l1_density
+            ),
+            "x",
+            label,
+            false,
+            false,
+            &[
+                PlotSeries {
+                    label: "exact".into(),
+                    points: fine.iter().map(|&x| (x, sample(x)[k])).collect(),
+                    style: Style::Line,
+                },
+                PlotSeries {
+                    label: "gas points (GIMP, MUSL, York q)".into(),
+                    points: run.profile.iter().map(|r| (r[0], r[k + 1])).collect(),
+                    style: Style::Markers,
+                },
+            ],
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// York Fig. 9: the piston's displacement against time in the
+/// piston–container (h = 0.5; `--quick`: h = 1), m = 0.1 and 1.0, three
+/// periods, with vertical lines at multiples of Eq. 27's period. One PNG per
+/// mass (`york_fig9_m0.1.png`, `york_fig9_m1.png`) and one CSV each.
+fn york_fig9(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::york::{run_piston_container, PistonContainer};
+    let out = out_dir()?;
+    for mass in [0.1, 1.0] {
+        let s = PistonContainer {
+            mass,
+            h: if quick { 1.0 } else { 0.5 },
+            periods: 3.0,
+            ..PistonContainer::default()
+        };
+        let r = run_piston_container(&s)?;
+        let period = 2.0 * std::f64::consts::PI / r.omega_exact;
+        let amp = r.history.iter().fold(0.0_f64, |a, p| a.max(p.1.abs()));
+        let mut csv = String::from("t [s],displacement [m]\n");
+        for (t, u) in &r.history {
+            csv.push_str(&format!("{t},{u}\n"));
+        }
+        std::fs::write(out.join(format!("york_fig9_m{mass}.csv")), csv)?;
+        let mut series = vec![PlotSeries {
+            label: format!("piston (measured period {:.6} s)", r.period),
+            points: r.history.clone(),
+            style: Style::Line,
+        }];
+        for k in 1..=3 {
+            let t = k as f64 * period;
+            series.push(PlotSeries {
+                label: if k == 1 {
+                    format!("Eq. 27 period {period:.6} s")
+                } else {
+                    String::new()
+                },
+                points: vec![(t, -amp), (t, amp)],
+                style: Style::Line,
+            });
+        }
+        let path = out.join(format!("york_fig9_m{mass}.png"));
+        plot_xy(
+            &path,
+            &format!("York Fig. 9: piston displacement, m = {mass}, h = {}", s.h),
+            "t [s]",
+            "displacement",
+            false,
+            false,
+            &series,
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
 }

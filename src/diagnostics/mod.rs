@@ -5,3 +5,4 @@ pub mod coupled;
 pub mod impm;
 pub mod mms;
 pub mod riemann;
+pub mod york;

@@ -39,8 +39,13 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
 }
 
 fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> Result<Summary> {
-    let has = |k: MaterialKind| scene.materials.iter().any(|m| m.kind == k);
-    let (solid, fluid) = (has(MaterialKind::Solid), has(MaterialKind::Fluid));
+    // Gas points (fluids with frame = "particles") run with the solids in
+    // the explicit MPM model (York Eq. 17: one nodal velocity field).
+    let solid = scene
+        .materials
+        .iter()
+        .any(|m| m.kind == MaterialKind::Solid);
+    let fluid = scene.materials.iter().any(|m| m.in_cells());
     if solid && fluid {
         let mut m = models::Coupled {
             run: crate::scene::build_coupled_run::<D>(scene)?,

@@ -1,9 +1,13 @@
-//! Materials: solid constitutive models (`solid`) and fluid equations of state
-//! (`eos`). Imports no physics module.
+//! Materials: solid constitutive models (`solid`), the equation-of-state
+//! interface (`equation_of_state`), fluid equations of state (`eos`,
+//! `solid_eos`) and the gas on material points (`gas_point`, York Sec. 3.3).
+//! Imports no physics module.
 
 pub mod eos;
 pub mod equation_of_state;
+pub mod gas_point;
 pub mod solid;
 pub mod solid_eos;
 
-pub use solid::{ElasticConstants, SolidMaterial, SolidModel};
+pub use gas_point::{ArtificialViscosity, GasPoint};
+pub use solid::{ElasticConstants, GasInput, PointState, SolidMaterial, SolidModel};

@@ -5,6 +5,8 @@
 
 use nalgebra::Matrix3;
 
+use super::gas_point::{GasPoint, GasStep};
+
 /// Isotropic elastic constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ElasticConstants {
@@ -42,8 +44,10 @@ impl ElasticConstants {
     }
 }
 
-/// Which constitutive model a solid uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// Which constitutive model a particle material uses: a solid's, or the
+/// fluid stress of a gas point (York Sec. 3.3; set by the scene for a fluid
+/// material with `frame = "particles"`, never named in a scene's `model`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SolidModel {
     /// Hypo-elastic, Jaumann rate (York Eqs. 18–20):
@@ -53,6 +57,11 @@ pub enum SolidModel {
     /// σ = (λ ln J / J) I + (μ / J)(F Fᵀ − I),
     /// W = λ/2 (ln J)² − μ ln J + μ/2 (tr FᵀF − 3).
     NeoHookean,
+    /// A compressible viscous gas on material points (York Eqs. 21–25):
+    /// σ = 2μ ε̇′ − (p + q) I. The particle's `work` holds its internal
+    /// energy per unit reference volume, ρ_ref e (ρ_ref = m / V⁰).
+    #[serde(skip)]
+    GasPoint(GasPoint),
 }
 
 impl SolidModel {
@@ -60,7 +69,9 @@ impl SolidModel {
     pub const NAMES: &'static str = "linear_elastic, neo_hookean";
 }
 
-/// A solid material as the MPM kernels see it.
+/// A particle material as the MPM kernels see it: a solid, or a gas on
+/// material points ([`SolidModel::GasPoint`], whose elastic constants are
+/// unused).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolidMaterial {
     /// Name from the scene.
@@ -74,9 +85,33 @@ pub struct SolidMaterial {
 }
 
 impl SolidMaterial {
-    /// Dilatational wave speed √((λ + 2μ)/ρ) at density `rho`.
+    /// Dilatational wave speed √((λ + 2μ)/ρ) at density `rho` (solids; a gas
+    /// point's sound speed needs its energy: [`GasPoint::sound_speed`]).
     pub fn wave_speed(&self, rho: f64) -> f64 {
         (self.elastic.p_wave() / rho).sqrt()
+    }
+
+    /// The gas-point model of this material, if it is one.
+    #[inline]
+    pub fn gas(&self) -> Option<&GasPoint> {
+        match &self.model {
+            SolidModel::GasPoint(g) => Some(g),
+            _ => None,
+        }
+    }
+
+    /// Largest stable explicit step of one particle in a grid of smallest
+    /// cell size `h`: `h / (c + |v|)` for a solid, [`GasPoint::dt_limit`]
+    /// for a gas point. `p` gives the particle's state.
+    #[inline]
+    pub fn dt_limit(&self, h: f64, p: &PointState, c_max: f64) -> f64 {
+        let rho = p.mass / p.vol;
+        match &self.model {
+            SolidModel::GasPoint(g) => {
+                g.dt_limit(h, rho, p.work * p.vol0 / p.mass, p.stress, p.speed, c_max)
+            }
+            _ => h / (self.wave_speed(rho) + p.speed),
+        }
     }
 
     /// Advances the particle stress over one step.
@@ -85,7 +120,10 @@ impl SolidMaterial {
     /// the updated deformation gradient and `j` its determinant, `stress` the
     /// Cauchy stress (updated in place) and `work` the accumulated stress work
     /// per unit reference volume (updated for rate models, whose strain energy
-    /// is that work).
+    /// is that work; for a gas point, its internal energy ρ_ref e). `gas`
+    /// gives a gas point its reference density ρ_ref = m/V⁰, its Jacobian at
+    /// the start of the step and the largest gas sound speed (York Eq. 24);
+    /// solids ignore it.
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn update_stress(
@@ -94,11 +132,24 @@ impl SolidMaterial {
         f_new: &Matrix3<f64>,
         j: f64,
         dt: f64,
+        gas: &GasInput,
         stress: &mut Matrix3<f64>,
         work: &mut f64,
     ) {
         let ElasticConstants { lambda, mu } = self.elastic;
         match self.model {
+            SolidModel::GasPoint(g) => {
+                let step = GasStep {
+                    // York Eq. 16: ρ = m/V with V = J V⁰.
+                    rho_old: gas.rho_ref / gas.j_old,
+                    rho_new: gas.rho_ref / j,
+                    dt,
+                    c_max: gas.c_max,
+                };
+                let (sigma, e_new, _) = g.update(l, *work / gas.rho_ref, &step);
+                *stress = sigma;
+                *work = gas.rho_ref * e_new;
+            }
             SolidModel::LinearElastic => {
                 let d = 0.5 * (l + l.transpose());
                 let w = 0.5 * (l - l.transpose());
@@ -143,6 +194,9 @@ impl SolidMaterial {
                     + 2.0 * mu * d
             }
             SolidModel::NeoHookean => neo_hookean_stress_j(lambda, mu, f_new, j),
+            // Gas points are explicit only (the scene rejects them in implicit
+            // mode, and `spatial_tangent` gives none): the stress is kept.
+            SolidModel::GasPoint(_) => *stress_old,
         }
     }
 
@@ -162,6 +216,7 @@ impl SolidMaterial {
         match self.model {
             SolidModel::LinearElastic => Some((lambda, mu)),
             SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
+            SolidModel::GasPoint(_) => None,
         }
     }
 
@@ -169,7 +224,8 @@ impl SolidMaterial {
     #[inline]
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {
         match self.model {
-            SolidModel::LinearElastic => work,
+            // Rate models: the accumulated work; a gas point: ρ_ref e.
+            SolidModel::LinearElastic | SolidModel::GasPoint(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();
@@ -178,6 +234,44 @@ impl SolidMaterial {
             }
         }
     }
+}
+
+/// What a gas point's stress update needs beyond the kinematics (ignored by
+/// solids).
+#[derive(Debug, Clone, Copy)]
+pub struct GasInput {
+    /// Reference density ρ_ref = m / V⁰.
+    pub rho_ref: f64,
+    /// Jacobian J at the start of the step.
+    pub j_old: f64,
+    /// Largest sound speed among the gas points (York Eq. 24).
+    pub c_max: f64,
+}
+
+impl GasInput {
+    /// The input of a solid (unused values).
+    pub const SOLID: Self = Self {
+        rho_ref: 1.0,
+        j_old: 1.0,
+        c_max: 0.0,
+    };
+}
+
+/// One particle's state, as [`SolidMaterial::dt_limit`] reads it.
+#[derive(Debug, Clone, Copy)]
+pub struct PointState<'a> {
+    /// Mass m_p.
+    pub mass: f64,
+    /// Current volume V_p.
+    pub vol: f64,
+    /// Reference volume V_p⁰.
+    pub vol0: f64,
+    /// Work (a gas point: ρ_ref e).
+    pub work: f64,
+    /// Cauchy stress.
+    pub stress: &'a Matrix3<f64>,
+    /// Speed |v_p|.
+    pub speed: f64,
 }
 
 /// Compressible neo-Hookean Cauchy stress σ = (λ ln J/J) I + (μ/J)(F Fᵀ − I).
@@ -284,7 +378,15 @@ mod tests {
         let dt = 1.0 / steps as f64;
         let mut work = 0.0;
         for _ in 0..steps {
-            m.update_stress(&l, &Matrix3::identity(), 1.0, dt, &mut s, &mut work);
+            m.update_stress(
+                &l,
+                &Matrix3::identity(),
+                1.0,
+                dt,
+                &GasInput::SOLID,
+                &mut s,
+                &mut work,
+            );
         }
         assert!((s.trace() - tr0).abs() < 1e-12);
         assert!((s.norm() - n0).abs() < 5e-3 * n0);

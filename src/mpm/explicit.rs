@@ -24,7 +24,7 @@ use super::particles::Particles;
 use super::scatter::{Bins, SharedMut};
 use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
-use crate::material::SolidMaterial;
+use crate::material::{GasInput, PointState, SolidMaterial};
 use crate::shape::{
     CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, ShapeKind, Stencil,
 };
@@ -136,7 +136,8 @@ pub struct StepScratch<const D: usize> {
 
 /// Largest stable explicit timestep times `cfl`: min over particles of
 /// h_min / (c_p + |v_p|), c_p the dilatational wave speed at the particle's
-/// current density.
+/// current density; a gas point adds its viscous and artificial-viscosity
+/// diffusion limit ([`crate::material::GasPoint::dt_limit`]).
 pub fn stable_dt<const D: usize>(
     grid: &Grid<D>,
     materials: &[SolidMaterial],
@@ -144,15 +145,45 @@ pub fn stable_dt<const D: usize>(
     cfl: f64,
 ) -> f64 {
     let hmin = grid.h.min();
+    let c_max = gas_sound_speed_max(materials, particles);
     let limit = (0..particles.len())
         .into_par_iter()
         .map(|p| {
-            let rho = particles.mass[p] / particles.vol[p];
-            let c = materials[particles.material[p] as usize].wave_speed(rho);
-            hmin / (c + particles.v[p].norm())
+            let state = PointState {
+                mass: particles.mass[p],
+                vol: particles.vol[p],
+                vol0: particles.vol0[p],
+                work: particles.work[p],
+                stress: &particles.stress[p],
+                speed: particles.v[p].norm(),
+            };
+            materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max)
         })
         .reduce(|| f64::INFINITY, f64::min);
     cfl * limit
+}
+
+/// The largest sound speed among the gas points (York Eq. 24's `c_max`);
+/// 0 when there are none (no pass over the particles then).
+pub fn gas_sound_speed_max<const D: usize>(
+    materials: &[SolidMaterial],
+    particles: &Particles<D>,
+) -> f64 {
+    if materials.iter().all(|m| m.gas().is_none()) {
+        return 0.0;
+    }
+    (0..particles.len())
+        .into_par_iter()
+        .with_min_len(512)
+        .map(|p| match materials[particles.material[p] as usize].gas() {
+            Some(g) => {
+                let rho = particles.mass[p] / particles.vol[p];
+                let e = particles.work[p] * particles.vol0[p] / particles.mass[p];
+                g.sound_speed(rho, e)
+            }
+            None => 0.0,
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// Advances particles and grid by one explicit step of size `dt` from time `t`.
@@ -857,7 +888,14 @@ fn g2p<
         &gs.velocity
     };
     let failed = AtomicUsize::new(usize::MAX);
+    // York Eq. 24's c_max from the state at the start of the stress update.
+    let c_max = if GRAD != GRAD_NONE {
+        gas_sound_speed_max(ctx.materials, particles)
+    } else {
+        0.0
+    };
     {
+        let mass = &particles.mass;
         let x = SharedMut::new(&mut particles.x);
         let v = SharedMut::new(&mut particles.v);
         let fgrad = SharedMut::new(&mut particles.f);
@@ -920,9 +958,14 @@ fn g2p<
                     failed.fetch_min(p, Ordering::Relaxed);
                     return;
                 }
+                let gas = GasInput {
+                    rho_ref: mass[p] / vol0[p],
+                    j_old: *vp_vol / vol0[p],
+                    c_max,
+                };
                 *fp = f_new;
                 *vp_vol = j * vol0[p];
-                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, j, dt, sp, wp);
+                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, j, dt, &gas, sp, wp);
             }
         });
     }

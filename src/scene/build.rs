@@ -15,7 +15,7 @@ use crate::ice::{
     InflowState, Limiter, MaterialInit,
 };
 use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
-use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
+use crate::material::{ArtificialViscosity, ElasticConstants, GasPoint, SolidMaterial, SolidModel};
 use crate::mpm::explicit::Uniform;
 use crate::mpm::implicit::{
     ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, PrescribedDisplacement,
@@ -42,6 +42,51 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
         model: m.model.unwrap_or(SolidModel::NeoHookean),
         elastic,
     }
+}
+
+/// The particle material of a gas-point fluid (York Sec. 3.3) on a grid of
+/// smallest cell size `h` (York's `g` is a multiple of it).
+fn gas_point_material(m: &MaterialSpec, i: usize, h: f64) -> Result<SolidMaterial, SceneError> {
+    let av = m.artificial_viscosity.unwrap_or_default();
+    Ok(SolidMaterial {
+        name: m.name.clone(),
+        density: 0.0,
+        model: SolidModel::GasPoint(GasPoint {
+            eos: fluid_eos(m, i)?,
+            viscosity: m.viscosity.unwrap_or(0.0),
+            q: ArtificialViscosity {
+                g: av.g_over_dx * h,
+                kappa: av.kappa,
+                c1: av.c1,
+                c2: av.c2,
+            },
+        }),
+        elastic: ElasticConstants {
+            lambda: 0.0,
+            mu: 0.0,
+        },
+    })
+}
+
+/// The particle materials of a scene in scene order (solids and gas points),
+/// as indexed by `Particles::material`.
+fn particle_materials<const D: usize>(
+    scene: &Scene,
+    grid: &Grid<D>,
+) -> Result<Vec<SolidMaterial>, SceneError> {
+    scene
+        .materials
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.on_particles())
+        .map(|(i, m)| {
+            if m.is_gas_point() {
+                gas_point_material(m, i, grid.h.min())
+            } else {
+                Ok(solid_material(m))
+            }
+        })
+        .collect()
 }
 
 /// The grid a scene describes (the scene must be validated and `D == dim`).
@@ -88,7 +133,29 @@ fn fill_objects<const D: usize>(
             .ok_or_else(|| {
                 SceneError::new(format!("objects[{oi}].material"), "unknown material")
             })?;
-        let rho = materials[mat_index].density;
+        // A gas object carries its own density and pressure (York Sec. 3.3):
+        // stress −p I and internal energy ρ e per unit reference volume.
+        let gas = materials[mat_index].gas();
+        let rho = match (gas, obj.density) {
+            (Some(_), Some(r)) => r,
+            _ => materials[mat_index].density,
+        };
+        let (gas_work, gas_stress) = match (gas, obj.pressure) {
+            (Some(g), Some(p)) => {
+                let e = g.energy_of(rho, p);
+                if !(e.is_finite() && e > 0.0) {
+                    return Err(SceneError::new(
+                        format!("objects[{oi}].pressure"),
+                        format!(
+                            "gives internal energy {e} at density {rho}; must give a positive \
+                             one (raise the pressure)"
+                        ),
+                    ));
+                }
+                (rho * e, -p * nalgebra::Matrix3::identity())
+            }
+            _ => (0.0, nalgebra::Matrix3::zeros()),
+        };
         let ppc = obj
             .particles_per_cell
             .unwrap_or(scene.mpm.particles_per_cell);
@@ -126,6 +193,11 @@ fn fill_objects<const D: usize>(
                         half,
                         mat_index as u16,
                     );
+                    if gas.is_some() {
+                        let p = particles.len() - 1;
+                        particles.work[p] = gas_work;
+                        particles.stress[p] = gas_stress;
+                    }
                 }
             }
         }
@@ -336,17 +408,12 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         ));
     }
     let grid = grid_of::<D>(scene);
-    let materials: Vec<SolidMaterial> = scene
-        .materials
-        .iter()
-        .filter(|m| m.kind == MaterialKind::Solid)
-        .map(solid_material)
-        .collect();
+    let materials = particle_materials(scene, &grid)?;
     let particles = fill_particles(scene, &grid, &materials)?;
     let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
     let params = ExplicitParams {
         shape: scene.mpm.shape,
-        scheme: scene.mpm.update,
+        scheme: scene.mpm_update(),
         mass_floor: 1e-12 * min_mass,
         damping: scene.mpm.damping,
     };

@@ -160,9 +160,10 @@ pub struct MpmSpec {
     /// Shape function.
     #[serde(default = "default_shape")]
     pub shape: ShapeKind,
-    /// Stress update ordering.
-    #[serde(default = "default_update")]
-    pub update: UpdateScheme,
+    /// Stress update ordering (default: `musl` in scenes with gas points,
+    /// York Sec. 2.2; `usl` otherwise; see [`Scene::mpm_update`]).
+    #[serde(default)]
+    pub update: Option<UpdateScheme>,
     /// Default particles per cell per direction.
     #[serde(default = "default_ppc")]
     pub particles_per_cell: usize,
@@ -174,9 +175,6 @@ pub struct MpmSpec {
 fn default_shape() -> ShapeKind {
     ShapeKind::QuadraticBspline
 }
-fn default_update() -> UpdateScheme {
-    UpdateScheme::Usl
-}
 fn default_ppc() -> usize {
     2
 }
@@ -185,7 +183,7 @@ impl Default for MpmSpec {
     fn default() -> Self {
         Self {
             shape: default_shape(),
-            update: default_update(),
+            update: None,
             particles_per_cell: default_ppc(),
             damping: 0.0,
         }
@@ -200,6 +198,59 @@ pub enum MaterialKind {
     Solid,
     /// A fluid in cell-centred multi-material ICE.
     Fluid,
+}
+
+/// Where a fluid material lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Frame {
+    /// In the cells (multi-material ICE); its state comes from `[[regions]]`.
+    #[default]
+    Cells,
+    /// On material points (York Sec. 3.3: gas points); it fills
+    /// `[[objects]]` with a `density` and a `pressure` each.
+    Particles,
+}
+
+/// York's artificial viscosity of gas points (York Eqs. 24–25), in the
+/// table `materials[i].artificial_viscosity`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArtificialViscositySpec {
+    /// Geometric length g as a multiple of the smallest cell size, > 0
+    /// (York Sec. 4.1: √2).
+    #[serde(default = "default_g_over_dx")]
+    pub g_over_dx: f64,
+    /// Artificial bulk coefficient κ̃ ≥ 0 (York: 0.75; 0 turns q off).
+    #[serde(default = "default_kappa")]
+    pub kappa: f64,
+    /// Linear-term coefficient c₁ ≥ 0 (York: 1).
+    #[serde(default = "default_c")]
+    pub c1: f64,
+    /// Quadratic-term coefficient c₂ ≥ 0 (York: 1).
+    #[serde(default = "default_c")]
+    pub c2: f64,
+}
+
+fn default_g_over_dx() -> f64 {
+    crate::material::ArtificialViscosity::DEFAULT_G_OVER_DX
+}
+fn default_kappa() -> f64 {
+    crate::material::ArtificialViscosity::DEFAULT_KAPPA
+}
+fn default_c() -> f64 {
+    crate::material::ArtificialViscosity::DEFAULT_C1
+}
+
+impl Default for ArtificialViscositySpec {
+    fn default() -> Self {
+        Self {
+            g_over_dx: default_g_over_dx(),
+            kappa: default_kappa(),
+            c1: default_c(),
+            c2: crate::material::ArtificialViscosity::DEFAULT_C2,
+        }
+    }
 }
 
 /// Equation of state of a fluid material.
@@ -248,6 +299,11 @@ pub struct MaterialSpec {
     pub p_inf: Option<f64>,
     /// Dynamic viscosity μ ≥ 0 (fluids; default 0 = inviscid).
     pub viscosity: Option<f64>,
+    /// Fluids: `"cells"` (ICE, the default) or `"particles"` (gas points,
+    /// York Sec. 3.3). A material lives in one frame.
+    pub frame: Option<Frame>,
+    /// Gas points: York's artificial viscosity (defaults: the paper's).
+    pub artificial_viscosity: Option<ArtificialViscositySpec>,
     /// A rigid solid (coupled scenes): its particles move with their
     /// objects' `velocity` (one for all objects of the material),
     /// prescribed; the elastic constants give its bulk EOS in the cells.
@@ -476,7 +532,7 @@ fn dist2(a: &[f64], b: &[f64], n: usize) -> f64 {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
-    /// Name of a solid material.
+    /// Name of a solid material or of a fluid with `frame = "particles"`.
     pub material: String,
     /// Region to fill.
     pub geometry: Geometry,
@@ -487,6 +543,11 @@ pub struct ObjectSpec {
     /// Pressure on the inner surface of an annulus object (implicit mode),
     /// ramped with `implicit.load_ramp`.
     pub inner_pressure: Option<f64>,
+    /// Gas points: initial density (> 0).
+    pub density: Option<f64>,
+    /// Gas points: initial pressure (the EOS must give it a positive
+    /// internal energy at `density`).
+    pub pressure: Option<f64>,
     /// Keep only the part inside the grid instead of rejecting a region that
     /// extends beyond it (e.g. a quarter of an annulus on symmetry planes).
     #[serde(default)]
@@ -879,6 +940,8 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.gamma.is_some(), "gamma"),
         (m.p_inf.is_some(), "p_inf"),
         (m.viscosity.is_some(), "viscosity"),
+        (m.frame.is_some(), "frame"),
+        (m.artificial_viscosity.is_some(), "artificial_viscosity"),
     ] {
         if v {
             return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
@@ -977,7 +1040,47 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
             return Err(err(p("viscosity"), format!("must be ≥ 0 (got {mu})")));
         }
     }
+    if let Some(av) = &m.artificial_viscosity {
+        if !m.on_particles() {
+            return Err(err(
+                p("artificial_viscosity"),
+                "only for gas points (frame = \"particles\")",
+            ));
+        }
+        if !(av.g_over_dx.is_finite() && av.g_over_dx > 0.0 && av.g_over_dx <= 10.0) {
+            return Err(err(
+                p("artificial_viscosity.g_over_dx"),
+                format!("must satisfy 0 < g_over_dx ≤ 10 (got {})", av.g_over_dx),
+            ));
+        }
+        for (v, k) in [(av.kappa, "kappa"), (av.c1, "c1"), (av.c2, "c2")] {
+            if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
+                return Err(err(
+                    p(&format!("artificial_viscosity.{k}")),
+                    format!("must satisfy 0 ≤ {k} ≤ 100 (got {v})"),
+                ));
+            }
+        }
+    }
     Ok(())
+}
+
+impl MaterialSpec {
+    /// Whether the material lives on particles: a solid, or a fluid with
+    /// `frame = "particles"` (gas points, York Sec. 3.3).
+    pub fn on_particles(&self) -> bool {
+        self.kind == MaterialKind::Solid || self.is_gas_point()
+    }
+
+    /// Whether the material is a fluid on particles (a gas point).
+    pub fn is_gas_point(&self) -> bool {
+        self.kind == MaterialKind::Fluid && self.frame == Some(Frame::Particles)
+    }
+
+    /// Whether the material is a fluid in the cells (ICE).
+    pub fn in_cells(&self) -> bool {
+        self.kind == MaterialKind::Fluid && !self.is_gas_point()
+    }
 }
 
 /// Shape checks of a region's geometry (fluid regions, heat sources).
@@ -1395,6 +1498,128 @@ impl Scene {
         Ok(())
     }
 
+    /// Checks of a scene with gas points (York Sec. 3.3): explicit mode, no
+    /// fluid in the cells, every gas object with a density and a pressure
+    /// that give a positive internal energy, every solid object without
+    /// them, and no gas-point material in `[[regions]]` or inflow states (a
+    /// material lives in one frame).
+    fn validate_gas_points(&self) -> Result<(), SceneError> {
+        if self.time.mode != Mode::Explicit {
+            return Err(err(
+                "time.mode",
+                format!(
+                    "gas points (frame = \"particles\") run in explicit mode only; allowed: \
+                     explicit (got {})",
+                    self.time.mode.name()
+                ),
+            ));
+        }
+        if let Some(i) = self.materials.iter().position(|m| m.in_cells()) {
+            let gas = self.materials.iter().position(|m| m.is_gas_point());
+            return Err(err(
+                format!("materials[{}].frame", gas.unwrap_or(i)),
+                format!(
+                    "gas points cannot share a scene with a fluid in the cells (`{}`) yet; \
+                     allowed: every fluid on \"particles\" or every fluid in \"cells\"",
+                    self.materials[i].name
+                ),
+            ));
+        }
+        let gas_names: Vec<&str> = self
+            .materials
+            .iter()
+            .filter(|m| m.is_gas_point())
+            .map(|m| m.name.as_str())
+            .collect();
+        let both = |key: String, name: &str| {
+            err(
+                key,
+                format!(
+                    "`{name}` has frame = \"particles\" (its state comes from its objects); a \
+                     material lives in one frame, particles or cells"
+                ),
+            )
+        };
+        for (i, r) in self.regions.iter().enumerate() {
+            for (k, st) in r.states.iter().enumerate() {
+                if gas_names.contains(&st.material.as_str()) {
+                    return Err(both(
+                        format!("regions[{i}].states[{k}].material"),
+                        &st.material,
+                    ));
+                }
+            }
+        }
+        for faces in self.fluid.inflow.faces().iter() {
+            for (spec, name) in faces {
+                let Some(spec) = spec else { continue };
+                for (k, st) in spec.states.iter().enumerate() {
+                    if gas_names.contains(&st.material.as_str()) {
+                        return Err(both(
+                            format!("fluid.inflow.{name}.states[{k}].material"),
+                            &st.material,
+                        ));
+                    }
+                }
+            }
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            let p = |k: &str| format!("objects[{i}].{k}");
+            let Some(m) = self.materials.iter().find(|m| m.name == o.material) else {
+                continue;
+            };
+            if !m.is_gas_point() {
+                for (v, k) in [(o.density, "density"), (o.pressure, "pressure")] {
+                    if v.is_some() {
+                        return Err(err(
+                            p(k),
+                            "only for objects of gas points (fluids with frame = \"particles\"); \
+                             a solid's density is its material's",
+                        ));
+                    }
+                }
+                continue;
+            }
+            let Some(rho) = o.density else {
+                return Err(err(p("density"), "missing; gas objects need a density > 0"));
+            };
+            positive(&p("density"), rho)?;
+            let Some(pr) = o.pressure else {
+                return Err(err(
+                    p("pressure"),
+                    "missing; gas objects need an initial pressure",
+                ));
+            };
+            let min = match (m.eos, m.p_inf) {
+                (Some(EosKind::StiffenedGas), Some(pi)) => -pi,
+                _ => 0.0,
+            };
+            if !(pr.is_finite() && pr > min) {
+                return Err(err(
+                    p("pressure"),
+                    format!("must be finite and > {min} for `{}` (got {pr})", m.name),
+                ));
+            }
+            if o.inner_pressure.is_some() {
+                return Err(err(p("inner_pressure"), "only for solid objects"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The stress-update ordering of the explicit MPM step: `mpm.update`, or
+    /// by default MUSL in scenes with gas points (York Sec. 2.2, Eqs. 10–13)
+    /// and USL otherwise.
+    pub fn mpm_update(&self) -> UpdateScheme {
+        self.mpm.update.unwrap_or_else(|| {
+            if self.materials.iter().any(|m| m.is_gas_point()) {
+                UpdateScheme::Musl
+            } else {
+                UpdateScheme::Usl
+            }
+        })
+    }
+
     /// Checks of a scene with solid and fluid materials (MPM-ICE): one
     /// solid field per solid material.
     fn validate_coupled(&self) -> Result<(), SceneError> {
@@ -1408,7 +1633,7 @@ impl Scene {
                  one solid field), got none",
             ));
         }
-        if self.mpm.update == UpdateScheme::Musl {
+        if self.mpm.update == Some(UpdateScheme::Musl) {
             return Err(err(
                 "mpm.update",
                 "musl is not offered in coupled scenes; allowed: usf, usl",
@@ -1606,7 +1831,12 @@ impl Scene {
             }
         }
         let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);
-        let has_fluid = self.materials.iter().any(|m| m.kind == MaterialKind::Fluid);
+        let has_fluid = self.materials.iter().any(|m| m.in_cells());
+        let has_gas = self.materials.iter().any(|m| m.is_gas_point());
+        if has_gas {
+            self.validate_gas_points()?;
+        }
+        let has_solid = has_solid || has_gas;
         if has_solid && has_fluid {
             self.validate_coupled()?;
         } else {
@@ -1691,12 +1921,13 @@ impl Scene {
             if self
                 .materials
                 .iter()
-                .any(|m| m.name == o.material && m.kind != MaterialKind::Solid)
+                .any(|m| m.name == o.material && !m.on_particles())
             {
                 return Err(err(
                     p("material"),
                     format!(
-                        "`{}` is a fluid; objects are filled with solid particles",
+                        "`{}` is a fluid in the cells; objects are filled with particles of \
+                         solids or of fluids with frame = \"particles\"",
                         o.material
                     ),
                 ));

@@ -6,6 +6,7 @@ pub mod harness;
 pub mod ice_studies;
 pub mod impm_studies;
 pub mod mpm_studies;
+pub mod york_studies;
 
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
 pub type Study = (
@@ -60,6 +61,16 @@ pub const STUDIES: &[Study] = &[
         "impm_mms",
         "axis-aligned MMS run implicitly (Newmark): order vs explicit, stability at large dt",
         impm_studies::impm_mms,
+    ),
+    (
+        "york_sod",
+        "York 4.1 Sod with gas material points, L1(rho) vs exact Riemann beside ICE at equal dx",
+        york_studies::york_sod,
+    ),
+    (
+        "york_piston_container",
+        "York 4.2 piston-container: period vs Eq. 27 for m = 0.1 and 1.0 vs h",
+        york_studies::york_piston_container,
     ),
     (
         "ice_sod",

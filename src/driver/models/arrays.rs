@@ -183,15 +183,59 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
     }
 }
 
+/// The gas-point snapshot fields (York Sec. 3.3), one value per particle:
+/// `pressure` (the EOS pressure p of a gas point, −tr σ/3 of a solid),
+/// `density` (m/V, York Eq. 16), `internal_energy` (specific e of a gas
+/// point, York Eq. 23; the stored work per unit mass of a solid) and `q`
+/// (York Eq. 24; 0 for solids). Empty when no material is a gas point.
+pub fn gas_point_fields<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+) -> Vec<OutField> {
+    if materials.iter().all(|m| m.gas().is_none()) {
+        return Vec::new();
+    }
+    let n = p.len();
+    let (mut pres, mut rho, mut e, mut q) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
+    for i in 0..n {
+        let r = p.mass[i] / p.vol[i];
+        let ei = p.work[i] * p.vol0[i] / p.mass[i];
+        let mean = -p.stress[i].trace() / 3.0;
+        let (pi, qi) = match materials[p.material[i] as usize].gas() {
+            Some(g) => {
+                let qi = g.q_of(&p.stress[i], r, ei);
+                (mean - qi, qi)
+            }
+            None => (mean, 0.0),
+        };
+        pres.push(pi);
+        rho.push(r);
+        e.push(ei);
+        q.push(qi);
+    }
+    vec![
+        OutField::new("pressure", "Pa", Values::Scalar(pres)),
+        OutField::new("density", "kg/m^3", Values::Scalar(rho)),
+        OutField::new("internal_energy", "J/kg", Values::Scalar(e)),
+        OutField::new("q", "Pa", Values::Scalar(q)),
+    ]
+}
+
 /// Whether particle `i` holds only finite, physically possible values.
-fn particle_ok<const D: usize>(p: &Particles<D>, i: usize) -> bool {
-    particle_violation(p, i).is_none()
+fn particle_ok<const D: usize>(p: &Particles<D>, i: usize, materials: &[SolidMaterial]) -> bool {
+    particle_violation(p, i, materials).is_none()
 }
 
 /// The first impossible value of particle `i`: `(field, value, rule)`.
 fn particle_violation<const D: usize>(
     p: &Particles<D>,
     i: usize,
+    materials: &[SolidMaterial],
 ) -> Option<(&'static str, f64, &'static str)> {
     const POS: &str = "finite and > 0";
     const FIN: &str = "finite";
@@ -218,6 +262,15 @@ fn particle_violation<const D: usize>(
     if !(t.is_finite() && t > 0.0) {
         return Some(("temperature", t, POS));
     }
+    // A gas point needs a positive internal energy (York Eq. 23; its work
+    // holds ρ_ref e).
+    if materials
+        .get(p.material[i] as usize)
+        .is_some_and(|m| m.gas().is_some())
+        && !(p.work[i].is_finite() && p.work[i] > 0.0)
+    {
+        return Some(("internal_energy", p.work[i] * p.vol0[i] / p.mass[i], POS));
+    }
     None
 }
 
@@ -228,8 +281,8 @@ pub fn particle_watchdog<const D: usize>(
 ) -> Option<Violation> {
     let i = (0..p.len())
         .into_par_iter()
-        .find_first(|&i| !particle_ok(p, i))?;
-    let (field, value, rule) = particle_violation(p, i)?;
+        .find_first(|&i| !particle_ok(p, i, materials))?;
+    let (field, value, rule) = particle_violation(p, i, materials)?;
     Some(Violation {
         at: Location::Particle(i),
         material: materials

@@ -5,8 +5,8 @@ use crate::driver::model::{
     Values, Violation,
 };
 use crate::driver::models::arrays::{
-    load_particles, name_particle_material, particle_fields, particle_material_totals,
-    particle_watchdog, save_particles,
+    gas_point_fields, load_particles, name_particle_material, particle_fields,
+    particle_material_totals, particle_watchdog, save_particles,
 };
 use crate::driver::outputs::pad3;
 use crate::error::Error;
@@ -104,7 +104,11 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             ],
             csv: false,
         };
-        vec![particle_fields(&r.particles), grid]
+        let mut particles = particle_fields(&r.particles);
+        particles
+            .fields
+            .extend(gas_point_fields(&r.particles, &r.materials));
+        vec![particles, grid]
     }
 
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
