@@ -147,6 +147,7 @@ fn fill_lagrangian_ghosts<const D: usize>(
 /// The Lagrangian strain `V^L/V − 1 = v^L/v − 1` of material `r` (Eq. 13's
 /// `v`, Eq. 41's `v^L`) per cell into `ws.remap`; 0 where it is not usable
 /// and in the ghosts ([`IceParams::lagrangian_remap`]).
+#[inline]
 fn remap_strain<const D: usize>(
     state: &IceState<D>,
     params: &IceParams<D>,
@@ -243,6 +244,7 @@ impl<const D: usize> AdvectedCell<'_, D> {
 
 /// Commit: the advected values of the Eulerian materials become the state
 /// (buffers swapped, no copy).
+#[inline]
 fn commit<const D: usize>(
     state: &mut IceState<D>,
     params: &IceParams<D>,
@@ -265,6 +267,7 @@ fn commit<const D: usize>(
 /// convective predictor of the next step; zero for materials that are not
 /// advected here (carried by particles or rigid). The buffers are
 /// allocated once, on the first semi-implicit step.
+#[inline]
 fn advective_acceleration<const D: usize>(
     state: &IceState<D>,
     params: &IceParams<D>,

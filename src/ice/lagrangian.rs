@@ -196,6 +196,7 @@ impl<'a, const D: usize> LagrangianOut<'a, D> {
 
 /// `true` when a particle-borne material fills more than
 /// [`SOLID_FRACTION_FOR_FLOW_WORK`] of cell `c` or of a face neighbour.
+#[inline]
 fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
     let layout = &inp.st.layout;
     let solid_in = |k: usize| {
@@ -210,6 +211,7 @@ fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
 /// rigid materials held at their velocity); with `cons`, the kinetic
 /// energy it dissipates (plus the work of a rigid material) becomes heat
 /// of the Eulerian materials, shared by `f_θ = θ κ/stk_e`.
+#[inline]
 fn momentum_exchange<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     k: &[f64],
@@ -270,6 +272,7 @@ fn momentum_exchange<const D: usize>(
 /// coefficients `h` (`None`: off). Keeps the temperatures before it and
 /// the thermal expansivities `β` there, and returns `Σ_s θ_s β_s Ṫ_s`
 /// (Eq. 40; 0 without heat exchange).
+#[inline]
 fn heat_exchange<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     h: Option<&[f64]>,
@@ -307,6 +310,7 @@ fn heat_exchange<const D: usize>(
 /// # Errors
 /// [`IceError::NonPhysical`] for a non-positive temperature or specific
 /// volume of an Eulerian material.
+#[inline]
 fn store_cell<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     out: &LagrangianOut<'_, D>,

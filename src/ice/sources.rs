@@ -95,6 +95,7 @@ impl<const D: usize> LagrangianCell<D> {
 }
 
 /// The face pressure gradient `∇p*` of cell `c` (Guilkey Eq. 33).
+#[inline]
 fn pressure_gradient<const D: usize>(
     layout: &CellLayout<D>,
     pstar: &[Vec<f64>; D],
@@ -115,6 +116,7 @@ fn pressure_gradient<const D: usize>(
 /// sources were applied (Guilkey Sec. 3.3 step 8). Returns the kinetic
 /// energy change of the pressure force and gravity, `Σ_r ½ M_r (|u_p|² −
 /// |u|²)`.
+#[inline]
 pub(super) fn cell_sources<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     c: usize,
@@ -172,6 +174,7 @@ pub(super) fn cell_sources<const D: usize>(
 /// Heat sources: internal energy added to material `r` of cell `c` at a
 /// rate per unit volume over a time window (the part of the step inside
 /// it).
+#[inline]
 fn add_heat_sources<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     c: usize,
@@ -193,6 +196,7 @@ fn add_heat_sources<const D: usize>(
 /// `Σ_r θ_r κ_r` over the materials that receive the flux work and the
 /// exchange heat (the Eulerian ones) in cell `c`: the denominator of their
 /// `f_θ`.
+#[inline]
 pub(super) fn eulerian_theta_kappa<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     c: usize,
@@ -211,6 +215,7 @@ pub(super) fn eulerian_theta_kappa<const D: usize>(
 /// θ_s,f u*_s,f`, of which the internal part `Δ(mE) − dke_src` (plus the
 /// viscous heating) is shared among the Eulerian materials by `f_θ =
 /// θ κ/stk_e`.
+#[inline]
 pub(super) fn conservative_energy<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     c: usize,
@@ -244,6 +249,7 @@ pub(super) fn conservative_energy<const D: usize>(
 /// u_L)/h_d` and the mean of the two cells' central tangential derivatives,
 /// `θ_f = (θ_L + θ_R)/2`; the divergence is the difference of the face
 /// tractions. Needs the velocity ghosts including corners.
+#[inline]
 fn viscous_source<const D: usize>(
     layout: &CellLayout<D>,
     st: &IceState<D>,

@@ -43,6 +43,7 @@ pub(super) struct CellShare {
 /// trace in a solid's cell) that cannot absorb its linearised share of the
 /// compression takes its EOS volume at the new pressure instead. The
 /// result may still be non-physical; the caller checks it.
+#[inline]
 pub(super) fn lagrangian_volume(eos: &FluidEos, m: &MaterialShare, cell: &CellShare) -> f64 {
     // Guilkey Eq. 40 with the isentropic κ of Eq. 29: the
     // adiabatic heating is inside κ, so Ṫ is the exchange
