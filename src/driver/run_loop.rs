@@ -384,7 +384,7 @@ pub fn run_model<M: Model>(
         }
         step_s += s.elapsed().as_secs_f64();
         failure = run.after_step(model, opts)?;
-        if model.steps() % 16 == 0 {
+        if model.steps().is_multiple_of(16) {
             let t = model.time();
             bar.set_position((1000.0 * t / run.cad.end) as u64);
             bar.set_message(format!("{t:.4e}"));

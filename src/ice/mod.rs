@@ -115,10 +115,11 @@ pub struct Site {
     /// Interior cell coordinates (`D` entries; ghosts are negative or
     /// `≥ cells`).
     pub cell: Vec<isize>,
-    /// Material index, `None` for a mixture quantity.
-    pub material: Option<usize>,
+    /// Material index, `None` for a mixture quantity (`u32` keeps the
+    /// crate's error small).
+    pub material: Option<u32>,
     /// The material's scene name (shown instead of the index when known).
-    pub material_name: Option<String>,
+    pub material_name: Option<Box<str>>,
 }
 
 impl std::fmt::Display for Site {
@@ -239,8 +240,9 @@ pub(crate) fn site<const D: usize>(state: &IceState<D>, c: usize, material: Opti
         step: state.steps,
         time: state.time,
         cell: state.layout.coords(c).to_vec(),
-        material,
-        material_name: material.and_then(|m| state.materials.get(m).map(|x| x.name.clone())),
+        material: material.map(|m| m as u32),
+        material_name: material
+            .and_then(|m| state.materials.get(m).map(|x| x.name.as_str().into())),
     }
 }
 
