@@ -211,7 +211,9 @@ fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
 /// rigid materials held at their velocity); with `cons`, the kinetic
 /// energy it dissipates (plus the work of a rigid material) becomes heat
 /// of the Eulerian materials, shared by `f_θ = θ κ/stk_e`.
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 fn momentum_exchange<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     k: &[f64],
@@ -272,7 +274,9 @@ fn momentum_exchange<const D: usize>(
 /// coefficients `h` (`None`: off). Keeps the temperatures before it and
 /// the thermal expansivities `β` there, and returns `Σ_s θ_s β_s Ṫ_s`
 /// (Eq. 40; 0 without heat exchange).
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 fn heat_exchange<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     h: Option<&[f64]>,
@@ -310,7 +314,9 @@ fn heat_exchange<const D: usize>(
 /// # Errors
 /// [`IceError::NonPhysical`] for a non-positive temperature or specific
 /// volume of an Eulerian material.
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 fn store_cell<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     out: &LagrangianOut<'_, D>,

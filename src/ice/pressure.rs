@@ -179,7 +179,9 @@ struct CellEquilibrium<'a> {
 /// on the reference volume of the cell. Returns the iteration count.
 ///
 /// Each cell `c` must be read and written by one task only.
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 fn equilibrate_one(
     inp: &CellInputs<'_>,
     out: &CellEquilibrium<'_>,
@@ -240,7 +242,9 @@ fn equilibrate_one(
 /// `Σ_r M_r v_r` where a particle material fills the cell, blended to the
 /// cell volume where it does not (see [`SOLID_FILL_FOR_NORMALISING`]);
 /// the cell volume when the total is not positive.
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 fn reference_volume(inp: &CellInputs<'_>, out: &CellEquilibrium<'_>, c: usize) -> f64 {
     let (mut sum, mut solid) = (0.0, 0.0);
     for r in 0..inp.eos.len() {

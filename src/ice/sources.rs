@@ -116,7 +116,9 @@ fn pressure_gradient<const D: usize>(
 /// sources were applied (Guilkey Sec. 3.3 step 8). Returns the kinetic
 /// energy change of the pressure force and gravity, `Σ_r ½ M_r (|u_p|² −
 /// |u|²)`.
-#[inline]
+// Called once per cell from one place: the body of the loop it came
+// from before the stage split, kept inlined there.
+#[inline(always)]
 pub(super) fn cell_sources<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     c: usize,
