@@ -276,6 +276,40 @@ fn bad_checkpoints_are_rejected_with_the_reason() {
     assert!(msg.contains("nowhere"), "{msg}");
 }
 
+/// Runs `s` (in `tmp/run`) into a failure that must stop with a checkpoint,
+/// checks that the checkpoint reads back at the stop's step and that a
+/// restart from it (in `tmp/again`) fails the same way; returns the message
+/// and the checkpoint's step.
+fn stop_and_restart(s: &Scene, tmp: &Path) -> (String, u64) {
+    let err = run_scene(s, &opts(&tmp.join("run"))).expect_err("must fail");
+    let msg = err.to_string();
+    println!("{msg}");
+    let Error::Stopped {
+        checkpoint, step, ..
+    } = &err
+    else {
+        panic!("not a stop with a checkpoint: {msg}");
+    };
+    // The checkpoint holds a state the watchdog passed; it restarts into
+    // the same failure, named the same way.
+    let ck = mpmice::output::checkpoint::Checkpoint::read(checkpoint, None).expect("readable");
+    assert_eq!(ck.step(), *step);
+    let again = run_scene(
+        s,
+        &RunOptions {
+            restart: Some(checkpoint.clone()),
+            ..opts(&tmp.join("again"))
+        },
+    )
+    .expect_err("fails again");
+    assert_eq!(
+        msg.split(';').next(),
+        again.to_string().split(';').next(),
+        "the same failure after a restart"
+    );
+    (msg, *step)
+}
+
 #[test]
 fn a_blow_up_names_the_site_and_keeps_the_last_good_state() {
     // Explicit MPM at 40 times its stable step: the disks invert.
@@ -286,34 +320,12 @@ fn a_blow_up_names_the_site_and_keeps_the_last_good_state() {
     s.time.watchdog_interval = 1;
     s.output.interval = Some(0.4);
     let dir = tmp.path().join("run");
-    let err = run_scene(&s, &opts(&dir)).expect_err("must blow up");
-    let msg = err.to_string();
-    println!("{msg}");
-    let Error::Stopped {
-        checkpoint, step, ..
-    } = &err
-    else {
-        panic!("not a stop with a checkpoint: {msg}");
-    };
+    let (msg, _) = stop_and_restart(&s, tmp.path());
     assert!(msg.contains("step") && msg.contains("t = "), "{msg}");
     assert!(
         msg.contains("particle") && msg.contains("`elastic`"),
         "names particle and material: {msg}"
     );
-    // The checkpoint holds a state the watchdog passed; it restarts into
-    // the same failure, named the same way.
-    let ck = mpmice::output::checkpoint::Checkpoint::read(checkpoint, None).expect("readable");
-    assert_eq!(ck.step(), *step);
-    let again = run_scene(
-        &s,
-        &RunOptions {
-            restart: Some(checkpoint.clone()),
-            ..opts(&tmp.path().join("again"))
-        },
-    )
-    .expect_err("fails again");
-    let (a, b) = (msg.split(';').next(), again.to_string());
-    assert_eq!(a, b.split(';').next(), "the same failure after a restart");
     // Every output file parses: the summary names the error.
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
@@ -453,31 +465,10 @@ fn a_fluid_torn_to_vacuum_names_the_cell_and_material_and_keeps_the_last_good_st
     std::fs::write(&path, text).expect("write");
     let mut s = mpmice::scene::load(&path).expect("scene");
     s.time.watchdog_interval = 5;
-    let dir = tmp.path().join("run");
-    let err = run_scene(&s, &opts(&dir)).expect_err("must fail");
-    let msg = err.to_string();
-    println!("{msg}");
-    let Error::Stopped {
-        checkpoint, step, ..
-    } = &err
-    else {
-        panic!("not a stop with a checkpoint: {msg}");
-    };
+    let (msg, step) = stop_and_restart(&s, tmp.path());
     for part in ["step ", "t = ", "cell [", "material `gas`", "temperature"] {
         assert!(msg.contains(part), "`{part}` missing: {msg}");
     }
-    // The checkpoint is the last state the watchdog passed, before the
-    // failing step, and it restarts into the same failure.
-    let ck = mpmice::output::checkpoint::Checkpoint::read(checkpoint, None).expect("readable");
-    assert_eq!(ck.step(), *step);
+    // The checkpoint is the last state the watchdog passed (every 5 steps).
     assert_eq!(step % 5, 0);
-    let again = run_scene(
-        &s,
-        &RunOptions {
-            restart: Some(checkpoint.clone()),
-            ..opts(&tmp.path().join("again"))
-        },
-    )
-    .expect_err("fails again");
-    assert_eq!(msg.split(';').next(), again.to_string().split(';').next());
 }

@@ -93,6 +93,39 @@ pub enum ArrayData {
     U64(Vec<u64>),
 }
 
+/// An element type of checkpoint arrays: how its values sit in
+/// [`ArrayData`].
+trait Element: Sized {
+    /// The values of `data` if they are of this type.
+    fn buffer(data: &mut ArrayData) -> Option<&mut Vec<Self>>;
+    /// Wraps values of this type.
+    fn wrap(v: Vec<Self>) -> ArrayData;
+}
+
+impl Element for f64 {
+    fn buffer(data: &mut ArrayData) -> Option<&mut Vec<f64>> {
+        match data {
+            ArrayData::F64(v) => Some(v),
+            ArrayData::U64(_) => None,
+        }
+    }
+    fn wrap(v: Vec<f64>) -> ArrayData {
+        ArrayData::F64(v)
+    }
+}
+
+impl Element for u64 {
+    fn buffer(data: &mut ArrayData) -> Option<&mut Vec<u64>> {
+        match data {
+            ArrayData::U64(v) => Some(v),
+            ArrayData::F64(_) => None,
+        }
+    }
+    fn wrap(v: Vec<u64>) -> ArrayData {
+        ArrayData::U64(v)
+    }
+}
+
 impl ArrayData {
     /// The element type.
     pub fn dtype(&self) -> Dtype {
@@ -497,19 +530,7 @@ impl Checkpoint {
         shape: Vec<usize>,
         fill: impl FnOnce(&mut Vec<f64>),
     ) {
-        match self.arrays.get_mut(name) {
-            Some((s, ArrayData::F64(buf))) => {
-                buf.clear();
-                fill(buf);
-                debug_assert_eq!(element_count(&shape), Some(buf.len()), "`{name}`");
-                *s = shape;
-            }
-            _ => {
-                let mut buf = Vec::new();
-                fill(&mut buf);
-                self.put_f64(name, shape, buf);
-            }
-        }
+        self.put_with(name, shape, fill);
     }
 
     /// The `u64` counterpart of [`Checkpoint::put_f64_with`].
@@ -519,19 +540,27 @@ impl Checkpoint {
         shape: Vec<usize>,
         fill: impl FnOnce(&mut Vec<u64>),
     ) {
-        match self.arrays.get_mut(name) {
-            Some((s, ArrayData::U64(buf))) => {
+        self.put_with(name, shape, fill);
+    }
+
+    fn put_with<T: Element>(
+        &mut self,
+        name: &str,
+        shape: Vec<usize>,
+        fill: impl FnOnce(&mut Vec<T>),
+    ) {
+        if let Some((s, data)) = self.arrays.get_mut(name) {
+            if let Some(buf) = T::buffer(data) {
                 buf.clear();
                 fill(buf);
                 debug_assert_eq!(element_count(&shape), Some(buf.len()), "`{name}`");
                 *s = shape;
-            }
-            _ => {
-                let mut buf = Vec::new();
-                fill(&mut buf);
-                self.put_u64(name, shape, buf);
+                return;
             }
         }
+        let mut buf = Vec::new();
+        fill(&mut buf);
+        self.put(name, shape, T::wrap(buf));
     }
 
     /// Adds an `f64` array of `shape` (C order).
@@ -1058,7 +1087,7 @@ fn decode_npy(bytes: &[u8], dtype: Dtype, shape: &[usize]) -> Result<ArrayData, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::test_dir;
+    use crate::output::{test_dir, test_entries as entries};
     use serde_json::json;
 
     const SCENE: &str = "fnv1a64:0123456789abcdef";
@@ -1149,15 +1178,6 @@ mod tests {
         e["bytes"] = json!(bytes.len());
         e["checksum"] = json!(content_hash(bytes));
         save_manifest(dir, &m);
-    }
-
-    fn entries(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = fs::read_dir(dir)
-            .expect("read dir")
-            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
     }
 
     #[test]

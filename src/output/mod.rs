@@ -107,18 +107,21 @@ pub(crate) fn test_dir(tag: &str) -> PathBuf {
     dir
 }
 
+/// The sorted names in a test folder.
+#[cfg(test)]
+pub(crate) fn test_entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn entries(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = fs::read_dir(dir)
-            .expect("read dir")
-            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
+    use test_entries as entries;
 
     #[test]
     fn atomic_write_replaces_and_leaves_no_tmp() {

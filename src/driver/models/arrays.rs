@@ -6,7 +6,7 @@
 use nalgebra::{Matrix3, SVector};
 use rayon::prelude::*;
 
-use crate::driver::model::{FieldSet, Geometry, Location, OutField, Values, Violation};
+use crate::driver::model::{Conserved, FieldSet, Geometry, Location, OutField, Values, Violation};
 use crate::driver::outputs::{pad3, per_depth};
 use crate::ice::{IceState, MaterialCells};
 use crate::material::eos::EquationOfState;
@@ -538,5 +538,21 @@ pub fn name_particle_material<const D: usize>(
             crate::error::Error::Numerical { site, what }
         }
         e => e,
+    }
+}
+
+/// The conservation totals of a particle model: per material, and the
+/// model's energies.
+pub fn particle_conserved<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+    energies: crate::stepper::Energies,
+) -> Conserved {
+    Conserved {
+        materials: (0..materials.len())
+            .map(|k| particle_material_totals(p, materials, k))
+            .collect(),
+        energies,
+        momentum_scale: p.momentum_scale(),
     }
 }

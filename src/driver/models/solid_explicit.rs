@@ -5,8 +5,8 @@ use crate::driver::model::{
     Values, Violation,
 };
 use crate::driver::models::arrays::{
-    gas_point_fields, load_particles, name_particle_material, particle_fields,
-    particle_material_totals, particle_watchdog, save_particles,
+    gas_point_fields, load_particles, name_particle_material, particle_conserved, particle_fields,
+    particle_watchdog, save_particles,
 };
 use crate::driver::outputs::pad3;
 use crate::error::Error;
@@ -122,13 +122,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
 
     fn conserved(&self) -> Conserved {
         let r = &self.run;
-        Conserved {
-            materials: (0..r.materials.len())
-                .map(|k| particle_material_totals(&r.particles, &r.materials, k))
-                .collect(),
-            energies: r.energies(),
-            momentum_scale: r.particles.momentum_scale(),
-        }
+        particle_conserved(&r.particles, &r.materials, r.energies())
     }
 
     fn watchdog(&self) -> Option<Violation> {

@@ -7,8 +7,8 @@ use crate::driver::model::{
     Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
 };
 use crate::driver::models::arrays::{
-    load_particles, name_particle_material, particle_fields, particle_material_totals,
-    particle_watchdog, put_vectors, save_particles, take_vectors,
+    load_particles, name_particle_material, particle_conserved, particle_fields, particle_watchdog,
+    put_vectors, save_particles, take_vectors,
 };
 use crate::driver::models::solid_explicit::SOLID_HISTORY;
 use crate::error::Error;
@@ -82,13 +82,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
 
     fn conserved(&self) -> Conserved {
         let r = &self.run;
-        Conserved {
-            materials: (0..r.materials.len())
-                .map(|k| particle_material_totals(&r.particles, &r.materials, k))
-                .collect(),
-            energies: self.energies(),
-            momentum_scale: r.particles.momentum_scale(),
-        }
+        particle_conserved(&r.particles, &r.materials, self.energies())
     }
 
     fn watchdog(&self) -> Option<Violation> {
