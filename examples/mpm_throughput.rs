@@ -1,7 +1,8 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps]`
-use mpmice::diagnostics::bench_cases::rotating_block;
+//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas]`
+//! (`gas`: the same block as gas points, York Sec. 3.3).
+use mpmice::diagnostics::bench_cases::{rotating_block_of, BlockMaterial};
 use mpmice::shape::ShapeKind;
 
 fn main() {
@@ -13,7 +14,11 @@ fn main() {
         _ => ShapeKind::QuadraticBspline,
     };
     let steps: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(300);
-    let mut run = rotating_block(shape);
+    let material = match args.get(3).map(String::as_str) {
+        Some("gas") => BlockMaterial::GasPoint,
+        _ => BlockMaterial::NeoHookean,
+    };
+    let mut run = rotating_block_of(shape, material);
     run.time.max_steps = Some(steps);
     let np = run.particles.len() as f64;
     let start = std::time::Instant::now();
@@ -24,7 +29,7 @@ fn main() {
     let t = run.phase_times();
     let ms = |s: f64| 1e3 * s / steps as f64;
     println!(
-        "{shape:?}: {np} particles, {steps} steps, {:.3e} particle-steps/s on {} threads; \
+        "{shape:?} {material:?}: {np} particles, {steps} steps, {:.3e} particle-steps/s on {} threads; \
          per step: bin {:.2} ms, p2g {:.2} ms, grid {:.2} ms, g2p {:.2} ms",
         np * steps as f64 / wall,
         rayon::current_num_threads(),

@@ -4,16 +4,35 @@
 use nalgebra::SVector;
 
 use crate::grid::{Boundary, Grid};
-use crate::material::{ElasticConstants, SolidMaterial, SolidModel};
+use crate::material::eos::{FluidEos, IdealGas};
+use crate::material::{ArtificialViscosity, ElasticConstants, GasPoint, SolidMaterial, SolidModel};
 use crate::mpm::{ExplicitParams, Particles, UpdateScheme};
 use crate::shape::ShapeKind;
 use crate::stepper::{SolidRun, TimeControl};
+
+/// What the benchmark block is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BlockMaterial {
+    /// Neo-Hookean solid (E = 1e6, ν = 0.3, ρ = 1000).
+    NeoHookean,
+    /// Gas points (York Sec. 3.3): ideal gas γ = 1.4, c_v = 717.5, ρ = 1.2,
+    /// p = 1e5, μ = 1.8e-5, York's artificial viscosity (g = √2 Δx).
+    GasPoint,
+}
 
 /// A 2D neo-Hookean block (E = 1e6, ν = 0.3, ρ = 1000) of 2×2 particles per
 /// cell filling [0.1, 0.9]² of a 200×200 grid with fixed walls: 102 400
 /// particles, in a slow rigid rotation (0.01 rad/s) so that every kernel
 /// works; fixed Δt at Courant number 0.3, USL.
 pub fn rotating_block(shape: ShapeKind) -> SolidRun<2> {
+    rotating_block_of(shape, BlockMaterial::NeoHookean)
+}
+
+/// [`rotating_block`] made of `material`: the same particles, grid, shape
+/// function and update, Δt at Courant number 0.3 of the material's wave
+/// speed — so a gas point's cost is measured against a solid point's on
+/// identical work.
+pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<2> {
     let n = 200;
     let grid = Grid::<2>::new(
         SVector::zeros(),
@@ -21,13 +40,42 @@ pub fn rotating_block(shape: ShapeKind) -> SolidRun<2> {
         [n, n],
         [[Boundary::Fixed; 2]; 2],
     );
-    let mat = SolidMaterial {
-        name: "block".into(),
-        density: 1000.0,
-        model: SolidModel::NeoHookean,
-        elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
-    };
     let h = 1.0 / n as f64;
+    let (gamma, p0) = (1.4, 1e5);
+    let (mat, rho, speed) = match material {
+        BlockMaterial::NeoHookean => {
+            let mat = SolidMaterial {
+                name: "block".into(),
+                density: 1000.0,
+                model: SolidModel::NeoHookean,
+                elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
+            };
+            let c = mat.wave_speed(1000.0);
+            (mat, 1000.0, c)
+        }
+        BlockMaterial::GasPoint => {
+            let ideal = IdealGas::new(gamma, 717.5).expect("valid ideal gas");
+            let mat = SolidMaterial {
+                name: "gas".into(),
+                density: 0.0,
+                model: SolidModel::GasPoint(GasPoint {
+                    eos: FluidEos::IdealGas(ideal),
+                    viscosity: 1.8e-5,
+                    q: ArtificialViscosity {
+                        g: ArtificialViscosity::DEFAULT_G_OVER_DX * h,
+                        kappa: ArtificialViscosity::DEFAULT_KAPPA,
+                        c1: ArtificialViscosity::DEFAULT_C1,
+                        c2: ArtificialViscosity::DEFAULT_C2,
+                    },
+                }),
+                elastic: ElasticConstants {
+                    lambda: 0.0,
+                    mu: 0.0,
+                },
+            };
+            (mat, 1.2, (gamma * p0 / 1.2f64).sqrt())
+        }
+    };
     let vol = h * h / 4.0;
     let mut p = Particles::<2>::default();
     for j in 0..320 {
@@ -37,7 +85,13 @@ pub fn rotating_block(shape: ShapeKind) -> SolidRun<2> {
                 0.1 + (j as f64 + 0.5) * h / 2.0,
             ]);
             let v = SVector::from([-(x[1] - 0.5), x[0] - 0.5]) * 0.01;
-            p.push(x, v, 1000.0 * vol, vol, SVector::repeat(h / 4.0), 0);
+            p.push(x, v, rho * vol, vol, SVector::repeat(h / 4.0), 0);
+            if material == BlockMaterial::GasPoint {
+                // York Eq. 22: ρ_ref e = p/(γ − 1) per unit reference volume.
+                let k = p.len() - 1;
+                p.work[k] = p0 / (gamma - 1.0);
+                p.stress[k] = nalgebra::Matrix3::identity() * -p0;
+            }
         }
     }
     let params = ExplicitParams {
@@ -46,7 +100,7 @@ pub fn rotating_block(shape: ShapeKind) -> SolidRun<2> {
         mass_floor: 1e-12,
         damping: 0.0,
     };
-    let dt = 0.3 * h / mat.wave_speed(1000.0);
+    let dt = 0.3 * h / speed;
     let time = TimeControl {
         end: f64::INFINITY,
         cfl: 0.3,

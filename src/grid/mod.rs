@@ -218,23 +218,36 @@ impl<const D: usize> Grid<D> {
         });
     }
 
-    /// Calls `f(ghost, mirror, axis, bc)` for every node of the boundary layer
-    /// (with `ghost == mirror`) and every ghost layer of each non-free face,
-    /// axis by axis so that corners fold twice.
+    /// Calls `f(ghost, mirror, axis, bc)` for every ghost layer of each
+    /// non-free face and then every node of the boundary layers (with
+    /// `ghost == mirror`), axis by axis so that corners fold twice.
+    ///
+    /// Within an axis the ghosts of both faces go first, outermost in, and
+    /// the boundary layers last. Where the domain is thick, no ghost of one
+    /// face folds onto a boundary layer, so the order is immaterial. Where it
+    /// is one cell thick (a strip, with a stencil that reaches a ghost), the
+    /// ghost beyond one face folds onto the other face's boundary layer, and
+    /// the mirror images beyond that face must reflect it again (the images
+    /// of a strip between two mirrors repeat with period 2h): folding the
+    /// boundary layers last does that for both faces alike. Folding one
+    /// face's boundary layer before the other face's ghosts reflected the
+    /// lower face's ghost twice and the upper face's once, and a gas at rest
+    /// on a one-cell strip with quadratic B-splines then drifted (ρ up to
+    /// 1.017 and |v| 0.79 by t = 0.1, `examples/york_sod_probe`, `CASE=rest
+    /// SHAPE=q`).
     fn for_each_mirror_pair(&self, mut f: impl FnMut(usize, usize, usize, Boundary)) {
         let strides = self.strides();
         for axis in 0..D {
             let n = self.cells[axis] as isize;
-            for side in 0..2 {
-                let bc = self.bc[axis][side];
-                if matches!(bc, Boundary::Free | Boundary::Periodic) {
+            for k in (0..=GHOST as isize).rev() {
+                // k = GHOST … 1: ghost layers; k = 0: boundary layers.
+                if k > n {
                     continue;
                 }
-                // Boundary layer first, then ghosts from the outermost in:
-                // the boundary layer must see only its own contributions.
-                for k in 0..=GHOST as isize {
-                    if k > n {
-                        break;
+                for side in 0..2 {
+                    let bc = self.bc[axis][side];
+                    if matches!(bc, Boundary::Free | Boundary::Periodic) {
+                        continue;
                     }
                     let (ghost, mirror) = if side == 0 { (-k, k) } else { (n + k, n - k) };
                     let shift = (mirror - ghost) * strides[axis] as isize;
