@@ -1,11 +1,13 @@
 //! Materials: solid constitutive models (`solid`), the equation-of-state
 //! interface (`equation_of_state`), fluid equations of state (`eos`,
-//! `solid_eos`) and the gas on material points (`gas_point`, York Sec. 3.3).
+//! `solid_eos`), J2 plasticity (`plasticity`) and the gas on material points
+//! (`gas_point`, York Sec. 3.3).
 //! Imports no physics module.
 
 pub mod eos;
 pub mod equation_of_state;
 pub mod gas_point;
+pub mod plasticity;
 pub mod solid;
 pub mod solid_eos;
 
