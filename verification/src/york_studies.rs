@@ -40,6 +40,10 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
             ShapeKind::Linear,
             "gas points, bilinear hats (York's choice), MUSL, York q",
         ),
+        (
+            ShapeKind::QuadraticBspline,
+            "gas points, quadratic B-splines, MUSL, York q",
+        ),
     ] {
         let mut points = Vec::new();
         for &n in cells {
@@ -91,7 +95,7 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
         "target: gas points within 1.5x the ICE's L1 at equal dx and order >= 0.8".to_string(),
     ];
     let gimp = &series[0];
-    for ice in &series[2..] {
+    for ice in series.iter().filter(|s| s.label.starts_with("ICE")) {
         let ratios: Vec<String> = gimp
             .points
             .iter()
