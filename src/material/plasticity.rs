@@ -180,13 +180,22 @@ pub struct J2 {
     pub specific_heat: f64,
 }
 
-/// A point's plastic state.
+/// A point's plastic state (default: virgin, at 300 K).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlasticState {
     /// Equivalent plastic strain ε̄.
     pub plastic_strain: f64,
     /// Temperature [K].
     pub temperature: f64,
+}
+
+impl Default for PlasticState {
+    fn default() -> Self {
+        Self {
+            plastic_strain: 0.0,
+            temperature: 300.0,
+        }
+    }
 }
 
 /// What one return did.

@@ -6,6 +6,7 @@
 use nalgebra::Matrix3;
 
 use super::gas_point::{GasPoint, GasStep};
+use super::plasticity::{PlasticState, J2};
 
 /// Isotropic elastic constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,6 +63,14 @@ pub enum SolidModel {
     /// energy per unit reference volume, ρ_ref e (ρ_ref = m / V⁰).
     #[serde(skip)]
     GasPoint(GasPoint),
+    /// Hypo-elastic (Jaumann rate, as [`SolidModel::LinearElastic`]) with
+    /// J2 plasticity by radial return ([`J2`]); set by the scene for
+    /// `model = "linear_elastic"` with a `plasticity` table. The particle's
+    /// `work` holds the total stress work (stored and dissipated) per unit
+    /// reference volume; its equivalent plastic strain and temperature are
+    /// [`PlasticState`].
+    #[serde(skip)]
+    ElasticPlastic(J2),
 }
 
 impl SolidModel {
@@ -89,6 +98,15 @@ impl SolidMaterial {
     /// point's sound speed needs its energy: [`GasPoint::sound_speed`]).
     pub fn wave_speed(&self, rho: f64) -> f64 {
         (self.elastic.p_wave() / rho).sqrt()
+    }
+
+    /// The plasticity of this material, if it has one.
+    #[inline]
+    pub fn plasticity(&self) -> Option<&J2> {
+        match &self.model {
+            SolidModel::ElasticPlastic(j2) => Some(j2),
+            _ => None,
+        }
     }
 
     /// The gas-point model of this material, if it is one.
@@ -123,7 +141,9 @@ impl SolidMaterial {
     /// is that work; for a gas point, its internal energy ρ_ref e). `gas`
     /// gives a gas point its reference density ρ_ref = m/V⁰, its Jacobian at
     /// the start of the step and the largest gas sound speed (York Eq. 24);
-    /// solids ignore it.
+    /// solids ignore it. `plastic` is the point's plastic state (read and
+    /// updated by [`SolidModel::ElasticPlastic`] only; the current density
+    /// for its heating is `gas.rho_ref / j`).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn update_stress(
@@ -135,6 +155,7 @@ impl SolidMaterial {
         gas: &GasInput,
         stress: &mut Matrix3<f64>,
         work: &mut f64,
+        plastic: &mut PlasticState,
     ) {
         let ElasticConstants { lambda, mu } = self.elastic;
         match self.model {
@@ -165,6 +186,14 @@ impl SolidMaterial {
             SolidModel::NeoHookean => {
                 *stress = neo_hookean_stress_j(lambda, mu, f_new, j);
             }
+            SolidModel::ElasticPlastic(j2) => {
+                let old = *stress;
+                j2.update(l, dt, lambda, mu, gas.rho_ref / j, stress, plastic);
+                let d = 0.5 * (l + l.transpose());
+                // Total stress power (stored + dissipated), as for the
+                // hypo-elastic model.
+                *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
+            }
         }
     }
 
@@ -184,7 +213,10 @@ impl SolidMaterial {
     ) -> Matrix3<f64> {
         let ElasticConstants { lambda, mu } = self.elastic;
         match self.model {
-            SolidModel::LinearElastic => {
+            // Plastic solids are explicit only (the scene rejects them in
+            // implicit mode, and `spatial_tangent` gives none): the elastic
+            // predictor stands in.
+            SolidModel::LinearElastic | SolidModel::ElasticPlastic(_) => {
                 let g = df - Matrix3::identity();
                 let d = 0.5 * (g + g.transpose());
                 let w = 0.5 * (g - g.transpose());
@@ -216,7 +248,7 @@ impl SolidMaterial {
         match self.model {
             SolidModel::LinearElastic => Some((lambda, mu)),
             SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
-            SolidModel::GasPoint(_) => None,
+            SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) => None,
         }
     }
 
@@ -225,7 +257,9 @@ impl SolidMaterial {
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {
         match self.model {
             // Rate models: the accumulated work; a gas point: ρ_ref e.
-            SolidModel::LinearElastic | SolidModel::GasPoint(_) => work,
+            SolidModel::LinearElastic | SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) => {
+                work
+            }
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();
@@ -386,6 +420,7 @@ mod tests {
                 &GasInput::SOLID,
                 &mut s,
                 &mut work,
+                &mut PlasticState::default(),
             );
         }
         assert!((s.trace() - tr0).abs() < 1e-12);

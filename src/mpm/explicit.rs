@@ -24,6 +24,7 @@ use super::particles::Particles;
 use super::scatter::{Bins, SharedMut};
 use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
+use crate::material::plasticity::PlasticState;
 use crate::material::{GasInput, PointState, SolidMaterial};
 use crate::shape::{
     CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, ShapeKind, Stencil,
@@ -894,8 +895,12 @@ fn g2p<
     } else {
         0.0
     };
+    // Plastic state travels only when some material is plastic.
+    let plastic = GRAD != GRAD_NONE && ctx.materials.iter().any(|m| m.plasticity().is_some());
     {
         let mass = &particles.mass;
+        let eps_p = SharedMut::new(&mut particles.plastic_strain);
+        let temp = SharedMut::new(&mut particles.temperature);
         let x = SharedMut::new(&mut particles.x);
         let v = SharedMut::new(&mut particles.v);
         let fgrad = SharedMut::new(&mut particles.f);
@@ -965,7 +970,21 @@ fn g2p<
                 };
                 *fp = f_new;
                 *vp_vol = j * vol0[p];
-                ctx.materials[mat[p] as usize].update_stress(&l3, &f_new, j, dt, &gas, sp, wp);
+                let material = &ctx.materials[mat[p] as usize];
+                if plastic {
+                    // SAFETY: as above.
+                    let (ep, tp) = unsafe { (eps_p.get(p), temp.get(p)) };
+                    let mut state = PlasticState {
+                        plastic_strain: *ep,
+                        temperature: *tp,
+                    };
+                    material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
+                    *ep = state.plastic_strain;
+                    *tp = state.temperature;
+                } else {
+                    let mut state = PlasticState::default();
+                    material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
+                }
             }
         });
     }

@@ -35,6 +35,8 @@ pub struct Particles<const D: usize> {
     /// stays at its initial value ([`Particles::INITIAL_TEMPERATURE`] unless
     /// set).
     pub temperature: Vec<f64>,
+    /// Equivalent plastic strain ε̄ (plastic materials; 0 elsewhere).
+    pub plastic_strain: Vec<f64>,
 }
 
 impl<const D: usize> Particles<D> {
@@ -74,6 +76,7 @@ impl<const D: usize> Particles<D> {
         self.work.push(0.0);
         self.material.push(material);
         self.temperature.push(Self::INITIAL_TEMPERATURE);
+        self.plastic_strain.push(0.0);
     }
 
     /// The particles `p` with `keep(p)`, in order (a new set).
@@ -106,6 +109,7 @@ impl<const D: usize> Particles<D> {
         self.work.push(other.work[p]);
         self.material.push(other.material[p]);
         self.temperature.push(other.temperature[p]);
+        self.plastic_strain.push(other.plastic_strain[p]);
     }
 
     /// Total mass.

@@ -36,10 +36,16 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
             m.shear_modulus.unwrap_or_default(),
         ),
     };
+    // Validation has checked the plasticity table (and that it goes with
+    // the hypo-elastic model).
+    let model = match m.plasticity.as_ref().map(|pl| pl.j2()) {
+        Some(Ok(j2)) => SolidModel::ElasticPlastic(j2),
+        _ => m.model.unwrap_or(SolidModel::NeoHookean),
+    };
     SolidMaterial {
         name: m.name.clone(),
         density: m.density.unwrap_or_default(),
-        model: m.model.unwrap_or(SolidModel::NeoHookean),
+        model,
         elastic,
     }
 }

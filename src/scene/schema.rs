@@ -253,6 +253,147 @@ impl Default for ArtificialViscositySpec {
     }
 }
 
+/// The flow-stress law of a plastic solid (`materials[i].plasticity.flow`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlowKind {
+    /// σ_y = yield_stress + hardening_modulus ε̄.
+    Linear,
+    /// σ_y = yield_stress + hardening_coefficient ε̄^hardening_exponent.
+    PowerLaw,
+    /// Johnson–Cook: (a + b ε̄ⁿ)(1 + c ln ε̇*)(1 − T*ᵐ).
+    JohnsonCook,
+}
+
+/// J2 plasticity of a hypo-elastic solid (`materials[i].plasticity`;
+/// `model = "linear_elastic"`, explicit mode). Keys by `flow`: `linear`
+/// needs `yield_stress` (and `hardening_modulus`, default 0); `power_law`
+/// needs `yield_stress`, `hardening_coefficient`, `hardening_exponent`;
+/// `johnson_cook` needs `a`, `b`, `n`, `c`, `m`, `melt_temperature` and
+/// `specific_heat` (`reference_rate` default 1 /s, `room_temperature`
+/// default 300 K, the particles' initial temperature).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlasticitySpec {
+    /// Flow-stress law.
+    pub flow: FlowKind,
+    /// Initial yield stress σ₀ ≥ 0 [Pa] (linear, power_law).
+    pub yield_stress: Option<f64>,
+    /// Hardening modulus H ≥ 0 [Pa] (linear; default 0: perfectly plastic).
+    pub hardening_modulus: Option<f64>,
+    /// Strength coefficient K ≥ 0 [Pa] (power_law).
+    pub hardening_coefficient: Option<f64>,
+    /// Hardening exponent in (0, 1] (power_law).
+    pub hardening_exponent: Option<f64>,
+    /// Johnson–Cook A [Pa].
+    pub a: Option<f64>,
+    /// Johnson–Cook B [Pa].
+    pub b: Option<f64>,
+    /// Johnson–Cook n in (0, 1].
+    pub n: Option<f64>,
+    /// Johnson–Cook C ≥ 0.
+    pub c: Option<f64>,
+    /// Johnson–Cook m > 0.
+    pub m: Option<f64>,
+    /// Johnson–Cook reference strain rate ε̇₀ > 0 [1/s] (default 1).
+    pub reference_rate: Option<f64>,
+    /// Johnson–Cook room temperature [K] (default 300).
+    pub room_temperature: Option<f64>,
+    /// Johnson–Cook melting temperature [K] (> room_temperature).
+    pub melt_temperature: Option<f64>,
+    /// Taylor–Quinney fraction β of plastic work turned into heat, in
+    /// [0, 1] (default 0.9).
+    pub taylor_quinney: Option<f64>,
+    /// Specific heat c_p > 0 [J/(kg K)] (johnson_cook: required; it heats
+    /// the point adiabatically).
+    pub specific_heat: Option<f64>,
+}
+
+impl PlasticitySpec {
+    /// The J2 model, or the first key that is missing or out of range
+    /// (path relative to the plasticity table).
+    ///
+    /// # Errors
+    /// A missing key or a parameter out of range, named.
+    pub fn j2(&self) -> Result<crate::material::plasticity::J2, (&'static str, String)> {
+        use crate::material::plasticity::{FlowStress, JohnsonCook, J2};
+        let need = |v: Option<f64>, key: &'static str| {
+            v.ok_or((
+                key,
+                format!("missing; flow = \"{}\" needs it", self.flow_name()),
+            ))
+        };
+        let flow = match self.flow {
+            FlowKind::Linear => FlowStress::Linear {
+                yield_stress: need(self.yield_stress, "yield_stress")?,
+                hardening: self.hardening_modulus.unwrap_or(0.0),
+            },
+            FlowKind::PowerLaw => FlowStress::PowerLaw {
+                yield_stress: need(self.yield_stress, "yield_stress")?,
+                k: need(self.hardening_coefficient, "hardening_coefficient")?,
+                n: need(self.hardening_exponent, "hardening_exponent")?,
+            },
+            FlowKind::JohnsonCook => FlowStress::JohnsonCook(JohnsonCook {
+                a: need(self.a, "a")?,
+                b: need(self.b, "b")?,
+                n: need(self.n, "n")?,
+                c: need(self.c, "c")?,
+                m: need(self.m, "m")?,
+                rate0: self.reference_rate.unwrap_or(1.0),
+                t_room: self.room_temperature.unwrap_or(300.0),
+                t_melt: need(self.melt_temperature, "melt_temperature")?,
+            }),
+        };
+        let specific_heat = match self.flow {
+            FlowKind::JohnsonCook => need(self.specific_heat, "specific_heat")?,
+            _ => self.specific_heat.unwrap_or(1.0),
+        };
+        let j2 = J2 {
+            flow,
+            taylor_quinney: self.taylor_quinney.unwrap_or(0.9),
+            specific_heat,
+        };
+        j2.validate()
+            .map_err(|b| (b.key, format!("must be {}", b.allowed)))?;
+        // Keys given that the law does not read.
+        let unused: &[(bool, &'static str)] = match self.flow {
+            FlowKind::Linear => &[
+                (
+                    self.hardening_coefficient.is_some(),
+                    "hardening_coefficient",
+                ),
+                (self.hardening_exponent.is_some(), "hardening_exponent"),
+                (self.a.is_some(), "a"),
+            ],
+            FlowKind::PowerLaw => &[
+                (self.hardening_modulus.is_some(), "hardening_modulus"),
+                (self.a.is_some(), "a"),
+            ],
+            FlowKind::JohnsonCook => &[
+                (self.yield_stress.is_some(), "yield_stress"),
+                (self.hardening_modulus.is_some(), "hardening_modulus"),
+                (
+                    self.hardening_coefficient.is_some(),
+                    "hardening_coefficient",
+                ),
+                (self.hardening_exponent.is_some(), "hardening_exponent"),
+            ],
+        };
+        if let Some((_, k)) = unused.iter().find(|(given, _)| *given) {
+            return Err((k, format!("not read by flow = \"{}\"", self.flow_name())));
+        }
+        Ok(j2)
+    }
+
+    fn flow_name(&self) -> &'static str {
+        match self.flow {
+            FlowKind::Linear => "linear",
+            FlowKind::PowerLaw => "power_law",
+            FlowKind::JohnsonCook => "johnson_cook",
+        }
+    }
+}
+
 /// Equation of state of a fluid material.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -311,6 +452,9 @@ pub struct MaterialSpec {
     /// field of its own, rigid or deformable.
     #[serde(default)]
     pub rigid: bool,
+    /// J2 plasticity (solids with `model = "linear_elastic"`, explicit
+    /// mode): see [`PlasticitySpec`].
+    pub plasticity: Option<PlasticitySpec>,
 }
 
 /// MPM-ICE coupling settings (Guilkey Sec. 3.3).
@@ -960,6 +1104,20 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
             format!("missing; solids need one of: {}", SolidModel::NAMES),
         ));
     }
+    if let Some(pl) = &m.plasticity {
+        if m.model != Some(SolidModel::LinearElastic) {
+            return Err(err(
+                p("plasticity"),
+                "J2 plasticity is built for the hypo-elastic path only; allowed with model = \
+                 \"linear_elastic\"",
+            ));
+        }
+        if m.rigid {
+            return Err(err(p("plasticity"), "a rigid solid does not deform"));
+        }
+        pl.j2()
+            .map_err(|(k, msg)| err(p(&format!("plasticity.{k}")), msg))?;
+    }
     match (
         m.youngs_modulus,
         m.poisson_ratio,
@@ -998,6 +1156,7 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.poisson_ratio.is_some(), "poisson_ratio"),
         (m.bulk_modulus.is_some(), "bulk_modulus"),
         (m.shear_modulus.is_some(), "shear_modulus"),
+        (m.plasticity.is_some(), "plasticity"),
     ] {
         if v {
             let extra = if k == "density" {
@@ -1884,6 +2043,15 @@ impl Scene {
                 ))
             }
             _ => {}
+        }
+        if t.mode == Mode::Implicit {
+            if let Some(i) = self.materials.iter().position(|m| m.plasticity.is_some()) {
+                return Err(err(
+                    format!("materials[{i}].plasticity"),
+                    "J2 plasticity runs in explicit mode only (implicit MPM has no consistent \
+                     tangent for it yet); allowed: time.mode = explicit, semi_implicit",
+                ));
+            }
         }
         self.validate_solvers()?;
         for faces in g.boundary.faces().iter().take(dim) {

@@ -95,6 +95,7 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
         buf.extend(p.material.iter().map(|&m| m as u64));
     });
     put_scalars(ck, &n("temperature"), &p.temperature);
+    put_scalars(ck, &n("plastic_strain"), &p.plastic_strain);
 }
 
 /// Loads the particle arrays saved by [`save_particles`]; the material
@@ -126,6 +127,7 @@ pub fn load_particles<const D: usize>(
         work: take_scalars(ck, &n("work"), len)?,
         material: material.into_iter().map(|m| m as u16).collect(),
         temperature: take_scalars(ck, &n("temperature"), len)?,
+        plastic_strain: take_scalars(ck, &n("plastic_strain"), len)?,
     })
 }
 
@@ -181,6 +183,22 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
         ],
         csv: true,
     }
+}
+
+/// The plastic snapshot field `plastic_strain` (equivalent plastic strain
+/// ε̄, 0 for elastic materials); empty when no material is plastic.
+pub fn plastic_fields<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+) -> Vec<OutField> {
+    if materials.iter().all(|m| m.plasticity().is_none()) {
+        return Vec::new();
+    }
+    vec![OutField::new(
+        "plastic_strain",
+        "-",
+        Values::Scalar(p.plastic_strain.clone()),
+    )]
 }
 
 /// The gas-point snapshot fields (York Sec. 3.3), one value per particle:

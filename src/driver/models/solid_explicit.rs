@@ -6,7 +6,7 @@ use crate::driver::model::{
 };
 use crate::driver::models::arrays::{
     gas_point_fields, load_particles, name_particle_material, particle_conserved, particle_fields,
-    particle_watchdog, save_particles,
+    particle_watchdog, plastic_fields, save_particles,
 };
 use crate::driver::outputs::pad3;
 use crate::error::Error;
@@ -108,6 +108,9 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         particles
             .fields
             .extend(gas_point_fields(&r.particles, &r.materials));
+        particles
+            .fields
+            .extend(plastic_fields(&r.particles, &r.materials));
         vec![particles, grid]
     }
 

@@ -1,0 +1,184 @@
+//! J2 plasticity in the explicit MPM step (issue 18): the scene's
+//! `plasticity` table, the plastic state carried by the particles, and a
+//! homogeneous uniaxial-strain load and unload against the closed form.
+
+use mpmice::scene::{build_solid_run, parse};
+
+const SCENE: &str = r#"
+[grid]
+dim = 1
+lower = [0.0]
+upper = [2.0]
+cells = [40]
+boundary = { x_lower = "free", x_upper = "free" }
+[time]
+end = 1.0
+dt = 1e-4
+[mpm]
+shape = "gimp"
+particles_per_cell = 2
+[[materials]]
+name = "steel"
+type = "solid"
+model = "linear_elastic"
+density = 1e20
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+plasticity = { flow = "linear", yield_stress = 300e6, hardening_modulus = 2e9 }
+[[objects]]
+material = "steel"
+geometry = { type = "box", lower = [0.5], upper = [1.5] }
+"#;
+
+/// A bar so heavy that its particles keep their velocities (ρ = 1e20: the
+/// release waves from its free ends move at 5e-5 m/s) is given the linear
+/// velocity field v = ε̇ (x − 1), stretched to 7 yield strains and then
+/// reversed to compression past reverse yield. The centre point's stress
+/// must follow the closed-form uniaxial-strain path of the strain its
+/// updates accumulated, ε = Σ Δt L (read back from its F, which each step
+/// multiplies by 1 + Δt L):
+/// elastic to ε_y = σ₀/2μ, then q = σ₀ + H ε̄ with ε̄ = 2μ(ε − ε_y)/(3μ + H),
+/// σ₁₁ = Kε + 2q/3, σ₂₂ = Kε − q/3; elastic unloading, reverse yield at
+/// −(σ₀ + H ε̄_max). The plastic strain is the particles' output.
+#[test]
+fn homogeneous_uniaxial_strain_follows_the_closed_form() {
+    let scene = parse(SCENE).expect("scene parses");
+    let mut run = build_solid_run::<1>(&scene).expect("run builds");
+    let (e, nu, sy, h) = (200e9, 0.3, 300e6, 2e9);
+    let mu = e / (2.0 * (1.0 + nu));
+    let k = e / (3.0 * (1.0 - 2.0 * nu));
+    let eps_y = sy / (2.0 * mu);
+    let rate = 1.0;
+    let n = run.particles.len();
+    let set_field = |run: &mut mpmice::stepper::SolidRun<1>, a: f64| {
+        for p in 0..n {
+            run.particles.v[p][0] = a * (run.particles.x[p][0] - 1.0);
+        }
+    };
+    set_field(&mut run, rate);
+    // Probe: the point nearest the centre.
+    let mid = (0..n)
+        .min_by(|&a, &b| {
+            let da = (run.particles.x[a][0] - 1.0).abs();
+            let db = (run.particles.x[b][0] - 1.0).abs();
+            da.total_cmp(&db)
+        })
+        .unwrap();
+    let (mut eps, mut peak, mut ebar_max, mut q_max) = (0.0, 0.0, 0.0, 0.0);
+    let mut loading = true;
+    let mut worst: f64 = 0.0;
+    let mut reverse = f64::NAN;
+    for step in 0..260 {
+        if step == 140 {
+            // Reverse: compress at the same rate.
+            set_field(&mut run, -rate);
+            loading = false;
+            peak = eps;
+            ebar_max = 2.0 * mu * (peak - eps_y) / (3.0 * mu + h);
+            q_max = sy + h * ebar_max;
+            reverse = peak - q_max / mu;
+        }
+        // The strain increment the point's update saw: F ← (1 + Δt L) F.
+        let f_old = run.particles.f[mid][(0, 0)];
+        run.step_dt(1e-4).expect("step");
+        eps += run.particles.f[mid][(0, 0)] / f_old - 1.0;
+        let (q, eb) = if loading {
+            if eps <= eps_y {
+                (2.0 * mu * eps, 0.0)
+            } else {
+                let eb = 2.0 * mu * (eps - eps_y) / (3.0 * mu + h);
+                (sy + h * eb, eb)
+            }
+        } else if eps >= reverse {
+            (q_max - 2.0 * mu * (peak - eps), ebar_max)
+        } else {
+            let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
+            (-(sy + h * eb), eb)
+        };
+        let s = run.particles.stress[mid];
+        let err = ((s[(0, 0)] - (k * eps + 2.0 * q / 3.0)).abs()
+            + (s[(1, 1)] - (k * eps - q / 3.0)).abs())
+            / sy
+            + (run.particles.plastic_strain[mid] - eb).abs() / eps_y;
+        worst = worst.max(err);
+    }
+    let final_ebar = run.particles.plastic_strain[mid];
+    println!(
+        "uniaxial strain in MPM: peak ε {peak:.4e} ({:.1} ε_y), final ε {eps:.4e}, ε̄ {final_ebar:.4e}, \
+         worst relative error {worst:.2e}",
+        peak / eps_y
+    );
+    assert!(
+        peak > 6.0 * eps_y && eps < reverse,
+        "the path must yield both ways"
+    );
+    assert!(
+        final_ebar > 1.5 * ebar_max,
+        "reverse plastic flow: {final_ebar}"
+    );
+    assert!(worst < 1e-11, "{worst:e}");
+}
+
+/// Bad plasticity input names its key and the allowed values.
+#[test]
+fn bad_plasticity_input_names_its_key() {
+    let edit = |from: &str, to: &str| {
+        assert_eq!(SCENE.matches(from).count(), 1, "anchor `{from}`");
+        SCENE.replacen(from, to, 1)
+    };
+    let jc = "plasticity = { flow = \"johnson_cook\", a = 792e6, b = 510e6, n = 0.26, c = 0.014, \
+              m = 1.03, melt_temperature = 1793.0, specific_heat = 477.0 }";
+    parse(&edit(
+        "plasticity = { flow = \"linear\", yield_stress = 300e6, hardening_modulus = 2e9 }",
+        jc,
+    ))
+    .expect("a Johnson-Cook steel parses");
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            edit("yield_stress = 300e6", "yield_stress = -1.0"),
+            "materials[0].plasticity.yield_stress",
+            "≥ 0",
+        ),
+        (
+            edit("yield_stress = 300e6, ", ""),
+            "materials[0].plasticity.yield_stress",
+            "missing",
+        ),
+        (
+            edit("hardening_modulus = 2e9", "hardening_exponent = 0.5"),
+            "materials[0].plasticity.hardening_exponent",
+            "not read",
+        ),
+        (
+            edit(
+                "plasticity = { flow = \"linear\", yield_stress = 300e6, hardening_modulus = 2e9 }",
+                &jc.replace("m = 1.03", "m = 0.0"),
+            ),
+            "materials[0].plasticity.m",
+            "> 0",
+        ),
+        (
+            edit(
+                "plasticity = { flow = \"linear\", yield_stress = 300e6, hardening_modulus = 2e9 }",
+                &jc.replace(", specific_heat = 477.0", ""),
+            ),
+            "materials[0].plasticity.specific_heat",
+            "missing",
+        ),
+        (
+            edit("model = \"linear_elastic\"", "model = \"neo_hookean\""),
+            "materials[0].plasticity",
+            "linear_elastic",
+        ),
+        (
+            edit("dt = 1e-4", "dt = 1e-4\nmode = \"implicit\""),
+            "materials[0].plasticity",
+            "explicit",
+        ),
+    ];
+    for (text, path, needle) in cases {
+        let e = parse(&text).expect_err(path);
+        assert_eq!(e.path, path, "{e}");
+        assert!(e.message.contains(needle), "{path}: {e}");
+    }
+}
