@@ -36,6 +36,16 @@ pub(crate) const SOLID_HISTORY: [(&str, &str); 4] = [
     ("total", "J"),
 ];
 
+/// Solid energies of an axisymmetric (r–z) run: particle volumes and masses
+/// are per radian, so the sums are energies per radian (× 2π for the whole
+/// body of revolution).
+pub(crate) const SOLID_HISTORY_AXISYMMETRIC: [(&str, &str); 4] = [
+    ("kinetic", "J/rad"),
+    ("strain", "J/rad"),
+    ("potential", "J/rad"),
+    ("total", "J/rad"),
+];
+
 impl<const D: usize> Model for ExplicitSolid<D> {
     fn kind(&self) -> String {
         format!("explicit_solid_{D}d")
@@ -112,7 +122,11 @@ impl<const D: usize> Model for ExplicitSolid<D> {
     }
 
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
-        SOLID_HISTORY.to_vec()
+        if self.run.grid.axisymmetric {
+            SOLID_HISTORY_AXISYMMETRIC.to_vec()
+        } else {
+            SOLID_HISTORY.to_vec()
+        }
     }
 
     fn history_row(&self, row: &mut Vec<f64>) {
@@ -155,7 +169,9 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             shape: scene_name(&self.run.params.shape),
             update: scene_name(&self.run.params.scheme),
             iterative: false,
-            momentum_conserved: true,
+            // Axisymmetric: the hoop force changes the radial momentum (only
+            // the axial one is conserved), so no drift is reported.
+            momentum_conserved: !self.run.grid.axisymmetric,
             phase_times: self.run.phase_times(),
             implicit_split: None,
         }
