@@ -134,7 +134,10 @@ pressure = 1.0
     for i in 0..p.len() {
         let pressure = -p.stress[i].trace() / 3.0;
         assert!(p.v[i].norm() < 1e-12, "particle {i}: v = {}", p.v[i]);
-        assert!((pressure - 1.0).abs() < 1e-12, "particle {i}: p = {pressure}");
+        assert!(
+            (pressure - 1.0).abs() < 1e-12,
+            "particle {i}: p = {pressure}"
+        );
         assert!((p.x[i] - p.x0[i]).norm() < 1e-12);
     }
 }
@@ -160,7 +163,10 @@ fn lame_cylinder_plane_strain_matches_exact() {
     assert!(b.sigma_r < 0.26, "sigma_r {}", b.sigma_r);
     assert!(b.sigma_third < 0.2, "sigma_z {}", b.sigma_third);
     assert!(order(a.u_r, b.u_r) > 0.85, "u_r order");
-    assert!(order(a.sigma_theta, b.sigma_theta) > 0.5, "sigma_theta order");
+    assert!(
+        order(a.sigma_theta, b.sigma_theta) > 0.5,
+        "sigma_theta order"
+    );
 }
 
 #[test]
@@ -170,8 +176,19 @@ fn lame_sphere_matches_exact() {
     let (a, b) = (lame(LameShape::Sphere, 4), lame(LameShape::Sphere, 8));
     assert!(b.u_r < 0.029, "u_r {}", b.u_r);
     assert!(b.sigma_theta < 0.15, "sigma_theta {}", b.sigma_theta);
-    assert!(b.sigma_r_interior < 0.1, "sigma_r interior {}", b.sigma_r_interior);
-    assert!(b.sigma_theta_interior < 0.042, "sigma_theta interior {}", b.sigma_theta_interior);
+    assert!(
+        b.sigma_r_interior < 0.1,
+        "sigma_r interior {}",
+        b.sigma_r_interior
+    );
+    assert!(
+        b.sigma_theta_interior < 0.042,
+        "sigma_theta interior {}",
+        b.sigma_theta_interior
+    );
     assert!(order(a.u_r, b.u_r) > 0.9, "u_r order");
-    assert!(order(a.sigma_r_interior, b.sigma_r_interior) > 0.9, "sigma_r interior order");
+    assert!(
+        order(a.sigma_r_interior, b.sigma_r_interior) > 0.9,
+        "sigma_r interior order"
+    );
 }

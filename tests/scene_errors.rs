@@ -734,15 +734,14 @@ fn axisymmetric_bad_inputs_name_their_keys() {
             "grid.axisymmetric",
             "explicit",
         ),
-        (
-            format!("{good}{COUPLED_EXTRA}"),
-            "grid.axisymmetric",
-            "ICE",
-        ),
+        (format!("{good}{COUPLED_EXTRA}"), "grid.axisymmetric", "ICE"),
     ];
     assert_each_names_its_key(&cases);
     // Off the axis (lower r > 0) any face condition is allowed.
-    let off_axis = edit("dim = 2", "dim = 2\naxisymmetric = true")
-        .replacen("lower = [0.0, 0.0]", "lower = [0.1, 0.0]", 1);
+    let off_axis = edit("dim = 2", "dim = 2\naxisymmetric = true").replacen(
+        "lower = [0.0, 0.0]",
+        "lower = [0.1, 0.0]",
+        1,
+    );
     mpmice::scene::parse(&off_axis).expect("an axisymmetric grid off the axis is valid");
 }

@@ -331,7 +331,9 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(
+                ctx, kernel, lp, particles, gs, dx,
+            )?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Usf => {
@@ -534,9 +536,13 @@ impl<const D: usize> CoupledMpm<'_, D> {
             let start = Instant::now();
             let (lp, dx) = (&scratch.lp, &mut scratch.dx);
             if ctx.params.scheme == UpdateScheme::Usf {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, false>(ctx, kernel, lp, particles, gs, dx)?;
+                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, false>(
+                    ctx, kernel, lp, particles, gs, dx,
+                )?;
             } else {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, false>(ctx, kernel, lp, particles, gs, dx)?;
+                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, false>(
+                    ctx, kernel, lp, particles, gs, dx,
+                )?;
             }
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
             Ok(())

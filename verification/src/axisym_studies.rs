@@ -66,8 +66,8 @@ pub fn axisym_lame(quick: bool) -> Result<StudyResult> {
                 m.sigma_r_interior,
                 m.sigma_theta_interior,
             ]
-                .into_iter()
-                .enumerate()
+            .into_iter()
+            .enumerate()
             {
                 pts[k].push(
                     Point::new(m.h, e, m.wall_s, ups)
@@ -90,8 +90,8 @@ pub fn axisym_lame(quick: bool) -> Result<StudyResult> {
             "sigma_r beyond the first cell",
             "sigma_theta beyond the first cell",
         ]
-            .iter()
-            .enumerate()
+        .iter()
+        .enumerate()
         {
             series.push(Series::new(
                 format!("{} {q}", shape.name()),
@@ -101,7 +101,10 @@ pub fn axisym_lame(quick: bool) -> Result<StudyResult> {
         }
     }
     for s in &series {
-        notes.push(format!("{}: observed order {:.2}", s.label, s.observed_order));
+        notes.push(format!(
+            "{}: observed order {:.2}",
+            s.label, s.observed_order
+        ));
     }
     for n in &notes {
         eprintln!("{n}");
