@@ -115,6 +115,15 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             csv: false,
         };
         let mut particles = particle_fields(&r.particles);
+        if g.axisymmetric {
+            // Masses and volumes are per radian in r–z.
+            for f in particles.fields.iter_mut() {
+                if f.name == "mass" || f.name == "volume" {
+                    let base = if f.name == "mass" { "kg" } else { "m^3" };
+                    f.unit = format!("{base}/rad");
+                }
+            }
+        }
         particles
             .fields
             .extend(gas_point_fields(&r.particles, &r.materials));
