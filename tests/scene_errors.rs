@@ -696,3 +696,52 @@ fn inflow_faces_are_built_and_bad_ones_name_their_key() {
     ];
     assert_each_names_its_key(&cases);
 }
+
+/// `grid.axisymmetric`: the good scene on the axis (x_lower = symmetry) is
+/// accepted; every misuse names its key.
+#[test]
+fn axisymmetric_bad_inputs_name_their_keys() {
+    let axi = |s: &str| {
+        s.replacen("dim = 2", "dim = 2\naxisymmetric = true", 1)
+            .replacen("x_lower = \"fixed\"", "x_lower = \"symmetry\"", 1)
+    };
+    let good = axi(GOOD);
+    let scene = mpmice::scene::parse(&good).expect("the axisymmetric scene is valid");
+    let run = mpmice::scene::build_solid_run::<2>(&scene).expect("builds");
+    assert!(run.grid.axisymmetric);
+    let three_d = good
+        .replacen("dim = 2", "dim = 3", 1)
+        .replacen("lower = [0.0, 0.0]", "lower = [0.0, 0.0, 0.0]", 1)
+        .replacen("upper = [1.0, 1.0]", "upper = [1.0, 1.0, 1.0]", 1)
+        .replacen("cells = [10, 10]", "cells = [10, 10, 10]", 1)
+        .replacen("lower = [0.2, 0.2]", "lower = [0.2, 0.2, 0.2]", 1)
+        .replacen("upper = [0.8, 0.8]", "upper = [0.8, 0.8, 0.8]", 1)
+        .replacen("velocity = [1.0, 0.0]", "velocity = [1.0, 0.0, 0.0]", 1);
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            edit("dim = 2", "dim = 2\naxisymmetric = true"),
+            "grid.boundary.x_lower",
+            "symmetry",
+        ),
+        (
+            good.replacen("lower = [0.0, 0.0]", "lower = [-0.5, 0.0]", 1),
+            "grid.lower",
+            "≥ 0",
+        ),
+        (three_d, "grid.axisymmetric", "grid.dim = 2"),
+        (
+            good.replacen("cfl = 0.5", "cfl = 0.5\nmode = \"implicit\"\ndt = 0.01", 1),
+            "grid.axisymmetric",
+            "explicit",
+        ),
+        (format!("{good}{COUPLED_EXTRA}"), "grid.axisymmetric", "ICE"),
+    ];
+    assert_each_names_its_key(&cases);
+    // Off the axis (lower r > 0) any face condition is allowed.
+    let off_axis = edit("dim = 2", "dim = 2\naxisymmetric = true").replacen(
+        "lower = [0.0, 0.0]",
+        "lower = [0.1, 0.0]",
+        1,
+    );
+    mpmice::scene::parse(&off_axis).expect("an axisymmetric grid off the axis is valid");
+}

@@ -11,7 +11,9 @@
 //! `york_fig6` (York Sec. 4.1: Sod with gas material points — density,
 //! velocity, pressure and specific internal energy against exact) and
 //! `york_fig9` (York Sec. 4.2: piston displacement history of the
-//! piston–container with Eq. 27's periods).
+//! piston–container with Eq. 27's periods), and `axisym_lame`
+//! (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick cylinder and sphere
+//! against the exact solutions).
 
 use std::path::PathBuf;
 
@@ -30,6 +32,10 @@ struct Args {
 }
 
 const FIGURES: &[(&str, &str)] = &[
+    (
+        "axisym_lame",
+        "axisymmetric r-z MPM, Lame thick cylinder and sphere: sigma_r, sigma_theta vs r against exact",
+    ),
     (
         "mpm_convergence",
         "error vs h of the axis-aligned MMS, 2D, every shape function, A = 0.05 (cell crossing)",
@@ -71,6 +77,7 @@ fn main() -> anyhow::Result<()> {
         "guilkey_fig5" => guilkey_fig5(args.quick),
         "york_fig6" => york_fig6(args.quick),
         "york_fig9" => york_fig9(args.quick),
+        "axisym_lame" => axisym_lame(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -316,6 +323,95 @@ fn york_fig9(quick: bool) -> anyhow::Result<()> {
             &series,
         )?;
         println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// Axisymmetric r–z MPM against Lamé (the `axisym_lame` study's setup,
+/// 16 cells across the wall; `--quick`: 8): σ_r/P and σ_θ/P (hoop,
+/// `stress[(2,2)]`) of every particle against the exact curves, one PNG per
+/// problem (`axisym_lame_cylinder.png`, `axisym_lame_sphere.png`) and one
+/// CSV each.
+fn axisym_lame(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::axisymmetric::{Lame, LameShape, Relax};
+    let out = out_dir()?;
+    let n = if quick { 8 } else { 16 };
+    for shape in [LameShape::Cylinder, LameShape::Sphere] {
+        let lame = Lame::standard(shape);
+        let mut run = lame.build(n, &Relax::default());
+        while !run.finished() {
+            run.step()?;
+        }
+        let p = &run.particles;
+        let pr = lame.pressure;
+        let mut csv =
+            String::from("r0,sigma_r/P,sigma_theta/P,sigma_r_exact/P,sigma_theta_exact/P\n");
+        let (mut sr, mut st) = (Vec::new(), Vec::new());
+        for i in 0..p.len() {
+            let x0 = p.x0[i];
+            let (r, er) = match shape {
+                LameShape::Cylinder => (x0[0], [1.0, 0.0]),
+                LameShape::Sphere => (x0.norm(), [x0[0] / x0.norm(), x0[1] / x0.norm()]),
+            };
+            let s = &p.stress[i];
+            let rad = er[0] * er[0] * s[(0, 0)]
+                + 2.0 * er[0] * er[1] * s[(0, 1)]
+                + er[1] * er[1] * s[(1, 1)];
+            let ex = lame.exact(r);
+            sr.push((r, rad / pr));
+            st.push((r, s[(2, 2)] / pr));
+            csv.push_str(&format!(
+                "{r},{},{},{},{}\n",
+                rad / pr,
+                s[(2, 2)] / pr,
+                ex.sigma_r / pr,
+                ex.sigma_theta / pr
+            ));
+        }
+        let name = format!("axisym_lame_{}", shape.name());
+        std::fs::write(out.join(format!("{name}.csv")), csv)?;
+        let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+            (0..=100)
+                .map(|k| {
+                    let r = lame.r_inner + (lame.r_outer - lame.r_inner) * k as f64 / 100.0;
+                    (r, f(r) / pr)
+                })
+                .collect()
+        };
+        plot_xy(
+            &out.join(format!("{name}.png")),
+            &format!(
+                "axisymmetric MPM, Lame {} (P = 1e-5 E, GIMP, {n} cells across the wall)",
+                shape.name()
+            ),
+            "r (reference)",
+            "stress / P",
+            false,
+            false,
+            &[
+                PlotSeries {
+                    label: "sigma_r exact".into(),
+                    points: curve(&|r| lame.exact(r).sigma_r),
+                    style: Style::Line,
+                },
+                PlotSeries {
+                    label: "sigma_theta exact".into(),
+                    points: curve(&|r| lame.exact(r).sigma_theta),
+                    style: Style::Line,
+                },
+                PlotSeries {
+                    label: "sigma_r particles".into(),
+                    points: sr,
+                    style: Style::Markers,
+                },
+                PlotSeries {
+                    label: "sigma_theta (hoop) particles".into(),
+                    points: st,
+                    style: Style::Markers,
+                },
+            ],
+        )?;
+        println!("wrote {}", out.join(format!("{name}.png")).display());
     }
     Ok(())
 }

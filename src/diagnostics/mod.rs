@@ -1,5 +1,6 @@
 //! Diagnostics: conservation, error norms and exact reference solutions.
 
+pub mod axisymmetric;
 pub mod bench_cases;
 pub mod coupled;
 pub mod impm;

@@ -90,6 +90,10 @@ pub struct Grid<const D: usize> {
     pub node_dims: [usize; D],
     /// Boundary condition per direction, `[lower, upper]`.
     pub bc: [[Boundary; 2]; D],
+    /// Axisymmetric (2D only): the coordinates are (r, z), r = x ≥ 0, and
+    /// the explicit MPM kernels add the hoop terms (volumes and masses are
+    /// per radian; see `mpm::explicit`). False for plane strain.
+    pub axisymmetric: bool,
 }
 
 impl<const D: usize> Grid<D> {
@@ -114,6 +118,7 @@ impl<const D: usize> Grid<D> {
             inv_h: h.map(|v| 1.0 / v),
             node_dims,
             bc,
+            axisymmetric: false,
         }
     }
 

@@ -213,13 +213,30 @@ pub fn explicit_step<const D: usize>(
         step,
         pressure: None,
     };
-    match params.shape {
-        ShapeKind::Linear => step_with::<D, 2, _>(&ctx, LinearHat, particles, gs, scratch),
-        ShapeKind::Gimp => step_with::<D, 3, _>(&ctx, Gimp, particles, gs, scratch),
+    // The geometry is hoisted out of every loop: each pass is compiled once
+    // for plane strain (no hoop terms, no extra work) and once for r–z.
+    if grid.axisymmetric {
+        step_shape::<D, true>(&ctx, particles, gs, scratch)
+    } else {
+        step_shape::<D, false>(&ctx, particles, gs, scratch)
+    }
+}
+
+fn step_shape<const D: usize, const AXI: bool>(
+    ctx: &Ctx<'_, D>,
+    particles: &mut Particles<D>,
+    gs: &mut GridState<D>,
+    scratch: &mut StepScratch<D>,
+) -> Result<()> {
+    match ctx.params.shape {
+        ShapeKind::Linear => step_with::<D, 2, _, AXI>(ctx, LinearHat, particles, gs, scratch),
+        ShapeKind::Gimp => step_with::<D, 3, _, AXI>(ctx, Gimp, particles, gs, scratch),
         ShapeKind::QuadraticBspline => {
-            step_with::<D, 3, _>(&ctx, QuadraticBspline, particles, gs, scratch)
+            step_with::<D, 3, _, AXI>(ctx, QuadraticBspline, particles, gs, scratch)
         }
-        ShapeKind::CubicBspline => step_with::<D, 4, _>(&ctx, CubicBspline, particles, gs, scratch),
+        ShapeKind::CubicBspline => {
+            step_with::<D, 4, _, AXI>(ctx, CubicBspline, particles, gs, scratch)
+        }
     }
 }
 
@@ -267,7 +284,7 @@ const GRAD_VEL_NEW: u8 = 1;
 /// Stress from the gradient of the latest P2G velocity (USF, MUSL).
 const GRAD_VEL: u8 = 2;
 
-fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
+fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
     ctx: &Ctx<'_, D>,
     kernel: K,
     particles: &mut Particles<D>,
@@ -290,48 +307,50 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>>(
         UpdateScheme::Usl => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, lp, particles, gs);
+            p2g::<D, S, K, true, true, true, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, AXI>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Musl => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, true>(ctx, kernel, bins, lp, particles, gs);
+            p2g::<D, S, K, true, true, true, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_STORE, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, AXI>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
             // Map the updated momenta back (Sulsky's modified USL).
             gs.momentum
                 .par_iter_mut()
                 .for_each(|m| *m = SVector::zeros());
             lap(&mut t.grid_s);
-            p2g::<D, S, K, false, true, false>(ctx, kernel, bins, lp, particles, gs);
+            p2g::<D, S, K, false, true, false, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(
+                ctx, kernel, lp, particles, gs, dx,
+            )?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Usf => {
             clear(gs);
             lap(&mut t.grid_s);
-            p2g::<D, S, K, true, true, false>(ctx, kernel, bins, lp, particles, gs);
+            p2g::<D, S, K, true, true, false, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_NONE, GRAD_VEL, AXI>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
-            p2g::<D, S, K, false, false, true>(ctx, kernel, bins, lp, particles, gs);
+            p2g::<D, S, K, false, false, true, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, AXI>(ctx, kernel, lp, particles, gs, dx)?;
             lap(&mut t.g2p_s);
         }
     }
@@ -409,7 +428,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             let start = Instant::now();
             prepare(ctx, particles, scratch)?;
             clear(gs);
-            p2g::<D, S, K, true, true, false>(
+            p2g::<D, S, K, true, true, false, false>(
                 ctx,
                 kernel,
                 &scratch.bins,
@@ -454,7 +473,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         ) -> Result<()> {
             let start = Instant::now();
             if ctx.params.scheme == UpdateScheme::Usf {
-                g2p::<D, S, K, false, POS_NONE, GRAD_VEL>(
+                g2p::<D, S, K, false, POS_NONE, GRAD_VEL, false>(
                     ctx,
                     kernel,
                     &scratch.lp,
@@ -465,7 +484,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             }
             let mid = Instant::now();
             scratch.times.g2p_s += (mid - start).as_secs_f64();
-            p2g::<D, S, K, false, false, true>(
+            p2g::<D, S, K, false, false, true, false>(
                 ctx,
                 kernel,
                 &scratch.bins,
@@ -518,9 +537,13 @@ impl<const D: usize> CoupledMpm<'_, D> {
             let start = Instant::now();
             let (lp, dx) = (&scratch.lp, &mut scratch.dx);
             if ctx.params.scheme == UpdateScheme::Usf {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE>(ctx, kernel, lp, particles, gs, dx)?;
+                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, false>(
+                    ctx, kernel, lp, particles, gs, dx,
+                )?;
             } else {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW>(ctx, kernel, lp, particles, gs, dx)?;
+                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, false>(
+                    ctx, kernel, lp, particles, gs, dx,
+                )?;
             }
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
             Ok(())
@@ -738,6 +761,15 @@ fn block<const D: usize>(s: &Matrix3<f64>) -> SMatrix<f64, D, D> {
 }
 
 /// Particle to grid (Guilkey Eq. 22 and Eq. 24, f = f_ext − f_int).
+///
+/// Axisymmetric (`AXI`, coordinates (r, z), volumes and masses per radian):
+/// the virtual work of the stress in cylindrical coordinates,
+/// ∫ (σ_rr ∂w_r/∂r + σ_rz ∂w_r/∂z + σ_θθ w_r/r) r dr dz (the last term is
+/// the virtual hoop strain δε_θθ = w_r/r: the "spatial variation of the
+/// basis vectors" of York's remark after Eq. 14, and York's ref. 12, Sulsky &
+/// Schreyer 1996, CMAME 139, axisymmetric MPM), with particle quadrature and
+/// V_p = ∫ r dA per radian, adds f_i,r −= V_p σ_θθ N_i(x_p)/r_p to the plane
+/// gradient term. Whatever the model, σ_θθ is `stress[(2,2)]`.
 fn p2g<
     const D: usize,
     const S: usize,
@@ -745,6 +777,7 @@ fn p2g<
     const MASS: bool,
     const MOMENTUM: bool,
     const FORCE: bool,
+    const AXI: bool,
 >(
     ctx: &Ctx<'_, D>,
     kernel: K,
@@ -765,6 +798,7 @@ fn p2g<
         let mv = particles.v[p] * mp;
         let mut fb = SVector::<f64, D>::zeros();
         let mut vs = SMatrix::<f64, D, D>::zeros();
+        let mut hoop = 0.0;
         if FORCE {
             if let Some(b) = body {
                 fb = b.accel(&particles.x0[p], &particles.x[p], t) * mp;
@@ -781,6 +815,10 @@ fn p2g<
                 }
             }
             vs = block::<D>(&sigma) * particles.vol[p];
+            if AXI {
+                // V_p σ_θθ / r_p (r_p > 0: particles stay off the axis).
+                hoop = particles.vol[p] * sigma[(2, 2)] / particles.x[p][0];
+            }
         }
         pw.for_each(|m, w, g| {
             let idx = base + offset(m, &strides);
@@ -793,7 +831,11 @@ fn p2g<
                     *momentum.get(idx) += mv * w;
                 }
                 if FORCE {
-                    *force.get(idx) += fb * w - vs * g;
+                    let f = force.get(idx);
+                    *f += fb * w - vs * g;
+                    if AXI {
+                        f[0] -= hoop * w;
+                    }
                 }
             }
         });
@@ -861,6 +903,13 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
 }
 
 /// Grid to particle (Guilkey Eqs. 23, 26, 27) and the constitutive update.
+///
+/// Axisymmetric (`AXI`): the hoop rate L_θθ = v_r(x_p)/r_p, with v_r
+/// interpolated from the same nodal velocity as the gradient and r_p the
+/// position at the start of the step (where the weights are), enters the
+/// 3×3 L as L₃₃ (York Eq. 14 with the cylindrical basis: the velocity
+/// gradient's hoop component is v_r/r); F₃₃ ← (1 + Δt L_θθ) F₃₃ and J =
+/// det(F_D) F₃₃. Every model gets the whole 3×3 L and F.
 fn g2p<
     const D: usize,
     const S: usize,
@@ -868,6 +917,7 @@ fn g2p<
     const FLIP: bool,
     const POS: u8,
     const GRAD: u8,
+    const AXI: bool,
 >(
     ctx: &Ctx<'_, D>,
     kernel: K,
@@ -913,9 +963,11 @@ fn g2p<
             // SAFETY: each task touches only particle p's entries.
             let (xp, vp) = unsafe { (x.get(p), v.get(p)) };
             let (pw, base) = weights_at(grid, kernel, xp, lp, p);
+            let r_old = xp[0];
             let mut acc = SVector::<f64, D>::zeros();
             let mut vel = SVector::<f64, D>::zeros();
             let mut l = SMatrix::<f64, D, D>::zeros();
+            let mut v_r = 0.0;
             pw.for_each(|m, w, g| {
                 let idx = base + offset(m, &strides);
                 if FLIP {
@@ -926,6 +978,9 @@ fn g2p<
                 }
                 if GRAD != GRAD_NONE {
                     l += grad_field[idx] * g.transpose();
+                    if AXI {
+                        v_r += grad_field[idx][0] * w;
+                    }
                 }
             });
             if FLIP {
@@ -948,16 +1003,24 @@ fn g2p<
                 // SAFETY: as above.
                 let (fp, sp, wp, vp_vol) =
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
-                // L lives in the D×D block, so F stays diag(F_D, I) and only
-                // that block changes: F_D ← (I + Δt L) F_D, J = det F_D.
+                // Plane strain: L lives in the D×D block, so F stays
+                // diag(F_D, I) and only that block changes: F_D ← (I + Δt L)
+                // F_D, J = det F_D. Axisymmetric: F₃₃ follows the hoop rate.
                 let fd = block::<D>(fp);
                 let fd_new = fd + (l * fd) * dt;
-                let j = det_small(&fd_new);
+                let mut j = det_small(&fd_new);
                 let mut f_new = *fp;
                 for a in 0..D {
                     for b in 0..D {
                         f_new[(a, b)] = fd_new[(a, b)];
                     }
+                }
+                if AXI {
+                    // Hoop stretch: F = diag(F_D, F₃₃), F₃₃ → r/R.
+                    let l_hoop = v_r / r_old;
+                    l3[(2, 2)] = l_hoop;
+                    f_new[(2, 2)] = fp[(2, 2)] * (1.0 + dt * l_hoop);
+                    j *= f_new[(2, 2)];
                 }
                 if !j.is_finite() || j <= 0.0 {
                     failed.fetch_min(p, Ordering::Relaxed);

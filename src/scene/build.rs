@@ -105,17 +105,21 @@ pub fn grid_of<const D: usize>(scene: &Scene) -> Grid<D> {
             faces[d][1].0.unwrap_or(Boundary::Free),
         ]
     });
-    Grid::new(
+    let mut grid = Grid::new(
         to_vec::<D>(&g.lower),
         to_vec::<D>(&g.upper),
         std::array::from_fn(|d| g.cells[d]),
         bc,
-    )
+    );
+    grid.axisymmetric = g.axisymmetric;
+    grid
 }
 
 /// Fills every object with particles: `ppc` per cell per direction at the
 /// centres of a regular sub-lattice of each grid cell, kept where the point is
-/// inside the object's region. Volume = cell volume / ppc^D, mass = ρ₀ V.
+/// inside the object's region. Volume = cell volume / ppc^D, mass = ρ₀ V;
+/// axisymmetric grids: volume per radian V = r_p A_p (exact ∫ r dA over the
+/// particle's square, r being linear), mass ρ₀ V per radian.
 pub fn fill_particles<const D: usize>(
     scene: &Scene,
     grid: &Grid<D>,
@@ -191,6 +195,7 @@ fn fill_objects<const D: usize>(
                         grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
                 }
                 if obj.geometry.contains(&x) {
+                    let vol = if grid.axisymmetric { vol * x[0] } else { vol };
                     particles.push(
                         SVector::from(x),
                         vel,

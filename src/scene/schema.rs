@@ -66,6 +66,12 @@ pub struct GridSpec {
     /// Boundary condition per face.
     #[serde(default)]
     pub boundary: BoundarySpec,
+    /// Axisymmetric r–z geometry (explicit solids and gas points, `dim = 2`):
+    /// x is the radius r ≥ 0 and y the axial coordinate z; particle volumes
+    /// and masses, forces and energies are per radian. With `lower[0] = 0`
+    /// the face `x_lower` is the axis and must be `symmetry`.
+    #[serde(default)]
+    pub axisymmetric: bool,
 }
 
 /// Boundary condition per face; faces not given are `free`.
@@ -1766,6 +1772,57 @@ impl Scene {
         Ok(())
     }
 
+    /// `grid.axisymmetric = true`: a 2D explicit particle scene (solids and
+    /// gas points) with r = x ≥ 0 and, where the grid reaches r = 0, the
+    /// axis as a `symmetry` face (mirror folding gives v_r = 0 there).
+    fn validate_axisymmetric(&self, has_fluid: bool) -> Result<(), SceneError> {
+        let g = &self.grid;
+        if g.dim != 2 {
+            return Err(err(
+                "grid.axisymmetric",
+                format!(
+                    "only with grid.dim = 2 (coordinates (r, z)); got grid.dim = {}",
+                    g.dim
+                ),
+            ));
+        }
+        if has_fluid {
+            return Err(err(
+                "grid.axisymmetric",
+                "is available for explicit MPM scenes (solids and fluids with frame = \
+                 \"particles\"); not with cell fluids (ICE) or coupled MPM-ICE",
+            ));
+        }
+        if self.time.mode != Mode::Explicit {
+            return Err(err(
+                "grid.axisymmetric",
+                format!(
+                    "is available with time.mode = \"explicit\" only (got \"{}\"; implicit \
+                     MPM has no hoop terms)",
+                    self.time.mode.name()
+                ),
+            ));
+        }
+        if g.lower[0] < 0.0 {
+            return Err(err(
+                "grid.lower",
+                format!(
+                    "grid.lower[0] is the radius r and must be ≥ 0 when grid.axisymmetric = \
+                     true (got {})",
+                    g.lower[0]
+                ),
+            ));
+        }
+        if g.lower[0] == 0.0 && g.boundary.x_lower != Some(Boundary::Symmetry) {
+            return Err(err(
+                "grid.boundary.x_lower",
+                "must be \"symmetry\" when grid.axisymmetric = true and grid.lower[0] = 0 \
+                 (the face is the axis r = 0)",
+            ));
+        }
+        Ok(())
+    }
+
     /// The stress-update ordering of the explicit MPM step: `mpm.update`, or
     /// by default MUSL in scenes with gas points (York Sec. 2.2, Eqs. 10–13)
     /// and USL otherwise.
@@ -2054,6 +2111,9 @@ impl Scene {
             }
         }
         self.validate_solvers()?;
+        if g.axisymmetric {
+            self.validate_axisymmetric(has_fluid)?;
+        }
         for faces in g.boundary.faces().iter().take(dim) {
             let periodic = faces.map(|(bc, _)| bc == Some(Boundary::Periodic));
             if periodic[0] != periodic[1] {

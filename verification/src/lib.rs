@@ -1,6 +1,7 @@
 //! Verification studies of mpmice: the harness (result format, order fits,
 //! plots) and the studies themselves.
 
+pub mod axisym_studies;
 pub mod coupled_studies;
 pub mod harness;
 pub mod ice_studies;
@@ -71,6 +72,11 @@ pub const STUDIES: &[Study] = &[
         "york_piston_container",
         "York 4.2 piston-container: period vs Eq. 27 for m = 0.1 and 1.0 vs h",
         york_studies::york_piston_container,
+    ),
+    (
+        "axisym_lame",
+        "axisymmetric r-z explicit MPM: Lame thick cylinder and sphere under internal pressure, sigma_r, sigma_theta, u_r vs h",
+        axisym_studies::axisym_lame,
     ),
     (
         "ice_sod",

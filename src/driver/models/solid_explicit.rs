@@ -36,6 +36,16 @@ pub(crate) const SOLID_HISTORY: [(&str, &str); 4] = [
     ("total", "J"),
 ];
 
+/// Solid energies of an axisymmetric (r–z) run: particle volumes and masses
+/// are per radian, so the sums are energies per radian (× 2π for the whole
+/// body of revolution).
+pub(crate) const SOLID_HISTORY_AXISYMMETRIC: [(&str, &str); 4] = [
+    ("kinetic", "J/rad"),
+    ("strain", "J/rad"),
+    ("potential", "J/rad"),
+    ("total", "J/rad"),
+];
+
 impl<const D: usize> Model for ExplicitSolid<D> {
     fn kind(&self) -> String {
         format!("explicit_solid_{D}d")
@@ -105,6 +115,15 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             csv: false,
         };
         let mut particles = particle_fields(&r.particles);
+        if g.axisymmetric {
+            // Masses and volumes are per radian in r–z.
+            for f in particles.fields.iter_mut() {
+                if f.name == "mass" || f.name == "volume" {
+                    let base = if f.name == "mass" { "kg" } else { "m^3" };
+                    f.unit = format!("{base}/rad");
+                }
+            }
+        }
         particles
             .fields
             .extend(gas_point_fields(&r.particles, &r.materials));
@@ -115,7 +134,11 @@ impl<const D: usize> Model for ExplicitSolid<D> {
     }
 
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
-        SOLID_HISTORY.to_vec()
+        if self.run.grid.axisymmetric {
+            SOLID_HISTORY_AXISYMMETRIC.to_vec()
+        } else {
+            SOLID_HISTORY.to_vec()
+        }
     }
 
     fn history_row(&self, row: &mut Vec<f64>) {
@@ -158,7 +181,9 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             shape: scene_name(&self.run.params.shape),
             update: scene_name(&self.run.params.scheme),
             iterative: false,
-            momentum_conserved: true,
+            // Axisymmetric: the hoop force changes the radial momentum (only
+            // the axial one is conserved), so no drift is reported.
+            momentum_conserved: !self.run.grid.axisymmetric,
             phase_times: self.run.phase_times(),
             implicit_split: None,
         }
