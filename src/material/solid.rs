@@ -6,6 +6,7 @@
 use nalgebra::Matrix3;
 
 use super::gas_point::{GasPoint, GasStep};
+use super::membrane::MembraneLaw;
 
 /// Isotropic elastic constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,6 +63,12 @@ pub enum SolidModel {
     /// energy per unit reference volume, ρ_ref e (ρ_ref = m / V⁰).
     #[serde(skip)]
     GasPoint(GasPoint),
+    /// A membrane material point (York Sec. 3.2, [`MembraneLaw`]): its
+    /// stress is updated by the explicit MPM step in the membrane's local
+    /// frame (it needs the tangent from its neighbours); the particle's
+    /// `work` holds its strain energy per unit reference volume.
+    #[serde(skip)]
+    Membrane(MembraneLaw),
 }
 
 impl SolidModel {
@@ -100,6 +107,15 @@ impl SolidMaterial {
         }
     }
 
+    /// The membrane law of this material, if it is a membrane.
+    #[inline]
+    pub fn membrane(&self) -> Option<&MembraneLaw> {
+        match &self.model {
+            SolidModel::Membrane(m) => Some(m),
+            _ => None,
+        }
+    }
+
     /// Largest stable explicit step of one particle in a grid of smallest
     /// cell size `h`: `h / (c + |v|)` for a solid, [`GasPoint::dt_limit`]
     /// for a gas point. `p` gives the particle's state.
@@ -110,6 +126,7 @@ impl SolidMaterial {
             SolidModel::GasPoint(g) => {
                 g.dt_limit(h, rho, p.work * p.vol0 / p.mass, p.stress, p.speed, c_max)
             }
+            SolidModel::Membrane(m) => h / (m.wave_speed() + p.speed),
             _ => h / (self.wave_speed(rho) + p.speed),
         }
     }
@@ -165,6 +182,10 @@ impl SolidMaterial {
             SolidModel::NeoHookean => {
                 *stress = neo_hookean_stress_j(lambda, mu, f_new, j);
             }
+            // The explicit step updates a membrane point in its local frame
+            // (`mpm::explicit`, York Sec. 3.2); without a frame the stress
+            // is kept.
+            SolidModel::Membrane(_) => {}
         }
     }
 
@@ -196,7 +217,7 @@ impl SolidMaterial {
             SolidModel::NeoHookean => neo_hookean_stress_j(lambda, mu, f_new, j),
             // Gas points are explicit only (the scene rejects them in implicit
             // mode, and `spatial_tangent` gives none): the stress is kept.
-            SolidModel::GasPoint(_) => *stress_old,
+            SolidModel::GasPoint(_) | SolidModel::Membrane(_) => *stress_old,
         }
     }
 
@@ -216,7 +237,7 @@ impl SolidMaterial {
         match self.model {
             SolidModel::LinearElastic => Some((lambda, mu)),
             SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
-            SolidModel::GasPoint(_) => None,
+            SolidModel::GasPoint(_) | SolidModel::Membrane(_) => None,
         }
     }
 
@@ -225,7 +246,7 @@ impl SolidMaterial {
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {
         match self.model {
             // Rate models: the accumulated work; a gas point: ρ_ref e.
-            SolidModel::LinearElastic | SolidModel::GasPoint(_) => work,
+            SolidModel::LinearElastic | SolidModel::GasPoint(_) | SolidModel::Membrane(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();
