@@ -38,8 +38,15 @@ pub struct MembraneMeasures {
     pub min_stress: f64,
     /// Largest membrane point stress.
     pub max_stress: f64,
-    /// Mean thermodynamic pressure of the gas points (EOS, q excluded).
+    /// Mean thermodynamic pressure of the gas points (EOS, q excluded;
+    /// York Table III's "averaging values at material points").
     pub mean_pressure: f64,
+    /// The gas's pressure as the grid feels it: `Σ p_p V_p / A` with `A`
+    /// the area inside the membrane (an ideal gas's `p V = (γ − 1) m e` is
+    /// its internal energy, whatever the points' own volumes).
+    pub area_pressure: f64,
+    /// Area inside the (closed) membrane polygon.
+    pub area: f64,
     /// Length of the membrane polygon.
     pub perimeter: f64,
 }
@@ -82,12 +89,22 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
     for k in 0..last {
         perimeter += (pts[(k + 1) % m] - pts[k]).norm();
     }
-    let (mut psum, mut pn) = (0.0, 0usize);
+    let mut area = 0.0;
+    if c.closed {
+        for k in 0..m {
+            let (u, v) = (pts[k], pts[(k + 1) % m]);
+            area += 0.5 * (u[0] * v[1] - v[0] * u[1]);
+        }
+        area = area.abs();
+    }
+    let (mut psum, mut pn, mut pv) = (0.0, 0usize, 0.0);
     for i in 0..p.len() {
         if let Some(g) = run.materials[p.material[i] as usize].gas() {
             let rho = p.mass[i] / p.vol[i];
             let e = p.work[i] * p.vol0[i] / p.mass[i];
-            psum += g.pressure(rho, e);
+            let pi = g.pressure(rho, e);
+            psum += pi;
+            pv += pi * p.vol[i];
             pn += 1;
         }
     }
@@ -99,6 +116,8 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
         min_stress: stress.iter().cloned().fold(f64::INFINITY, f64::min),
         max_stress: stress.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         mean_pressure: if pn > 0 { psum / pn as f64 } else { 0.0 },
+        area_pressure: if area > 0.0 { pv / area } else { 0.0 },
+        area,
         perimeter,
     }
 }
@@ -142,7 +161,7 @@ impl Default for DogBone {
     fn default() -> Self {
         Self {
             h: 0.1,
-            spacing_over_h: 0.25,
+            spacing_over_h: 0.125,
             end: 4.0,
             history_interval: 0.02,
             snapshot_times: vec![0.0, 0.1, 0.2, 0.4, 0.8, 4.0],

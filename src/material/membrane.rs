@@ -18,27 +18,6 @@
 //! An axisymmetric run would add the hoop rate `ε̇₃₃ = v_r/r` to the same
 //! 2×2 plane-stress law (`ṡ = E/(1 − ν²) [[1, ν], [ν, 1]] ε̇`).
 
-/// Where a membrane point's tangential strain comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MembraneStrain {
-    /// York Sec. 3.2: the grid's strain increment at the point (York Eq.
-    /// 13) projected on the tangent, `ε̇_tt = t·L·t`, integrated in rate form.
-    #[default]
-    Grid,
-    /// From the chord lengths to the neighbours: the stretch `λ` of the
-    /// point's segment (current / initial length) gives
-    /// `s = s₀ + E' ln λ` directly, so points that drift apart along the
-    /// membrane (which the grid's gradient at the points does not see) are
-    /// pulled back.
-    Chord,
-}
-
-impl MembraneStrain {
-    /// Names accepted in scene files.
-    pub const NAMES: &'static str = "grid, chord";
-}
-
 /// The elastic membrane law of one membrane material.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MembraneLaw {
@@ -50,8 +29,6 @@ pub struct MembraneLaw {
     pub thickness: f64,
     /// Density ρ (mass per unit volume; areal density is ρ h).
     pub density: f64,
-    /// Where the tangential strain comes from.
-    pub strain: MembraneStrain,
 }
 
 impl MembraneLaw {
@@ -81,20 +58,6 @@ impl MembraneLaw {
         self.poisson * s
     }
 
-    /// The chord form: tangential stress `s₀ + E' ln λ` at stretch `λ` from
-    /// a prestress `s₀`, and the energy per unit reference volume
-    /// `W₀ + ∫₁^λ s dλ = W₀ + s₀(λ − 1) + E'(λ ln λ − λ + 1)` (the stress
-    /// power per reference volume is `s λ̇` at constant thickness).
-    #[inline]
-    pub fn chord(&self, s0: f64, lambda: f64) -> (f64, f64) {
-        let e = self.modulus();
-        let ln = lambda.ln();
-        (
-            s0 + e * ln,
-            self.energy_of(s0) + s0 * (lambda - 1.0) + e * (lambda * ln - lambda + 1.0),
-        )
-    }
-
     /// Elastic energy per unit reference volume stored by a tangential
     /// stress `s` (`s²/(2E')`, used for a prestress).
     #[inline]
@@ -114,7 +77,6 @@ mod tests {
             poisson: 0.3,
             thickness: 0.1,
             density: 0.5,
-            strain: MembraneStrain::Grid,
         };
         assert!((m.modulus() - 1e4 / 0.91).abs() < 1e-9);
         assert!((m.wave_speed() - (1e4 / 0.91 / 0.5_f64).sqrt()).abs() < 1e-12);

@@ -12,5 +12,5 @@ pub mod solid;
 pub mod solid_eos;
 
 pub use gas_point::{ArtificialViscosity, GasPoint};
-pub use membrane::{MembraneLaw, MembraneStrain};
+pub use membrane::MembraneLaw;
 pub use solid::{ElasticConstants, GasInput, PointState, SolidMaterial, SolidModel};

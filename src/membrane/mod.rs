@@ -13,8 +13,6 @@
 
 use nalgebra::{Matrix3, SVector};
 
-use crate::material::{MembraneStrain, SolidMaterial};
-
 /// The particles of one membrane: `first .. first + count`, in order along
 /// the contour.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,29 +55,20 @@ pub struct Membranes<const D: usize> {
     /// Length of each point's segment at t = 0 (half the distances to its
     /// two neighbours); zero for other particles.
     pub segment0: Vec<f64>,
-    /// Initial tangential stress s₀ of each point (the chord form's
-    /// reference).
-    pub prestress: Vec<f64>,
 }
 
 impl<const D: usize> Membranes<D> {
     /// The membranes `chains` of `n` particles at positions `x` (t = 0).
-    /// `stress` gives each point's prestress (its in-plane trace).
-    pub fn new(chains: Vec<MembraneChain>, x: &[SVector<f64, D>], stress: &[Matrix3<f64>]) -> Self {
+    pub fn new(chains: Vec<MembraneChain>, x: &[SVector<f64, D>]) -> Self {
         let n = x.len();
         let mut m = Self {
             chains,
             tangent: Vec::new(),
             segment0: Vec::new(),
-            prestress: Vec::new(),
         };
         if !m.chains.is_empty() {
             m.tangent = vec![SVector::zeros(); n];
             m.segment0 = vec![0.0; n];
-            m.prestress = stress
-                .iter()
-                .map(|s| (0..D).map(|i| s[(i, i)]).sum())
-                .collect();
             for c in &m.chains {
                 for k in 0..c.count {
                     m.segment0[c.first + k] = segment_length(c, k, x);
@@ -99,23 +88,14 @@ impl<const D: usize> Membranes<D> {
     /// current positions (central difference along the contour, one-sided
     /// at an open end; York Sec. 3.2) and rewrites its stress in the new
     /// frame, `σ = s t⊗t + s₃₃ e₃⊗e₃` with `s` the in-plane trace of the
-    /// old stress. Points of a [`MembraneStrain::Chord`] material take
-    /// their stress, volume and energy from the stretch of their segment
-    /// instead (`materials` and `particles` fields give them). No
-    /// allocation.
+    /// old stress. No allocation.
     ///
     /// # Errors
     /// The first point whose neighbour coincides with it (no tangent).
-    #[allow(clippy::too_many_arguments)]
     pub fn update_frames(
         &mut self,
         x: &[SVector<f64, D>],
         stress: &mut [Matrix3<f64>],
-        materials: &[SolidMaterial],
-        material: &[u16],
-        vol0: &[f64],
-        vol: &mut [f64],
-        work: &mut [f64],
     ) -> Result<(), usize> {
         for c in &self.chains {
             for k in 0..c.count {
@@ -130,17 +110,7 @@ impl<const D: usize> Membranes<D> {
                 let t = d / d.norm();
                 self.tangent[p] = t;
                 let sp = &mut stress[p];
-                let mut s: f64 = (0..D).map(|i| sp[(i, i)]).sum();
-                if let Some(law) = materials[material[p] as usize].membrane() {
-                    if law.strain == MembraneStrain::Chord {
-                        let lambda = segment_length(c, k, x) / self.segment0[p];
-                        let (sc, w) = law.chord(self.prestress[p], lambda);
-                        s = sc;
-                        work[p] = w;
-                        vol[p] = lambda * vol0[p];
-                        sp[(2, 2)] = law.out_of_plane(s);
-                    }
-                }
+                let s: f64 = (0..D).map(|i| sp[(i, i)]).sum();
                 for i in 0..D {
                     for j in 0..D {
                         sp[(i, j)] = s * t[i] * t[j];

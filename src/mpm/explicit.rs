@@ -886,11 +886,6 @@ fn membrane_update<const D: usize>(
     work: &mut f64,
     vol: &mut f64,
 ) -> bool {
-    if m.strain == crate::material::MembraneStrain::Chord {
-        // Stress, volume and energy come from the neighbours' chords at
-        // the start of the step (`membrane::Membranes::update_frames`).
-        return true;
-    }
     let eps_rate = t.dot(&(l * t));
     let lam = *vol / vol0 * (1.0 + dt * eps_rate);
     if !(lam.is_finite() && lam > 0.0) {

@@ -78,7 +78,6 @@ fn membrane_material(m: &MaterialSpec) -> SolidMaterial {
         poisson: m.poisson_ratio.unwrap_or_default(),
         thickness: m.thickness.unwrap_or_default(),
         density: m.density.unwrap_or_default(),
-        strain: m.membrane_strain.unwrap_or_default(),
     };
     SolidMaterial {
         name: m.name.clone(),
@@ -532,18 +531,10 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
             fixed_ends: o.fixed_ends,
         })
         .collect();
-    let mut membranes = Membranes::new(chains, &particles.x, &particles.stress);
+    let mut membranes = Membranes::new(chains, &particles.x);
     if !membranes.is_empty() {
         let p = &mut particles;
-        if let Err(q) = membranes.update_frames(
-            &p.x,
-            &mut p.stress,
-            &materials,
-            &p.material,
-            &p.vol0,
-            &mut p.vol,
-            &mut p.work,
-        ) {
+        if let Err(q) = membranes.update_frames(&p.x, &mut p.stress) {
             return Err(SceneError::new(
                 "objects",
                 format!("membrane point {q} coincides with a neighbour"),

@@ -318,9 +318,6 @@ pub struct MaterialSpec {
     pub rigid: bool,
     /// Membranes: thickness h (> 0); the areal density is ρ h.
     pub thickness: Option<f64>,
-    /// Membranes: where the tangential strain comes from, `"grid"` (York
-    /// Sec. 3.2, the default) or `"chord"` (the neighbours' distances).
-    pub membrane_strain: Option<crate::material::MembraneStrain>,
 }
 
 /// MPM-ICE coupling settings (Guilkey Sec. 3.3).
@@ -2179,13 +2176,11 @@ impl Scene {
             if m.name.trim().is_empty() {
                 return Err(err(p("name"), "must not be empty"));
             }
-            for (v, k) in [
-                (m.thickness.is_some(), "thickness"),
-                (m.membrane_strain.is_some(), "membrane_strain"),
-            ] {
-                if v && m.kind != MaterialKind::Membrane {
-                    return Err(err(p(k), "only for membranes (type = \"membrane\")"));
-                }
+            if m.thickness.is_some() && m.kind != MaterialKind::Membrane {
+                return Err(err(
+                    p("thickness"),
+                    "only for membranes (type = \"membrane\")",
+                ));
             }
             if self.materials[..i].iter().any(|o| o.name == m.name) {
                 return Err(err(p("name"), format!("`{}` is used twice", m.name)));

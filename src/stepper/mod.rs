@@ -124,15 +124,7 @@ impl<const D: usize> SolidRun<D> {
         if !self.membranes.is_empty() {
             // York Sec. 3.2: the local frames from the neighbours' positions.
             let p = &mut self.particles;
-            if let Err(q) = self.membranes.update_frames(
-                &p.x,
-                &mut p.stress,
-                &self.materials,
-                &p.material,
-                &p.vol0,
-                &mut p.vol,
-                &mut p.work,
-            ) {
+            if let Err(q) = self.membranes.update_frames(&p.x, &mut p.stress) {
                 return Err(Error::Numerical {
                     site: FailureSite {
                         step: self.steps,

@@ -171,16 +171,8 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             // Refresh the membrane tangents for outputs; the stress itself is
             // turned at the next step's start, as in an unbroken run.
             let p = &r.particles;
-            let (mut stress, mut vol, mut work) = (p.stress.clone(), p.vol.clone(), p.work.clone());
-            let _ = r.membranes.update_frames(
-                &p.x,
-                &mut stress,
-                &r.materials,
-                &p.material,
-                &p.vol0,
-                &mut vol,
-                &mut work,
-            );
+            let mut stress = p.stress.clone();
+            let _ = r.membranes.update_frames(&p.x, &mut stress);
         }
         Ok(())
     }
