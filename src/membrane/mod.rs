@@ -103,7 +103,9 @@ impl<const D: usize> Membranes<D> {
                 let (a, b) = c.neighbours(k);
                 let tol = 1e-9 * self.segment0[p];
                 let (da, db) = ((x[p] - x[a]).norm(), (x[b] - x[p]).norm());
-                if (a != p && !(da > tol)) || (b != p && !(db > tol)) {
+                // A coinciding (or non-finite) neighbour leaves no tangent.
+                let apart = |d: f64| d.is_finite() && d > tol;
+                if (a != p && !apart(da)) || (b != p && !apart(db)) {
                     return Err(p);
                 }
                 let d = x[b] - x[a];
