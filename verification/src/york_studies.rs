@@ -194,8 +194,10 @@ pub fn york_piston_container(quick: bool) -> Result<StudyResult> {
 }
 
 /// York Sec. 4.3: the dog-bone membrane expansion (York Fig. 10, Tables
-/// II–IV) at element sizes 0.4, 0.2, 0.1, 0.05 (quick: 0.4, 0.2), membrane
-/// points an eighth of a cell apart, to t = `YORK_DOGBONE_END` (default 4):
+/// II–IV) at element sizes 0.4, 0.2, 0.1, 0.05 (quick: 0.4, 0.2; or the
+/// list in `YORK_DOGBONE_H`), membrane points an eighth of a cell apart, to
+/// t = `YORK_DOGBONE_END`
+/// (default 4):
 /// final mean radius and pressure, radii at 0° and 90°, hoop stress
 /// against p r / t, energy, gas points outside the membrane, wall time.
 /// The error of the series is the hoop stress's relative difference from
@@ -223,7 +225,7 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
     ];
     let mut notes = vec![
         format!(
-            "reconstructed dog-bone: lobes r = {}, centres at +-{}, neck half-width {} (perimeter {:.3}); E = 1e4 (exponent recovered from York Table IV: E = {:.3e}); nu = 0.3, thickness 0.1, membrane rho 0.5; gas rho 1, e0 250 (p0 = 100), mu 0.2, York q; GIMP, MUSL, 2x2 gas points per cell, end t = {end}",
+            "reconstructed dog-bone: lobes r = {}, centres at +-{}, neck half-width {} (perimeter {:.3}); E = 1e4 (exponent recovered from York Table IV: E = {:.3e}); nu = 0.3, thickness 0.1, membrane rho 0.5; gas rho 1, e0 250 (p0 = 100), mu 0.2, York q; GIMP, MUSL, 2x2 gas points per cell filling the dog-bone, end t = {end}",
             DogBone::LOBE_RADIUS,
             DogBone::LOBE_OFFSET,
             DogBone::NECK,
