@@ -14,6 +14,7 @@ pub mod error;
 pub mod grid;
 pub mod ice;
 pub mod material;
+pub mod membrane;
 pub mod mpm;
 pub mod output;
 pub mod scene;

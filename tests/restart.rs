@@ -184,6 +184,20 @@ fn gas_points_restart_bit_identically() {
     assert_restart_is_bit_identical("gas points (York Sod)", &s);
 }
 
+#[test]
+fn membranes_restart_bit_identically() {
+    // York dog-bone (membrane + gas points) on the coarsest grid, briefly:
+    // the membrane stress, stretch (volume) and strain energy (work) travel
+    // in the particle arrays; the chains and initial segment lengths come
+    // from the scene and the tangents are recomputed every step.
+    let mut s = case("york_dogbone.toml");
+    s.grid.cells = vec![12, 12];
+    s.objects[0].spacing = Some(0.1);
+    s.time.end = 0.02;
+    s.output.interval = Some(0.01);
+    assert_restart_is_bit_identical("membrane (York dog-bone)", &s);
+}
+
 /// Runs `scene` to a checkpoint and returns it (the run stops by its step
 /// limit after the checkpoint).
 fn a_checkpoint(scene: &Scene, dir: &Path) -> PathBuf {

@@ -745,3 +745,171 @@ fn axisymmetric_bad_inputs_name_their_keys() {
     );
     mpmice::scene::parse(&off_axis).expect("an axisymmetric grid off the axis is valid");
 }
+
+/// A membrane (York Sec. 3.2) around gas points: the good scene of the
+/// membrane checks below.
+const MEMBRANE: &str = r#"
+[grid]
+dim = 2
+lower = [0.0, 0.0]
+upper = [1.0, 1.0]
+cells = [10, 10]
+boundary = { x_lower = "fixed", x_upper = "fixed", y_lower = "fixed", y_upper = "fixed" }
+
+[time]
+end = 0.01
+
+[[materials]]
+name = "gas"
+type = "fluid"
+frame = "particles"
+eos = "ideal_gas"
+gamma = 1.4
+cv = 1.0
+
+[[materials]]
+name = "skin"
+type = "membrane"
+density = 0.5
+youngs_modulus = 1.0e4
+poisson_ratio = 0.3
+thickness = 0.1
+
+[[objects]]
+material = "skin"
+geometry = { type = "polyline", vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true }
+spacing = 0.05
+
+[[objects]]
+material = "gas"
+geometry = { type = "circle", center = [0.5, 0.5], radius = 0.25 }
+density = 1.0
+pressure = 1.0
+"#;
+
+fn membrane_edit(from: &str, to: &str) -> String {
+    assert_eq!(MEMBRANE.matches(from).count(), 1, "edit anchor `{from}`");
+    MEMBRANE.replacen(from, to, 1)
+}
+
+#[test]
+fn the_membrane_scene_is_accepted_and_builds_ordered_points() {
+    let s = mpmice::scene::parse(MEMBRANE).expect("valid");
+    let run = mpmice::scene::build_solid_run::<2>(&s).expect("builds");
+    let c = run.membranes.chains[0];
+    // Perimeter 2.4 at spacing 0.05: 48 points, closed, each of mass
+    // ρ h Δ = 0.5 · 0.1 · 0.05.
+    assert_eq!((c.first, c.count, c.closed), (0, 48, true));
+    for p in 0..48 {
+        assert!((run.particles.mass[p] - 0.0025).abs() < 1e-15);
+    }
+}
+
+#[test]
+fn bad_membrane_input_names_its_key() {
+    let square = "vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true";
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            membrane_edit(square, "vertices = [[0.2, 0.2], [0.8, 0.8], [0.8, 0.2], [0.2, 0.8]], closed = true"),
+            "objects[0].geometry.vertices",
+            "crosses",
+        ),
+        (
+            membrane_edit(square, "vertices = [[0.2, 0.2], [0.8, 0.2], [0.5, 0.2]]"),
+            "objects[0].geometry.vertices",
+            "in order",
+        ),
+        (
+            membrane_edit(square, "vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.2], [0.2, 0.8]], closed = true"),
+            "objects[0].geometry.vertices[2]",
+            "zero-length",
+        ),
+        (
+            membrane_edit(square, "vertices = [[0.2, 0.2]]"),
+            "objects[0].geometry.vertices",
+            "at least 2",
+        ),
+        (
+            membrane_edit("spacing = 0.05", "spacing = 0.2"),
+            "objects[0].spacing",
+            "smallest cell size",
+        ),
+        (
+            membrane_edit("spacing = 0.05\n", ""),
+            "objects[0].spacing",
+            "missing",
+        ),
+        (
+            membrane_edit("spacing = 0.05", "spacing = 0.05\nfixed_ends = true"),
+            "objects[0].fixed_ends",
+            "open polylines",
+        ),
+        (
+            membrane_edit("thickness = 0.1", "thickness = 0.0"),
+            "materials[1].thickness",
+            "> 0",
+        ),
+        (
+            membrane_edit("thickness = 0.1\n", ""),
+            "materials[1].thickness",
+            "missing",
+        ),
+        (
+            membrane_edit("poisson_ratio = 0.3", "poisson_ratio = 0.3\nmodel = \"neo_hookean\""),
+            "materials[1].model",
+            "not a membrane key",
+        ),
+        (
+            membrane_edit("spacing = 0.05", "spacing = 0.05\nparticles_per_cell = 2"),
+            "objects[0].particles_per_cell",
+            "not a membrane object key",
+        ),
+        (
+            membrane_edit("density = 1.0\npressure", "spacing = 0.05\ndensity = 1.0\npressure"),
+            "objects[1].spacing",
+            "only for membrane objects",
+        ),
+        (
+            membrane_edit(
+                "{ type = \"polyline\", vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true }",
+                "{ type = \"box\", lower = [0.2, 0.2], upper = [0.8, 0.8] }",
+            ),
+            "objects[0].geometry.type",
+            "polyline, circle, dog_bone",
+        ),
+        (
+            membrane_edit(
+                "{ type = \"circle\", center = [0.5, 0.5], radius = 0.25 }",
+                "{ type = \"dog_bone\", center = [0.5, 0.5], lobe_radius = 0.1, lobe_offset = 0.3, neck_half_width = 0.2 }",
+            ),
+            "objects[1].geometry.neck_half_width",
+            "lobe_radius",
+        ),
+        (
+            membrane_edit("end = 0.01", "end = 0.01\nmode = \"implicit\"\ndt = 0.001"),
+            "time.mode",
+            "explicit",
+        ),
+        (
+            membrane_edit("frame = \"particles\"\n", ""),
+            "materials[0].frame",
+            "ICE",
+        ),
+        (
+            membrane_edit("thickness = 0.1", "thickness = 0.1\n[[materials]]\nname = \"air\"\ntype = \"fluid\"\neos = \"ideal_gas\"\ngamma = 1.4\ncv = 1.0"),
+            "materials[2].frame",
+            "ICE",
+        ),
+        (
+            membrane_edit("dim = 2\nlower = [0.0, 0.0]\nupper = [1.0, 1.0]\ncells = [10, 10]", "dim = 3\nlower = [0.0, 0.0, 0.0]\nupper = [1.0, 1.0, 1.0]\ncells = [10, 10, 10]"),
+            "grid.dim",
+            "2D only",
+        ),
+        (
+            membrane_edit("dim = 2", "dim = 2\naxisymmetric = true"),
+            "grid.axisymmetric",
+            "plane 2D only",
+        ),
+    ];
+    assert_each_names_its_key(&cases);
+}

@@ -11,9 +11,11 @@
 //! `york_fig6` (York Sec. 4.1: Sod with gas material points — density,
 //! velocity, pressure and specific internal energy against exact) and
 //! `york_fig9` (York Sec. 4.2: piston displacement history of the
-//! piston–container with Eq. 27's periods), and `axisym_lame`
-//! (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick cylinder and sphere
-//! against the exact solutions).
+//! piston–container with Eq. 27's periods), `york_fig11` / `york_fig13`
+//! (York Sec. 4.3: dog-bone membrane expansion — point positions at several
+//! times; radii at 0° and 90° and the energies against time), and
+//! `axisym_lame` (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick
+//! cylinder and sphere against the exact solutions).
 
 use std::path::PathBuf;
 
@@ -57,6 +59,14 @@ const FIGURES: &[(&str, &str)] = &[
         "piston-container (York 4.2): piston displacement vs time, m = 0.1 and 1.0, exact periods",
     ),
     (
+        "york_fig11",
+        "dog-bone membrane expansion (York 4.3): point positions at several times",
+    ),
+    (
+        "york_fig13",
+        "dog-bone membrane expansion (York 4.3): radii at 0 and 90 deg and energies vs time",
+    ),
+    (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
     ),
@@ -78,6 +88,8 @@ fn main() -> anyhow::Result<()> {
         "york_fig6" => york_fig6(args.quick),
         "york_fig9" => york_fig9(args.quick),
         "axisym_lame" => axisym_lame(args.quick),
+        "york_fig11" => york_dogbone_figures(args.quick, true),
+        "york_fig13" => york_dogbone_figures(args.quick, false),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -413,5 +425,141 @@ fn axisym_lame(quick: bool) -> anyhow::Result<()> {
         )?;
         println!("wrote {}", out.join(format!("{name}.png")).display());
     }
+    Ok(())
+}
+
+/// York Figs. 11–13: the dog-bone membrane expansion at element size 0.1
+/// (`--quick`: 0.4) to t = 4. `positions`: one PNG per snapshot time with
+/// the membrane (line) and gas points (markers), `york_fig11_tT.png`, and
+/// a CSV of all points; otherwise the radii at 0° and 90° and the kinetic,
+/// gas internal, membrane strain and total energies against time
+/// (`york_fig13_radii.png`, `york_fig13_energy.png`, `york_fig13.csv`).
+fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
+    let out = out_dir()?;
+    let h = if quick { 0.4 } else { 0.1 };
+    let r = run_dog_bone(&DogBone {
+        h,
+        ..DogBone::default()
+    })?;
+    if positions {
+        let mut csv = String::from("t,kind,x,y\n");
+        for ((t, mem), (_, gas)) in r.snapshots.iter().zip(&r.gas_snapshots) {
+            for (kind, pts) in [("membrane", mem), ("gas", gas)] {
+                for p in pts {
+                    csv.push_str(&format!("{t},{kind},{},{}\n", p[0], p[1]));
+                }
+            }
+            let mut line: Vec<(f64, f64)> = mem.iter().map(|p| (p[0], p[1])).collect();
+            if let Some(&first) = line.first() {
+                line.push(first);
+            }
+            let frame = DogBone::HALF_WIDTH;
+            let series = vec![
+                PlotSeries {
+                    label: "gas points".into(),
+                    points: gas.iter().map(|p| (p[0], p[1])).collect(),
+                    style: Style::Markers,
+                },
+                PlotSeries {
+                    label: "membrane points".into(),
+                    points: line,
+                    style: Style::Line,
+                },
+                PlotSeries {
+                    label: String::new(),
+                    points: vec![(-frame, -frame), (frame, frame)],
+                    style: Style::Markers,
+                },
+            ];
+            let path = out.join(format!("york_fig11_t{t:.2}.png"));
+            plot_xy(
+                &path,
+                &format!("York Fig. 11/12: dog-bone, h = {h}, t = {t:.2}"),
+                "x",
+                "y",
+                false,
+                false,
+                &series,
+            )?;
+            println!("wrote {}", path.display());
+        }
+        std::fs::write(out.join("york_fig11.csv"), csv)?;
+        return Ok(());
+    }
+    let mut csv = String::from("t,radius_0,radius_90,mean_radius,kinetic,internal,strain,total\n");
+    for x in &r.history {
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{}\n",
+            x.t,
+            x.radius_0,
+            x.radius_90,
+            x.mean_radius,
+            x.kinetic,
+            x.internal,
+            x.strain,
+            x.kinetic + x.internal + x.strain
+        ));
+    }
+    std::fs::write(out.join("york_fig13.csv"), csv)?;
+    let col = |f: &dyn Fn(&mpmice::diagnostics::york_membrane::DogBoneSample) -> f64| {
+        r.history.iter().map(|x| (x.t, f(x))).collect::<Vec<_>>()
+    };
+    let radii = vec![
+        PlotSeries {
+            label: "radius at 0 deg".into(),
+            points: col(&|x| x.radius_0),
+            style: Style::Line,
+        },
+        PlotSeries {
+            label: "radius at 90 deg".into(),
+            points: col(&|x| x.radius_90),
+            style: Style::Line,
+        },
+    ];
+    let path = out.join("york_fig13_radii.png");
+    plot_xy(
+        &path,
+        &format!("York Fig. 13: dog-bone radii, h = {h}"),
+        "t",
+        "radius",
+        false,
+        false,
+        &radii,
+    )?;
+    println!("wrote {}", path.display());
+    let energy = vec![
+        PlotSeries {
+            label: "kinetic".into(),
+            points: col(&|x| x.kinetic),
+            style: Style::Line,
+        },
+        PlotSeries {
+            label: "gas internal".into(),
+            points: col(&|x| x.internal),
+            style: Style::Line,
+        },
+        PlotSeries {
+            label: "membrane strain".into(),
+            points: col(&|x| x.strain),
+            style: Style::Line,
+        },
+        PlotSeries {
+            label: "total".into(),
+            points: col(&|x| x.kinetic + x.internal + x.strain),
+            style: Style::Line,
+        },
+    ];
+    let path = out.join("york_fig13_energy.png");
+    plot_xy(
+        &path,
+        &format!("York Fig. 13: dog-bone energies, h = {h}"),
+        "t",
+        "energy (per unit depth)",
+        false,
+        false,
+        &energy,
+    )?;
+    println!("wrote {}", path.display());
     Ok(())
 }

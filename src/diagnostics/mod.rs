@@ -7,3 +7,4 @@ pub mod impm;
 pub mod mms;
 pub mod riemann;
 pub mod york;
+pub mod york_membrane;

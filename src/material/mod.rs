@@ -1,15 +1,18 @@
 //! Materials: solid constitutive models (`solid`), the equation-of-state
 //! interface (`equation_of_state`), fluid equations of state (`eos`,
-//! `solid_eos`), J2 plasticity (`plasticity`) and the gas on material points
-//! (`gas_point`, York Sec. 3.3).
+//! `solid_eos`), J2 plasticity (`plasticity`), the gas on material points
+//! (`gas_point`, York Sec. 3.3) and the membrane law (`membrane`, York
+//! Sec. 3.2).
 //! Imports no physics module.
 
 pub mod eos;
 pub mod equation_of_state;
 pub mod gas_point;
+pub mod membrane;
 pub mod plasticity;
 pub mod solid;
 pub mod solid_eos;
 
 pub use gas_point::{ArtificialViscosity, GasPoint};
+pub use membrane::MembraneLaw;
 pub use solid::{ElasticConstants, GasInput, PointState, SolidMaterial, SolidModel};

@@ -6,6 +6,7 @@
 use nalgebra::Matrix3;
 
 use super::gas_point::{GasPoint, GasStep};
+use super::membrane::MembraneLaw;
 use super::plasticity::{PlasticState, J2};
 
 /// Isotropic elastic constants.
@@ -71,6 +72,12 @@ pub enum SolidModel {
     /// [`PlasticState`].
     #[serde(skip)]
     ElasticPlastic(J2),
+    /// A membrane material point (York Sec. 3.2, [`MembraneLaw`]): its
+    /// stress is updated by the explicit MPM step in the membrane's local
+    /// frame (it needs the tangent from its neighbours); the particle's
+    /// `work` holds its strain energy per unit reference volume.
+    #[serde(skip)]
+    Membrane(MembraneLaw),
 }
 
 impl SolidModel {
@@ -118,6 +125,15 @@ impl SolidMaterial {
         }
     }
 
+    /// The membrane law of this material, if it is a membrane.
+    #[inline]
+    pub fn membrane(&self) -> Option<&MembraneLaw> {
+        match &self.model {
+            SolidModel::Membrane(m) => Some(m),
+            _ => None,
+        }
+    }
+
     /// Largest stable explicit step of one particle in a grid of smallest
     /// cell size `h`: `h / (c + |v|)` for a solid, [`GasPoint::dt_limit`]
     /// for a gas point. `p` gives the particle's state.
@@ -128,6 +144,7 @@ impl SolidMaterial {
             SolidModel::GasPoint(g) => {
                 g.dt_limit(h, rho, p.work * p.vol0 / p.mass, p.stress, p.speed, c_max)
             }
+            SolidModel::Membrane(m) => h / (m.wave_speed() + p.speed),
             _ => h / (self.wave_speed(rho) + p.speed),
         }
     }
@@ -194,6 +211,10 @@ impl SolidMaterial {
                 // hypo-elastic model.
                 *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
             }
+            // The explicit step updates a membrane point in its local frame
+            // (`mpm::explicit`, York Sec. 3.2); without a frame the stress
+            // is kept.
+            SolidModel::Membrane(_) => {}
         }
     }
 
@@ -228,7 +249,7 @@ impl SolidMaterial {
             SolidModel::NeoHookean => neo_hookean_stress_j(lambda, mu, f_new, j),
             // Gas points are explicit only (the scene rejects them in implicit
             // mode, and `spatial_tangent` gives none): the stress is kept.
-            SolidModel::GasPoint(_) => *stress_old,
+            SolidModel::GasPoint(_) | SolidModel::Membrane(_) => *stress_old,
         }
     }
 
@@ -248,7 +269,9 @@ impl SolidMaterial {
         match self.model {
             SolidModel::LinearElastic => Some((lambda, mu)),
             SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
-            SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) => None,
+            SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) | SolidModel::Membrane(_) => {
+                None
+            }
         }
     }
 
@@ -257,9 +280,10 @@ impl SolidMaterial {
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {
         match self.model {
             // Rate models: the accumulated work; a gas point: ρ_ref e.
-            SolidModel::LinearElastic | SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) => {
-                work
-            }
+            SolidModel::LinearElastic
+            | SolidModel::GasPoint(_)
+            | SolidModel::ElasticPlastic(_)
+            | SolidModel::Membrane(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();

@@ -189,13 +189,16 @@ pub fn gas_sound_speed_max<const D: usize>(
 
 /// Advances particles and grid by one explicit step of size `dt` from time `t`.
 ///
-/// `step` is only used to name the step in errors.
+/// `step` is only used to name the step in errors. `tangent` holds the unit
+/// tangent of every membrane point (York Sec. 3.2; zero for other
+/// particles), or is empty when the run has no membranes.
 #[allow(clippy::too_many_arguments)]
 pub fn explicit_step<const D: usize>(
     grid: &Grid<D>,
     materials: &[SolidMaterial],
     params: &ExplicitParams,
     body: Option<&dyn BodyForce<D>>,
+    tangent: &[SVector<f64, D>],
     particles: &mut Particles<D>,
     gs: &mut GridState<D>,
     scratch: &mut StepScratch<D>,
@@ -212,6 +215,7 @@ pub fn explicit_step<const D: usize>(
         dt,
         step,
         pressure: None,
+        tangent,
     };
     // The geometry is hoisted out of every loop: each pass is compiled once
     // for plane strain (no hoop terms, no extra work) and once for r–z.
@@ -251,6 +255,8 @@ struct Ctx<'a, const D: usize> {
     /// Coupled MPM-ICE: the nodal pressure and `p_ref`; the internal force
     /// then uses `σ + (p − p_ref) I` (Guilkey Sec. 3.3 step 7).
     pressure: Option<(&'a [f64], f64)>,
+    /// Unit tangents of the membrane points (York Sec. 3.2), or empty.
+    tangent: &'a [SVector<f64, D>],
 }
 
 impl<const D: usize> Ctx<'_, D> {
@@ -403,6 +409,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             dt: self.dt,
             step: self.step,
             pressure,
+            tangent: &[],
         }
     }
 
@@ -902,6 +909,49 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
     ctx.grid.mirror_ghosts(&mut gs.accel);
 }
 
+/// The stress update of a membrane point (York Sec. 3.2) with unit tangent
+/// `t`: the strain rate projected on the tangent, `ε̇_tt = t·L·t`, advances
+/// the tangential stress `s` ([`crate::material::MembraneLaw::update`]);
+/// the stress goes back to the global frame as `σ = s t⊗t + ν s e₃⊗e₃`
+/// (York Eq. 15 takes it from there). The point's volume follows its
+/// length at constant thickness, `V = λ V⁰` with `λ ← λ(1 + Δt ε̇_tt)`, and
+/// `work` gathers the stress power `V s ε̇_tt` per unit reference volume.
+/// Returns false when the stretch is not positive and finite.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn membrane_update<const D: usize>(
+    m: &crate::material::MembraneLaw,
+    t: &SVector<f64, D>,
+    l: &SMatrix<f64, D, D>,
+    dt: f64,
+    vol0: f64,
+    stress: &mut Matrix3<f64>,
+    work: &mut f64,
+    vol: &mut f64,
+) -> bool {
+    let eps_rate = t.dot(&(l * t));
+    let lam = *vol / vol0 * (1.0 + dt * eps_rate);
+    if !(lam.is_finite() && lam > 0.0) {
+        return false;
+    }
+    // The in-plane trace of σ = s t⊗t is s in any frame.
+    let s_old: f64 = (0..D).map(|i| stress[(i, i)]).sum();
+    let s = m.update(s_old, eps_rate, dt);
+    let mut sigma = Matrix3::zeros();
+    for i in 0..D {
+        for j in 0..D {
+            sigma[(i, j)] = s * t[i] * t[j];
+        }
+    }
+    if D < 3 {
+        sigma[(2, 2)] += m.out_of_plane(s);
+    }
+    *stress = sigma;
+    *work += dt * lam * 0.5 * (s_old + s) * eps_rate;
+    *vol = lam * vol0;
+    true
+}
+
 /// Grid to particle (Guilkey Eqs. 23, 26, 27) and the constitutive update.
 ///
 /// Axisymmetric (`AXI`): the hoop rate L_θθ = v_r(x_p)/r_p, with v_r
@@ -939,6 +989,8 @@ fn g2p<
         &gs.velocity
     };
     let failed = AtomicUsize::new(usize::MAX);
+    let tangent = ctx.tangent;
+    let has_membrane = !tangent.is_empty();
     // York Eq. 24's c_max from the state at the start of the stress update.
     let c_max = if GRAD != GRAD_NONE {
         gas_sound_speed_max(ctx.materials, particles)
@@ -1003,6 +1055,14 @@ fn g2p<
                 // SAFETY: as above.
                 let (fp, sp, wp, vp_vol) =
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
+                if has_membrane {
+                    if let Some(m) = ctx.materials[mat[p] as usize].membrane() {
+                        if !membrane_update(m, &tangent[p], &l, dt, vol0[p], sp, wp, vp_vol) {
+                            failed.fetch_min(p, Ordering::Relaxed);
+                        }
+                        return;
+                    }
+                }
                 // Plane strain: L lives in the D×D block, so F stays
                 // diag(F_D, I) and only that block changes: F_D ← (I + Δt L)
                 // F_D, J = det F_D. Axisymmetric: F₃₃ follows the hoop rate.

@@ -15,7 +15,10 @@ use crate::ice::{
     InflowState, Limiter, MaterialInit,
 };
 use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
-use crate::material::{ArtificialViscosity, ElasticConstants, GasPoint, SolidMaterial, SolidModel};
+use crate::material::{
+    ArtificialViscosity, ElasticConstants, GasPoint, MembraneLaw, SolidMaterial, SolidModel,
+};
+use crate::membrane::{self, MembraneChain, Membranes};
 use crate::mpm::explicit::Uniform;
 use crate::mpm::implicit::{
     ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, PrescribedDisplacement,
@@ -74,6 +77,59 @@ fn gas_point_material(m: &MaterialSpec, i: usize, h: f64) -> Result<SolidMateria
     })
 }
 
+/// The particle material of a membrane (York Sec. 3.2).
+fn membrane_material(m: &MaterialSpec) -> SolidMaterial {
+    let law = MembraneLaw {
+        young: m.youngs_modulus.unwrap_or_default(),
+        poisson: m.poisson_ratio.unwrap_or_default(),
+        thickness: m.thickness.unwrap_or_default(),
+        density: m.density.unwrap_or_default(),
+    };
+    SolidMaterial {
+        name: m.name.clone(),
+        density: law.density,
+        model: SolidModel::Membrane(law),
+        elastic: ElasticConstants {
+            lambda: 0.0,
+            mu: 0.0,
+        },
+    }
+}
+
+/// The ordered points of a membrane object's curve (York Sec. 3.2) at most
+/// `spacing` apart, whether the curve is closed, and the arc length Δ
+/// between neighbours.
+fn membrane_curve(g: &Geometry, spacing: f64) -> (Vec<[f64; 2]>, bool, f64) {
+    match g {
+        Geometry::Polyline { vertices, closed } => {
+            let (p, d) = membrane::resample(vertices, *closed, spacing);
+            (p, *closed, d)
+        }
+        Geometry::Circle { center, radius } => {
+            let (p, d) = membrane::circle_points([center[0], center[1]], *radius, spacing);
+            (p, true, d)
+        }
+        Geometry::DogBone {
+            center,
+            lobe_radius,
+            lobe_offset,
+            neck_half_width,
+        } => {
+            let outline = membrane::dog_bone_outline(
+                [center[0], center[1]],
+                *lobe_radius,
+                *lobe_offset,
+                *neck_half_width,
+                spacing / 64.0,
+            );
+            let (p, d) = membrane::resample(&outline, true, spacing);
+            (p, true, d)
+        }
+        // Validation admits only the curves above.
+        _ => (Vec::new(), true, spacing),
+    }
+}
+
 /// The particle materials of a scene in scene order (solids and gas points),
 /// as indexed by `Particles::material`.
 fn particle_materials<const D: usize>(
@@ -88,6 +144,8 @@ fn particle_materials<const D: usize>(
         .map(|(i, m)| {
             if m.is_gas_point() {
                 gas_point_material(m, i, grid.h.min())
+            } else if m.kind == MaterialKind::Membrane {
+                Ok(membrane_material(m))
             } else {
                 Ok(solid_material(m))
             }
@@ -166,6 +224,52 @@ fn fill_objects<const D: usize>(
             }
             _ => (0.0, nalgebra::Matrix3::zeros()),
         };
+        let vel0 = obj
+            .velocity
+            .as_deref()
+            .map(to_vec::<D>)
+            .unwrap_or_else(SVector::zeros);
+        if let Some(law) = materials[mat_index].membrane() {
+            // York Sec. 3: mass from the areal density ρ h and the spacing
+            // (per unit depth in 2D); an open chain's ends carry half.
+            let spacing = obj.spacing.unwrap_or(grid.h.min());
+            let (pts, closed, delta) = membrane_curve(&obj.geometry, spacing);
+            let before = particles.len();
+            let s0 = obj.prestress.unwrap_or(0.0);
+            for (k, xy) in pts.iter().enumerate() {
+                let end = !closed && (k == 0 || k + 1 == pts.len());
+                let share = if end { 0.5 } else { 1.0 };
+                let vol = law.thickness * delta * share;
+                let x = SVector::<f64, D>::from_fn(|d, _| if d < 2 { xy[d] } else { 0.0 });
+                particles.push(
+                    x,
+                    vel0,
+                    law.density * vol,
+                    vol,
+                    SVector::repeat(0.5 * delta),
+                    mat_index as u16,
+                );
+                let p = particles.len() - 1;
+                // The prestress as an in-plane trace; the first frame update
+                // turns it along the tangent.
+                particles.stress[p][(0, 0)] = s0;
+                particles.stress[p][(2, 2)] = law.out_of_plane(s0);
+                particles.work[p] = law.energy_of(s0);
+            }
+            if let Some(q) = (before..particles.len()).find(|&q| {
+                (0..D).any(|d| {
+                    let x = particles.x[q][d];
+                    x < grid.lower[d] || x > grid.upper[d]
+                })
+            }) {
+                return Err(SceneError::new(
+                    format!("objects[{oi}].geometry"),
+                    format!("membrane point {} lies outside the grid", q - before),
+                ));
+            }
+            ranges.push(before..particles.len());
+            continue;
+        }
         let ppc = obj
             .particles_per_cell
             .unwrap_or(scene.mpm.particles_per_cell);
@@ -420,7 +524,34 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
     }
     let grid = grid_of::<D>(scene);
     let materials = particle_materials(scene, &grid)?;
-    let particles = fill_particles(scene, &grid, &materials)?;
+    let (mut particles, ranges) = fill_objects(scene, &grid, &materials)?;
+    let chains: Vec<MembraneChain> = scene
+        .objects
+        .iter()
+        .zip(&ranges)
+        .filter(|(o, _)| {
+            scene
+                .materials
+                .iter()
+                .any(|m| m.name == o.material && m.kind == MaterialKind::Membrane)
+        })
+        .map(|(o, r)| MembraneChain {
+            first: r.start,
+            count: r.len(),
+            closed: !matches!(o.geometry, Geometry::Polyline { closed: false, .. }),
+            fixed_ends: o.fixed_ends,
+        })
+        .collect();
+    let mut membranes = Membranes::new(chains, &particles.x);
+    if !membranes.is_empty() {
+        let p = &mut particles;
+        if let Err(q) = membranes.update_frames(&p.x, &mut p.stress) {
+            return Err(SceneError::new(
+                "objects",
+                format!("membrane point {q} coincides with a neighbour"),
+            ));
+        }
+    }
     let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
     let params = ExplicitParams {
         shape: scene.mpm.shape,
@@ -435,6 +566,7 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         max_steps: scene.time.max_steps,
     };
     let mut run = SolidRun::new(grid, materials, particles, params, time);
+    run.membranes = membranes;
     if let Some(g) = &scene.gravity {
         let g = to_vec::<D>(g);
         if g.norm() > 0.0 {

@@ -204,6 +204,11 @@ pub enum MaterialKind {
     Solid,
     /// A fluid in cell-centred multi-material ICE.
     Fluid,
+    /// A membrane on one layer of ordered material points (York Sec. 3.2):
+    /// `density`, `youngs_modulus`, `poisson_ratio`, `thickness`; its
+    /// objects are curves (`polyline`, `circle`, `dog_bone`) with a
+    /// `spacing`.
+    Membrane,
 }
 
 /// Where a fluid material lives.
@@ -461,6 +466,8 @@ pub struct MaterialSpec {
     /// J2 plasticity (solids with `model = "linear_elastic"`, explicit
     /// mode): see [`PlasticitySpec`].
     pub plasticity: Option<PlasticitySpec>,
+    /// Membranes: thickness h (> 0); the areal density is ρ h.
+    pub thickness: Option<f64>,
 }
 
 /// MPM-ICE coupling settings (Guilkey Sec. 3.3).
@@ -569,6 +576,36 @@ pub enum Geometry {
         /// Vertices `[[x, y], …]` (at least 3).
         vertices: Vec<[f64; 2]>,
     },
+    /// A polyline in the x–y plane: a membrane's curve (York Sec. 3.2), or,
+    /// when `closed`, the region inside it (like `polygon`).
+    Polyline {
+        /// Vertices `[[x, y], …]` in order along the curve.
+        vertices: Vec<[f64; 2]>,
+        /// Whether the last vertex joins the first.
+        #[serde(default)]
+        closed: bool,
+    },
+    /// A circle (2D): a membrane's closed curve, or the disk inside it.
+    Circle {
+        /// Centre `[x, y]`.
+        center: Vec<f64>,
+        /// Radius.
+        radius: f64,
+    },
+    /// The dog-bone of York Fig. 10 (reconstructed; 2D): two circular lobes
+    /// of radius `lobe_radius` centred at `center ± (lobe_offset, 0)` joined
+    /// by a straight neck of half-width `neck_half_width`; a membrane's
+    /// closed curve, or the region inside it.
+    DogBone {
+        /// Centre `[x, y]`.
+        center: Vec<f64>,
+        /// Lobe radius r.
+        lobe_radius: f64,
+        /// Distance a of each lobe centre from the centre (> r).
+        lobe_offset: f64,
+        /// Neck half-width w (0 < w < r).
+        neck_half_width: f64,
+    },
     /// Annulus (2D) or cylindrical shell along z (3D): distance from the
     /// centre (in the x–y plane) between the radii.
     Annulus {
@@ -605,6 +642,30 @@ impl Geometry {
                 let r2 = dist2(x, center, x.len().min(2));
                 r2 >= inner_radius * inner_radius && r2 <= outer_radius * outer_radius
             }
+            Geometry::Polyline { vertices, closed } => {
+                *closed
+                    && Geometry::Polygon {
+                        vertices: vertices.clone(),
+                    }
+                    .contains(x)
+            }
+            Geometry::Circle { center, radius } => {
+                x.len() >= 2 && dist2(x, center, 2) <= radius * radius
+            }
+            Geometry::DogBone {
+                center,
+                lobe_radius: r,
+                lobe_offset: a,
+                neck_half_width: w,
+            } => {
+                if x.len() < 2 {
+                    return false;
+                }
+                let (dx, dy) = (x[0] - center[0], x[1] - center[1]);
+                (dx.abs() <= *a && dy.abs() <= *w)
+                    || (dx - a).powi(2) + dy * dy <= r * r
+                    || (dx + a).powi(2) + dy * dy <= r * r
+            }
             Geometry::Polygon { vertices } => {
                 if x.len() < 2 {
                     return false;
@@ -629,7 +690,7 @@ impl Geometry {
     pub fn bounds(&self, dim: usize) -> (Vec<f64>, Vec<f64>) {
         match self {
             Geometry::HalfSpace { .. } => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
-            Geometry::Polygon { vertices } => {
+            Geometry::Polygon { vertices } | Geometry::Polyline { vertices, .. } => {
                 let mut lo = vec![f64::NEG_INFINITY; dim];
                 let mut hi = vec![f64::INFINITY; dim];
                 for d in 0..dim.min(2) {
@@ -642,6 +703,30 @@ impl Geometry {
                 (lo, hi)
             }
             Geometry::Box { lower, upper } => (lower.clone(), upper.clone()),
+            Geometry::Circle { center, radius } => {
+                let mut lo = vec![f64::NEG_INFINITY; dim];
+                let mut hi = vec![f64::INFINITY; dim];
+                for d in 0..dim.min(2) {
+                    lo[d] = center[d] - radius;
+                    hi[d] = center[d] + radius;
+                }
+                (lo, hi)
+            }
+            Geometry::DogBone {
+                center,
+                lobe_radius: r,
+                lobe_offset: a,
+                ..
+            } => {
+                let mut lo = vec![f64::NEG_INFINITY; dim];
+                let mut hi = vec![f64::INFINITY; dim];
+                let ext = [a + r, *r];
+                for d in 0..dim.min(2) {
+                    lo[d] = center[d] - ext[d];
+                    hi[d] = center[d] + ext[d];
+                }
+                (lo, hi)
+            }
             Geometry::Disk { center, radius } | Geometry::Sphere { center, radius } => (
                 center.iter().map(|c| c - radius).collect(),
                 center.iter().map(|c| c + radius).collect(),
@@ -702,6 +787,14 @@ pub struct ObjectSpec {
     /// extends beyond it (e.g. a quarter of an annulus on symmetry planes).
     #[serde(default)]
     pub clip: bool,
+    /// Membranes: the largest distance between neighbouring points along
+    /// the curve (> 0, at most the smallest cell size).
+    pub spacing: Option<f64>,
+    /// Membranes on an open polyline: hold the two end points in place.
+    #[serde(default)]
+    pub fixed_ends: bool,
+    /// Membranes: initial tangential stress s₀ (a taut membrane).
+    pub prestress: Option<f64>,
 }
 
 /// Output file formats.
@@ -1234,7 +1327,9 @@ impl MaterialSpec {
     /// Whether the material lives on particles: a solid, or a fluid with
     /// `frame = "particles"` (gas points, York Sec. 3.3).
     pub fn on_particles(&self) -> bool {
-        self.kind == MaterialKind::Solid || self.is_gas_point()
+        self.kind == MaterialKind::Solid
+            || self.kind == MaterialKind::Membrane
+            || self.is_gas_point()
     }
 
     /// Whether the material is a fluid on particles (a gas point).
@@ -1262,6 +1357,7 @@ fn validate_region_shape(g: &Geometry, path: &str, dim: usize) -> Result<(), Sce
         }
         Geometry::Annulus { center, .. } => vec_len(&format!("{path}.center"), center, dim)?,
         Geometry::HalfSpace { .. } | Geometry::Polygon { .. } => {}
+        Geometry::Polyline { .. } | Geometry::Circle { .. } | Geometry::DogBone { .. } => {}
     }
     Ok(())
 }
@@ -1278,6 +1374,49 @@ fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneEr
             ));
         }
     }
+    match g {
+        Geometry::Polyline { vertices, closed } => {
+            if dim != 2 {
+                return Err(err(format!("{path}.type"), "a polyline needs dim = 2"));
+            }
+            validate_polyline(vertices, *closed, path)?;
+        }
+        Geometry::Circle { center, radius } => {
+            if dim != 2 {
+                return Err(err(format!("{path}.type"), "a circle needs dim = 2"));
+            }
+            vec_len(&format!("{path}.center"), center, 2)?;
+            positive(&format!("{path}.radius"), *radius)?;
+        }
+        Geometry::DogBone {
+            center,
+            lobe_radius,
+            lobe_offset,
+            neck_half_width,
+        } => {
+            if dim != 2 {
+                return Err(err(format!("{path}.type"), "a dog_bone needs dim = 2"));
+            }
+            vec_len(&format!("{path}.center"), center, 2)?;
+            positive(&format!("{path}.lobe_radius"), *lobe_radius)?;
+            if !(neck_half_width.is_finite()
+                && *neck_half_width > 0.0
+                && neck_half_width < lobe_radius)
+            {
+                return Err(err(
+                    format!("{path}.neck_half_width"),
+                    format!("must satisfy 0 < neck_half_width < lobe_radius = {lobe_radius}"),
+                ));
+            }
+            if !(lobe_offset.is_finite() && lobe_offset > lobe_radius) {
+                return Err(err(
+                    format!("{path}.lobe_offset"),
+                    format!("must be > lobe_radius = {lobe_radius} (lobes apart)"),
+                ));
+            }
+        }
+        _ => {}
+    }
     if let Geometry::HalfSpace { point, normal } = g {
         vec_len(&format!("{path}.point"), point, dim)?;
         vec_len(&format!("{path}.normal"), normal, dim)?;
@@ -1288,7 +1427,218 @@ fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneEr
     Ok(())
 }
 
+/// A membrane's (or a closed region's) polyline: enough finite vertices, no
+/// zero-length segment, in order (no segment folds back onto the previous
+/// one) and not crossing itself.
+fn validate_polyline(v: &[[f64; 2]], closed: bool, path: &str) -> Result<(), SceneError> {
+    let min = if closed { 3 } else { 2 };
+    if v.len() < min || !v.iter().flatten().all(|x| x.is_finite()) {
+        return Err(err(
+            format!("{path}.vertices"),
+            format!(
+                "needs at least {min} finite [x, y] vertices ({} polyline)",
+                if closed { "a closed" } else { "an open" }
+            ),
+        ));
+    }
+    let n = v.len();
+    let nseg = if closed { n } else { n - 1 };
+    let scale = v
+        .iter()
+        .flatten()
+        .fold(0.0f64, |a, x| a.max(x.abs()))
+        .max(1.0);
+    for i in 0..nseg {
+        let (a, b) = (v[i], v[(i + 1) % n]);
+        if (b[0] - a[0]).hypot(b[1] - a[1]) <= 1e-12 * scale {
+            return Err(err(
+                format!("{path}.vertices[{}]", (i + 1) % n),
+                format!("repeats vertex {i}: zero-length segment; vertices must be distinct"),
+            ));
+        }
+    }
+    if let Some((i, j)) = crate::membrane::self_intersection(v, closed) {
+        return Err(err(
+            format!("{path}.vertices"),
+            format!(
+                "the polyline crosses or folds onto itself (segments {i} and {j}); give the \
+                 vertices in order along a simple curve"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A membrane material: density, Young's modulus, Poisson's ratio and
+/// thickness, nothing of a solid's model or a fluid's.
+fn validate_membrane(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+    for (v, k) in [
+        (m.model.is_some(), "model"),
+        (m.bulk_modulus.is_some(), "bulk_modulus"),
+        (m.shear_modulus.is_some(), "shear_modulus"),
+        (m.eos.is_some(), "eos"),
+        (m.gamma.is_some(), "gamma"),
+        (m.cv.is_some(), "cv"),
+        (m.p_inf.is_some(), "p_inf"),
+        (m.viscosity.is_some(), "viscosity"),
+        (m.frame.is_some(), "frame"),
+        (m.artificial_viscosity.is_some(), "artificial_viscosity"),
+        (m.rigid, "rigid"),
+    ] {
+        if v {
+            return Err(err(
+                p(k),
+                "not a membrane key; membranes take density, youngs_modulus, poisson_ratio, \
+                 thickness",
+            ));
+        }
+    }
+    for (v, k) in [
+        (m.density, "density"),
+        (m.youngs_modulus, "youngs_modulus"),
+        (m.thickness, "thickness"),
+    ] {
+        match v {
+            Some(x) => positive(&p(k), x)?,
+            None => return Err(err(p(k), "missing; membranes need it > 0")),
+        }
+    }
+    match m.poisson_ratio {
+        Some(nu) if nu.is_finite() && nu > -1.0 && nu < 1.0 => Ok(()),
+        Some(nu) => Err(err(
+            p("poisson_ratio"),
+            format!("must satisfy -1 < ν < 1 (got {nu})"),
+        )),
+        None => Err(err(p("poisson_ratio"), "missing; -1 < ν < 1")),
+    }
+}
+
 impl Scene {
+    /// Checks of a scene with membranes (York Sec. 3.2): 2D, explicit
+    /// mode, no fluid in the cells; membrane objects are curves with a
+    /// spacing of at most a cell; other objects have no membrane keys.
+    fn validate_membranes(&self) -> Result<(), SceneError> {
+        let Some(mi) = self
+            .materials
+            .iter()
+            .position(|m| m.kind == MaterialKind::Membrane)
+        else {
+            for (i, o) in self.objects.iter().enumerate() {
+                membrane_keys_absent(o, i)?;
+            }
+            return Ok(());
+        };
+        if self.grid.dim != 2 {
+            return Err(err(
+                "grid.dim",
+                format!(
+                    "membranes (materials[{mi}]) are implemented in 2D only; allowed: 2 (got {})",
+                    self.grid.dim
+                ),
+            ));
+        }
+        if self.time.mode != Mode::Explicit {
+            return Err(err(
+                "time.mode",
+                format!(
+                    "membranes (materials[{mi}]) run in explicit MPM only; allowed: explicit \
+                     (got {})",
+                    self.time.mode.name()
+                ),
+            ));
+        }
+        if let Some(f) = self.materials.iter().position(|m| m.in_cells()) {
+            return Err(err(
+                format!("materials[{f}].frame"),
+                format!(
+                    "membranes (materials[{mi}]) couple to gas points only, not to a fluid in \
+                     the cells (ICE); allowed: frame = \"particles\""
+                ),
+            ));
+        }
+        let hmin = (0..2)
+            .map(|d| (self.grid.upper[d] - self.grid.lower[d]) / self.grid.cells[d] as f64)
+            .fold(f64::INFINITY, f64::min);
+        for (i, o) in self.objects.iter().enumerate() {
+            let p = |k: &str| format!("objects[{i}].{k}");
+            let is_membrane = self
+                .materials
+                .iter()
+                .any(|m| m.name == o.material && m.kind == MaterialKind::Membrane);
+            if !is_membrane {
+                membrane_keys_absent(o, i)?;
+                if let Geometry::Polyline { closed: false, .. } = o.geometry {
+                    return Err(err(
+                        p("geometry.closed"),
+                        "an open polyline encloses no region; only membranes take one",
+                    ));
+                }
+                continue;
+            }
+            match &o.geometry {
+                Geometry::Polyline { closed, .. } => {
+                    if o.fixed_ends && *closed {
+                        return Err(err(
+                            p("fixed_ends"),
+                            "only for open polylines (closed = false)",
+                        ));
+                    }
+                }
+                Geometry::Circle { .. } | Geometry::DogBone { .. } => {
+                    if o.fixed_ends {
+                        return Err(err(
+                            p("fixed_ends"),
+                            "only for open polylines (closed = false)",
+                        ));
+                    }
+                }
+                _ => {
+                    return Err(err(
+                        p("geometry.type"),
+                        "a membrane is a curve; allowed: polyline, circle, dog_bone",
+                    ))
+                }
+            }
+            match o.spacing {
+                None => {
+                    return Err(err(
+                        p("spacing"),
+                        "missing; membranes need a point spacing > 0",
+                    ))
+                }
+                Some(s) if !(s.is_finite() && s > 0.0) => {
+                    return Err(err(p("spacing"), format!("must be > 0 (got {s})")))
+                }
+                Some(s) if s > hmin * (1.0 + 1e-12) => {
+                    return Err(err(
+                        p("spacing"),
+                        format!(
+                            "must be at most the smallest cell size {hmin} (got {s}): points \
+                             farther apart than a cell let the gas through"
+                        ),
+                    ))
+                }
+                _ => {}
+            }
+            if let Some(s0) = o.prestress {
+                if !s0.is_finite() {
+                    return Err(err(p("prestress"), "must be finite"));
+                }
+            }
+            for (v, k) in [
+                (o.particles_per_cell.is_some(), "particles_per_cell"),
+                (o.density.is_some(), "density"),
+                (o.pressure.is_some(), "pressure"),
+                (o.inner_pressure.is_some(), "inner_pressure"),
+            ] {
+                if v {
+                    return Err(err(p(k), "not a membrane object key (use spacing)"));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn validate_solvers(&self) -> Result<(), SceneError> {
         let ps = &self.fluid.pressure;
         let lt = ps.linear_tolerance;
@@ -1454,7 +1804,11 @@ impl Scene {
                         radius(*inner_radius, "inner_radius")?;
                         radius(*outer_radius, "outer_radius")?;
                     }
-                    Geometry::HalfSpace { .. } | Geometry::Polygon { .. } => {}
+                    Geometry::HalfSpace { .. }
+                    | Geometry::Polygon { .. }
+                    | Geometry::Polyline { .. }
+                    | Geometry::Circle { .. }
+                    | Geometry::DogBone { .. } => {}
                 }
             }
         }
@@ -1803,6 +2157,23 @@ impl Scene {
                 ),
             ));
         }
+        if let Some(i) = self
+            .materials
+            .iter()
+            .position(|m| m.kind == MaterialKind::Membrane)
+        {
+            // A membrane of revolution needs its hoop stress from v_r/r in
+            // the membrane law (plane stress in the meridian and hoop
+            // directions); its 2D law is plane strain along the sheet.
+            return Err(err(
+                "grid.axisymmetric",
+                format!(
+                    "membranes (`{}`, materials[{i}]) are plane 2D only for now; allowed with \
+                     membranes: grid.axisymmetric = false",
+                    self.materials[i].name
+                ),
+            ));
+        }
         if g.lower[0] < 0.0 {
             return Err(err(
                 "grid.lower",
@@ -2038,21 +2409,33 @@ impl Scene {
             if m.name.trim().is_empty() {
                 return Err(err(p("name"), "must not be empty"));
             }
+            if m.thickness.is_some() && m.kind != MaterialKind::Membrane {
+                return Err(err(
+                    p("thickness"),
+                    "only for membranes (type = \"membrane\")",
+                ));
+            }
             if self.materials[..i].iter().any(|o| o.name == m.name) {
                 return Err(err(p("name"), format!("`{}` is used twice", m.name)));
             }
             match m.kind {
                 MaterialKind::Solid => validate_solid(m, &p)?,
                 MaterialKind::Fluid => validate_fluid(m, &p)?,
+                MaterialKind::Membrane => validate_membrane(m, &p)?,
             }
         }
+        self.validate_membranes()?;
         let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);
         let has_fluid = self.materials.iter().any(|m| m.in_cells());
         let has_gas = self.materials.iter().any(|m| m.is_gas_point());
         if has_gas {
             self.validate_gas_points()?;
         }
-        let has_solid = has_solid || has_gas;
+        let has_membrane = self
+            .materials
+            .iter()
+            .any(|m| m.kind == MaterialKind::Membrane);
+        let has_solid = has_solid || has_gas || has_membrane;
         if has_solid && has_fluid {
             self.validate_coupled()?;
         } else {
@@ -2173,7 +2556,10 @@ impl Scene {
             }
             match &o.geometry {
                 Geometry::HalfSpace { .. } => {}
-                Geometry::Polygon { .. } => validate_geometry(&o.geometry, &p("geometry"), dim)?,
+                Geometry::Polygon { .. }
+                | Geometry::Polyline { .. }
+                | Geometry::Circle { .. }
+                | Geometry::DogBone { .. } => validate_geometry(&o.geometry, &p("geometry"), dim)?,
                 Geometry::Box { lower, upper } => {
                     vec_len(&p("geometry.lower"), lower, dim)?;
                     vec_len(&p("geometry.upper"), upper, dim)?;
@@ -2262,4 +2648,21 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Membrane-only object keys must be absent on other objects.
+fn membrane_keys_absent(o: &ObjectSpec, i: usize) -> Result<(), SceneError> {
+    for (v, k) in [
+        (o.spacing.is_some(), "spacing"),
+        (o.fixed_ends, "fixed_ends"),
+        (o.prestress.is_some(), "prestress"),
+    ] {
+        if v {
+            return Err(err(
+                format!("objects[{i}].{k}"),
+                "only for membrane objects (materials with type = \"membrane\")",
+            ));
+        }
+    }
+    Ok(())
 }

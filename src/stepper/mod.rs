@@ -9,9 +9,10 @@
 
 use nalgebra::SVector;
 
-use crate::error::Result;
+use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
 use crate::material::SolidMaterial;
+use crate::membrane::Membranes;
 use crate::mpm::{
     explicit_step, stable_dt, BodyForce, ExplicitParams, GridState, Particles, StepScratch,
 };
@@ -67,6 +68,8 @@ pub struct SolidRun<const D: usize> {
     pub t: f64,
     /// Completed steps.
     pub steps: u64,
+    /// Membranes (York Sec. 3.2) among the particles: chains and frames.
+    pub membranes: Membranes<D>,
     grid_state: GridState<D>,
     scratch: StepScratch<D>,
 }
@@ -91,6 +94,7 @@ impl<const D: usize> SolidRun<D> {
             time,
             t: 0.0,
             steps: 0,
+            membranes: Membranes::default(),
             grid_state: GridState::new(n),
             scratch: StepScratch::default(),
         }
@@ -117,11 +121,27 @@ impl<const D: usize> SolidRun<D> {
 
     /// Takes one step of exactly `dt`; returns it.
     pub fn step_dt(&mut self, dt: f64) -> Result<f64> {
+        if !self.membranes.is_empty() {
+            // York Sec. 3.2: the local frames from the neighbours' positions.
+            let p = &mut self.particles;
+            if let Err(q) = self.membranes.update_frames(&p.x, &mut p.stress) {
+                return Err(Error::Numerical {
+                    site: FailureSite {
+                        step: self.steps,
+                        time: self.t,
+                        particle: Some(q),
+                        cell: None,
+                    },
+                    what: "membrane point coincides with a neighbour (no tangent)".into(),
+                });
+            }
+        }
         explicit_step(
             &self.grid,
             &self.materials,
             &self.params,
             self.body.as_deref().map(|b| b as &dyn BodyForce<D>),
+            &self.membranes.tangent,
             &mut self.particles,
             &mut self.grid_state,
             &mut self.scratch,
@@ -129,6 +149,10 @@ impl<const D: usize> SolidRun<D> {
             dt,
             self.steps,
         )?;
+        if !self.membranes.is_empty() {
+            let p = &mut self.particles;
+            self.membranes.fix_ends(&mut p.x, &p.x0, &mut p.v);
+        }
         self.t += dt;
         self.steps += 1;
         Ok(dt)

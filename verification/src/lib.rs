@@ -79,6 +79,11 @@ pub const STUDIES: &[Study] = &[
         axisym_studies::axisym_lame,
     ),
     (
+        "york_dogbone",
+        "York 4.3 dog-bone membrane expansion: radius, pressure, hoop vs p r / t, gas kept, vs h",
+        york_studies::york_dogbone,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,

@@ -28,6 +28,32 @@ pub fn scene_name<T: serde::Serialize>(x: &T) -> String {
     }
 }
 
+/// Membrane point outputs (York Sec. 3.2): the tangential stress `s`
+/// (in-plane trace of σ = s t⊗t), the stretch of the point's segment
+/// (current / initial length) and the unit tangent; none without membranes.
+fn membrane_fields<const D: usize>(r: &SolidRun<D>) -> Vec<OutField> {
+    let m = &r.membranes;
+    if m.is_empty() {
+        return Vec::new();
+    }
+    let p = &r.particles;
+    let s = (0..p.len())
+        .map(|i| {
+            if m.segment0[i] > 0.0 {
+                (0..D).map(|d| p.stress[i][(d, d)]).sum()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let t = m.tangent.iter().map(pad3).collect();
+    vec![
+        OutField::new("membrane_stress", "Pa", Values::Scalar(s)),
+        OutField::new("stretch", "1", Values::Scalar(m.stretch(&p.x))),
+        OutField::new("tangent", "1", Values::Vector(t)),
+    ]
+}
+
 /// Solid energies as history columns.
 pub(crate) const SOLID_HISTORY: [(&str, &str); 4] = [
     ("kinetic", "J"),
@@ -130,6 +156,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         particles
             .fields
             .extend(plastic_fields(&r.particles, &r.materials));
+        particles.fields.extend(membrane_fields(r));
         vec![particles, grid]
     }
 
@@ -165,6 +192,14 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         self.run.particles = load_particles(ck, "particles", self.run.materials.len())?;
         self.run.t = ck.take_f64("model.time", Some(&[1]))?[0];
         self.run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
+        let r = &mut self.run;
+        if !r.membranes.is_empty() {
+            // Refresh the membrane tangents for outputs; the stress itself is
+            // turned at the next step's start, as in an unbroken run.
+            let p = &r.particles;
+            let mut stress = p.stress.clone();
+            let _ = r.membranes.update_frames(&p.x, &mut stress);
+        }
         Ok(())
     }
 
