@@ -1,7 +1,8 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas]`
-//! (`gas`: the same block as gas points, York Sec. 3.3).
+//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc]`
+//! (`gas`: the same block as gas points, York Sec. 3.3; `jc`: hypo-elastic
+//! with Johnson–Cook plasticity).
 use mpmice::diagnostics::bench_cases::{rotating_block_of, BlockMaterial};
 use mpmice::shape::ShapeKind;
 
@@ -16,6 +17,7 @@ fn main() {
     let steps: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(300);
     let material = match args.get(3).map(String::as_str) {
         Some("gas") => BlockMaterial::GasPoint,
+        Some("jc") => BlockMaterial::JohnsonCook,
         _ => BlockMaterial::NeoHookean,
     };
     let mut run = rotating_block_of(shape, material);
@@ -26,6 +28,12 @@ fn main() {
         run.step().expect("step");
     }
     let wall = start.elapsed().as_secs_f64();
+    let yielded = run
+        .particles
+        .plastic_strain
+        .iter()
+        .filter(|&&e| e > 0.0)
+        .count();
     let t = run.phase_times();
     let ms = |s: f64| 1e3 * s / steps as f64;
     println!(
@@ -38,4 +46,7 @@ fn main() {
         ms(t.grid_s),
         ms(t.g2p_s)
     );
+    if material == BlockMaterial::JohnsonCook {
+        println!("{yielded} of {np} points have yielded");
+    }
 }

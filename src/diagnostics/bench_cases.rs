@@ -18,6 +18,11 @@ pub enum BlockMaterial {
     /// Gas points (York Sec. 3.3): ideal gas γ = 1.4, c_v = 717.5, ρ = 1.2,
     /// p = 1e5, μ = 1.8e-5, York's artificial viscosity (g = √2 Δx).
     GasPoint,
+    /// Hypo-elastic with Johnson–Cook J2 plasticity (the neo-Hookean's
+    /// E, ν, ρ; A = 0, so that every point with any stress flows: the worst
+    /// case,
+    /// the cost of the radial return with its Newton iteration.
+    JohnsonCook,
 }
 
 /// A 2D neo-Hookean block (E = 1e6, ν = 0.3, ρ = 1000) of 2×2 particles per
@@ -48,6 +53,30 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
                 name: "block".into(),
                 density: 1000.0,
                 model: SolidModel::NeoHookean,
+                elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
+            };
+            let c = mat.wave_speed(1000.0);
+            (mat, 1000.0, c)
+        }
+        BlockMaterial::JohnsonCook => {
+            use crate::material::plasticity::{FlowStress, JohnsonCook, J2};
+            let mat = SolidMaterial {
+                name: "block".into(),
+                density: 1000.0,
+                model: SolidModel::ElasticPlastic(J2 {
+                    flow: FlowStress::JohnsonCook(JohnsonCook {
+                        a: 0.0,
+                        b: 1e4,
+                        n: 0.26,
+                        c: 0.014,
+                        m: 1.03,
+                        rate0: 1.0,
+                        t_room: 300.0,
+                        t_melt: 1800.0,
+                    }),
+                    taylor_quinney: 0.9,
+                    specific_heat: 477.0,
+                }),
                 elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
             };
             let c = mat.wave_speed(1000.0);
