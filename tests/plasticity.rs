@@ -133,7 +133,8 @@ fn bad_plasticity_input_names_its_key() {
         jc,
     ))
     .expect("a Johnson-Cook steel parses");
-    let cases: Vec<(String, &str, &str)> = vec![
+    let cases: Vec<(String, &str, &str)> =
+        vec![
         (
             edit("yield_stress = 300e6", "yield_stress = -1.0"),
             "materials[0].plasticity.yield_stress",
@@ -147,6 +148,11 @@ fn bad_plasticity_input_names_its_key() {
         (
             edit("hardening_modulus = 2e9", "hardening_exponent = 0.5"),
             "materials[0].plasticity.hardening_exponent",
+            "not read",
+        ),
+        (
+            edit("hardening_modulus = 2e9", "hardening_modulus = 2e9, m = 1.0"),
+            "materials[0].plasticity.m",
             "not read",
         ),
         (

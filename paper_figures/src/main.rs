@@ -487,20 +487,7 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
         std::fs::write(out.join("york_fig11.csv"), csv)?;
         return Ok(());
     }
-    let mut csv = String::from("t,radius_0,radius_90,mean_radius,kinetic,internal,strain,total\n");
-    for x in &r.history {
-        csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{}\n",
-            x.t,
-            x.radius_0,
-            x.radius_90,
-            x.mean_radius,
-            x.kinetic,
-            x.internal,
-            x.strain,
-            x.kinetic + x.internal + x.strain
-        ));
-    }
+    let csv = r.history_csv();
     std::fs::write(out.join("york_fig13.csv"), csv)?;
     let col = |f: &dyn Fn(&mpmice::diagnostics::york_membrane::DogBoneSample) -> f64| {
         r.history.iter().map(|x| (x.t, f(x))).collect::<Vec<_>>()

@@ -314,6 +314,29 @@ pub struct DogBoneRun {
     pub wall_s: f64,
 }
 
+impl DogBoneRun {
+    /// The history as CSV: `t, radius_0, radius_90, mean_radius, kinetic,
+    /// internal, strain, total` (York Figs. 12–13's curves).
+    pub fn history_csv(&self) -> String {
+        let mut csv =
+            String::from("t,radius_0,radius_90,mean_radius,kinetic,internal,strain,total\n");
+        for x in &self.history {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{},{},{}\n",
+                x.t,
+                x.radius_0,
+                x.radius_90,
+                x.mean_radius,
+                x.kinetic,
+                x.internal,
+                x.strain,
+                x.kinetic + x.internal + x.strain
+            ));
+        }
+        csv
+    }
+}
+
 /// Kinetic, gas internal and membrane strain energy of a run.
 fn energy_split(run: &SolidRun<2>) -> (f64, f64, f64) {
     let p = &run.particles;

@@ -1094,19 +1094,24 @@ fn g2p<
                 *fp = f_new;
                 *vp_vol = j * vol0[p];
                 let material = &ctx.materials[mat[p] as usize];
+                // SAFETY: as above.
+                let mut state = if plastic {
+                    unsafe {
+                        PlasticState {
+                            plastic_strain: *eps_p.get(p),
+                            temperature: *temp.get(p),
+                        }
+                    }
+                } else {
+                    PlasticState::default()
+                };
+                material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
                 if plastic {
                     // SAFETY: as above.
-                    let (ep, tp) = unsafe { (eps_p.get(p), temp.get(p)) };
-                    let mut state = PlasticState {
-                        plastic_strain: *ep,
-                        temperature: *tp,
-                    };
-                    material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
-                    *ep = state.plastic_strain;
-                    *tp = state.temperature;
-                } else {
-                    let mut state = PlasticState::default();
-                    material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
+                    unsafe {
+                        *eps_p.get(p) = state.plastic_strain;
+                        *temp.get(p) = state.temperature;
+                    }
                 }
             }
         });

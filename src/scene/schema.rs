@@ -367,28 +367,29 @@ impl PlasticitySpec {
         j2.validate()
             .map_err(|b| (b.key, format!("must be {}", b.allowed)))?;
         // Keys given that the law does not read.
-        let unused: &[(bool, &'static str)] = match self.flow {
-            FlowKind::Linear => &[
-                (
-                    self.hardening_coefficient.is_some(),
-                    "hardening_coefficient",
-                ),
-                (self.hardening_exponent.is_some(), "hardening_exponent"),
-                (self.a.is_some(), "a"),
-            ],
-            FlowKind::PowerLaw => &[
-                (self.hardening_modulus.is_some(), "hardening_modulus"),
-                (self.a.is_some(), "a"),
-            ],
-            FlowKind::JohnsonCook => &[
-                (self.yield_stress.is_some(), "yield_stress"),
-                (self.hardening_modulus.is_some(), "hardening_modulus"),
-                (
-                    self.hardening_coefficient.is_some(),
-                    "hardening_coefficient",
-                ),
-                (self.hardening_exponent.is_some(), "hardening_exponent"),
-            ],
+        let jc_keys = [
+            (self.a.is_some(), "a"),
+            (self.b.is_some(), "b"),
+            (self.n.is_some(), "n"),
+            (self.c.is_some(), "c"),
+            (self.m.is_some(), "m"),
+            (self.reference_rate.is_some(), "reference_rate"),
+            (self.room_temperature.is_some(), "room_temperature"),
+            (self.melt_temperature.is_some(), "melt_temperature"),
+        ];
+        let power_keys = [
+            (
+                self.hardening_coefficient.is_some(),
+                "hardening_coefficient",
+            ),
+            (self.hardening_exponent.is_some(), "hardening_exponent"),
+        ];
+        let linear_key = [(self.hardening_modulus.is_some(), "hardening_modulus")];
+        let yield_key = [(self.yield_stress.is_some(), "yield_stress")];
+        let unused: Vec<(bool, &'static str)> = match self.flow {
+            FlowKind::Linear => [&power_keys[..], &jc_keys[..]].concat(),
+            FlowKind::PowerLaw => [&linear_key[..], &jc_keys[..]].concat(),
+            FlowKind::JohnsonCook => [&yield_key[..], &linear_key[..], &power_keys[..]].concat(),
         };
         if let Some((_, k)) = unused.iter().find(|(given, _)| *given) {
             return Err((k, format!("not read by flow = \"{}\"", self.flow_name())));

@@ -271,21 +271,7 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
             r.outside_end, r.outside_max, r.steps, r.particles, r.wall_s
         ));
         eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
-        let mut csv =
-            String::from("t,radius_0,radius_90,mean_radius,kinetic,internal,strain,total\n");
-        for x in &r.history {
-            csv.push_str(&format!(
-                "{},{},{},{},{},{},{},{}\n",
-                x.t,
-                x.radius_0,
-                x.radius_90,
-                x.mean_radius,
-                x.kinetic,
-                x.internal,
-                x.strain,
-                x.kinetic + x.internal + x.strain
-            ));
-        }
+        let csv = r.history_csv();
         let _ = std::fs::create_dir_all(&root);
         std::fs::write(root.join(format!("york_dogbone_h{h}.csv")), csv)?;
         let mut snaps = String::from("t,kind,x,y\n");
