@@ -7,6 +7,7 @@
 // Dimension loops `for d in 0..D` index several arrays in lockstep (position,
 // cell size, strides); iterator chains would hide the maths.
 #![allow(clippy::needless_range_loop)]
+pub mod contact;
 pub mod coupling;
 pub mod diagnostics;
 pub mod driver;

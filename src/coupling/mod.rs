@@ -770,8 +770,7 @@ impl<const D: usize> CoupledRun<D> {
                     &mut f.particles,
                     &mut f.gs,
                     &mut f.scratch,
-                    &self.node_pressure,
-                    self.coupling.p_ref,
+                    Some((&self.node_pressure, self.coupling.p_ref)),
                     &self.node_force,
                 )?;
             }

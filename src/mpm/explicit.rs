@@ -451,11 +451,52 @@ impl<const D: usize> CoupledMpm<'_, D> {
         with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
     }
 
+    /// The nodal gradient of the particle mass, `Σ_p m_p ∇S_ip` (Lian
+    /// Eq. 51; Bardenhagen et al. 2000). `∇S_ip` is the gradient in the
+    /// particle's position, so at a node outside the body, where `S_i`
+    /// falls off towards the particles, the sum points from the body to the
+    /// node: the body's outward normal. Uses this step's bins and
+    /// particle domains (call [`Self::p2g`] first). Not folded at walls (a
+    /// mirror image's gradient reflects unlike a velocity at a fixed wall):
+    /// on wall nodes it is the one-sided sum.
+    pub fn mass_gradient(
+        &self,
+        particles: &Particles<D>,
+        scratch: &StepScratch<D>,
+        node: &mut [SVector<f64, D>],
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            scratch: &StepScratch<D>,
+            node: &mut [SVector<f64, D>],
+        ) {
+            let grid = ctx.grid;
+            let strides = grid.strides();
+            node.par_iter_mut().for_each(|q| *q = SVector::zeros());
+            let out = SharedMut::new(node);
+            scratch.bins.for_each_colored(|p| {
+                let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
+                let mp = particles.mass[p];
+                pw.for_each(|m, _, g| {
+                    // SAFETY: slab colouring gives concurrent tasks disjoint
+                    // nodes.
+                    unsafe { *out.get(base + offset(m, &strides)) += g * mp };
+                });
+            });
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, scratch, node)
+    }
+
     /// Steps 7–9 on the nodes: (USF) the stress update from the P2G
-    /// velocity, the internal force with `σ + (p − p_ref) I` and the body
-    /// force (Guilkey Eq. 24), plus `extra_force` (the pressure force
-    /// `−θ_s V ∇p*` carried from the cells, already folded at walls), and
-    /// the grid momentum equation (Eqs. 21, 25) giving `vᴸ` and `a`.
+    /// velocity, the internal force with `σ + (p − p_ref) I` (`pressure` =
+    /// the nodal pressure and `p_ref`; `None` outside MPM-ICE: σ alone) and
+    /// the body force (Guilkey Eq. 24), plus `extra_force` (the pressure
+    /// force `−θ_s V ∇p*` carried from the cells, already folded at walls;
+    /// empty for none), and the grid momentum equation (Eqs. 21, 25) giving
+    /// `vᴸ` and `a`.
     ///
     /// # Errors
     /// An inverted particle (USF).
@@ -465,8 +506,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         particles: &mut Particles<D>,
         gs: &mut GridState<D>,
         scratch: &mut StepScratch<D>,
-        node_pressure: &[f64],
-        p_ref: f64,
+        pressure: Option<(&[f64], f64)>,
         extra_force: &[SVector<f64, D>],
     ) -> Result<()> {
         #[allow(clippy::too_many_arguments)]
@@ -509,7 +549,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch.times.grid_s += mid2.elapsed().as_secs_f64();
             Ok(())
         }
-        let ctx = self.ctx(Some((node_pressure, p_ref)));
+        let ctx = self.ctx(pressure);
         with_kernel!(
             self.params.shape,
             run,

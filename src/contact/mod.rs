@@ -1,0 +1,278 @@
+//! Grid contact between an MPM body and a body of points that lives off the
+//! grid — Lian's membrane finite-element nodes (Lian, Liu, Zhang Sec. 5,
+//! Eqs. 49–59; the algorithm of Sec. 6 step 4).
+//!
+//! Each step both bodies first advance on their own (trial solutions, as if
+//! they did not touch): the MPM body `s` on the grid (its nodal mass and
+//! trial velocity after the internal force, [`crate::mpm::CoupledMpm`]),
+//! the point body `r` on its own nodes. Then the points' mass, momentum
+//! and surface normal are mapped to the grid ([`GridContact::map_points`],
+//! Eq. 49), the nodes where both bodies approach each other are found
+//! (Eq. 52), the contact force that restores the impenetrability condition
+//! (stick, Eq. 55) — or its normal part with a Coulomb-limited tangential
+//! part (slip, Eqs. 56–58) — is applied to the MPM body's nodes (Eq. 53)
+//! ([`GridContact::resolve`]), and the points take the opposite force back
+//! through the same weights (Eq. 59, [`GridContact::correct_points`]). The
+//! forces on the two bodies are equal and opposite node by node and the
+//! map and its transpose use the same weights, so the total momentum is
+//! conserved to round-off.
+//!
+//! The points map to the grid with the linear hat functions (their 2^D
+//! surrounding nodes), whatever shape function the MPM body uses.
+
+use nalgebra::SVector;
+
+use crate::grid::Grid;
+use crate::shape::{LinearHat, ParticleWeights};
+
+/// How the contact force acts tangentially.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactLaw {
+    /// Stick: the two bodies share the node's velocity (Lian Eq. 55).
+    Stick,
+    /// Coulomb slip: the normal part of the stick force, and a tangential
+    /// part at most `friction` times the normal one (Lian Eq. 58);
+    /// `friction = 0` is free slip.
+    Slip {
+        /// Friction coefficient μ ≥ 0.
+        friction: f64,
+    },
+}
+
+/// The point body as the contact sees it (Lian's FE nodes): positions at
+/// the start of the step, lumped masses, trial velocities `v̄^{n+1/2}`
+/// (Lian Eq. 46) and nodal normals (the sum of the adjoining elements'
+/// area-weighted normals; any consistent orientation: the contact turns
+/// each grid normal towards the MPM body).
+#[derive(Debug, Clone, Copy)]
+pub struct PointBody<'a, const D: usize> {
+    /// Positions.
+    pub x: &'a [SVector<f64, D>],
+    /// Lumped masses.
+    pub mass: &'a [f64],
+    /// Trial velocities.
+    pub v: &'a [SVector<f64, D>],
+    /// Surface normals (not necessarily unit).
+    pub normal: &'a [SVector<f64, D>],
+}
+
+/// The MPM body's side of a contact step: its nodal mass, its trial nodal
+/// velocity and acceleration after the internal force (corrected in place
+/// by the contact force) and its nodal mass gradient (Lian Eq. 51,
+/// [`crate::mpm::CoupledMpm::mass_gradient`]).
+pub struct MpmNodes<'a, const D: usize> {
+    /// Nodal mass `m_I^s`.
+    pub mass: &'a [f64],
+    /// Trial velocity `v̄_I^{s,n+1/2}` (corrected).
+    pub velocity: &'a mut [SVector<f64, D>],
+    /// Nodal acceleration (corrected by `f/m`, so a FLIP update sees the
+    /// contact).
+    pub accel: &'a mut [SVector<f64, D>],
+    /// `Σ_p m_p ∇N_I(x_p)`: the MPM body's outward normal (unnormalised).
+    pub mass_gradient: &'a [SVector<f64, D>],
+    /// Nodes with less mass are empty.
+    pub mass_floor: f64,
+}
+
+/// What one contact step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ContactStats {
+    /// Grid nodes both bodies reach.
+    pub shared_nodes: usize,
+    /// Nodes where the bodies approached and a force acted.
+    pub contact_nodes: usize,
+    /// Of those, the nodes where the Coulomb limit held the tangential
+    /// force (slipping).
+    pub slipping_nodes: usize,
+    /// Total impulse on the point body, `Δt Σ_I f_I^r`.
+    pub impulse: [f64; 3],
+    /// `Δt Σ_I |f_I·n_I|`: the normal impulse's magnitude.
+    pub normal_impulse: f64,
+    /// `Δt Σ_I |f_I − (f_I·n_I) n_I|`: the tangential (friction) impulse's
+    /// magnitude.
+    pub tangential_impulse: f64,
+}
+
+/// Grid buffers of the contact (no allocation once sized): the point
+/// body's nodal mass, momentum and normal, the contact force on it, and
+/// the list of nodes it touches (so every pass is over that list, not the
+/// whole grid — a membrane is a surface in a volume of nodes).
+#[derive(Debug, Clone, Default)]
+pub struct GridContact<const D: usize> {
+    /// `m_I^r` (Lian Eq. 49).
+    pub mass: Vec<f64>,
+    /// `p̄_I^r`.
+    pub momentum: Vec<SVector<f64, D>>,
+    /// `Σ_K N_I(x_K) n_K`.
+    pub normal: Vec<SVector<f64, D>>,
+    /// Contact force on the point body `f_I^{r,c}` (Lian Eqs. 55, 58).
+    pub force: Vec<SVector<f64, D>>,
+    /// Nodes the point body reaches, in first-touch order.
+    pub touched: Vec<usize>,
+}
+
+/// The 2^D linear-hat weights of point `x` and the flat index of their
+/// first node (`None` off the grid).
+#[inline]
+fn hat_weights<const D: usize>(
+    grid: &Grid<D>,
+    x: &SVector<f64, D>,
+) -> Option<(ParticleWeights<D, 2>, usize)> {
+    let xi = grid.to_grid_units(x);
+    if (0..D).any(|d| !(xi[d] >= 0.0 && xi[d] <= grid.cells[d] as f64)) {
+        return None;
+    }
+    let pw = ParticleWeights::<D, 2>::new(LinearHat, &xi, &SVector::zeros());
+    Some((pw, grid.node_index(pw.base())))
+}
+
+/// Flat offset of a stencil multi-index.
+#[inline]
+fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
+    (0..D).map(|d| m[d] * strides[d]).sum()
+}
+
+impl<const D: usize> GridContact<D> {
+    /// Buffers for a grid of `n` nodes.
+    pub fn new(n: usize) -> Self {
+        Self {
+            mass: vec![0.0; n],
+            momentum: vec![SVector::zeros(); n],
+            normal: vec![SVector::zeros(); n],
+            force: vec![SVector::zeros(); n],
+            touched: Vec::with_capacity(n.min(4096)),
+        }
+    }
+
+    /// Step 4(a): maps the point body's mass, trial momentum and normal to
+    /// the grid (Lian Eq. 49), clearing only what the last step touched.
+    ///
+    /// # Errors
+    /// The index of the first point off the grid.
+    pub fn map_points(&mut self, grid: &Grid<D>, body: &PointBody<'_, D>) -> Result<(), usize> {
+        for &i in &self.touched {
+            self.mass[i] = 0.0;
+            self.momentum[i] = SVector::zeros();
+            self.normal[i] = SVector::zeros();
+            self.force[i] = SVector::zeros();
+        }
+        self.touched.clear();
+        let strides = grid.strides();
+        for k in 0..body.x.len() {
+            let Some((pw, base)) = hat_weights(grid, &body.x[k]) else {
+                return Err(k);
+            };
+            let (m, p, n) = (body.mass[k], body.v[k] * body.mass[k], body.normal[k]);
+            pw.for_each(|o, w, _| {
+                if w <= 0.0 {
+                    return;
+                }
+                let i = base + offset(o, &strides);
+                if self.mass[i] == 0.0 {
+                    self.touched.push(i);
+                }
+                self.mass[i] += w * m;
+                self.momentum[i] += p * w;
+                self.normal[i] += n * w;
+            });
+        }
+        Ok(())
+    }
+
+    /// Steps 4(b)–(d) on the grid: at every node both bodies reach, the
+    /// normal is the point body's mapped normal turned towards the MPM
+    /// body (against the MPM body's outward normal, its mass gradient); where the bodies
+    /// approach (Lian Eq. 52, `(m^s p̄^r − m^r p̄^s)·n > 0`) the contact
+    /// force on the point body is the stick force (Lian Eq. 55, derived
+    /// from the common velocity `(p̄^r + p̄^s)/(m^r + m^s)`):
+    ///
+    /// `f^r = (m^r p̄^s − m^s p̄^r) / ((m^r + m^s) Δt)`,
+    ///
+    /// or, for Coulomb slip, its normal part `f_n = f^r·n` plus its
+    /// tangential part capped at `μ |f_n|` (Lian Eqs. 56–58). The MPM body
+    /// takes `−f^r` (Eq. 53) in its velocity and acceleration. Separating
+    /// bodies feel nothing.
+    pub fn resolve(&mut self, s: &mut MpmNodes<'_, D>, law: ContactLaw, dt: f64) -> ContactStats {
+        let mut stats = ContactStats::default();
+        let mut impulse = SVector::<f64, D>::zeros();
+        for &i in &self.touched {
+            let (mr, ms) = (self.mass[i], s.mass[i]);
+            if ms <= s.mass_floor || mr <= 0.0 {
+                continue;
+            }
+            stats.shared_nodes += 1;
+            let nn = self.normal[i].norm();
+            if nn <= 0.0 {
+                continue;
+            }
+            let mut n = self.normal[i] / nn;
+            // `Σ m_p ∇N_I(x_p)` is the MPM body's outward normal at I (Lian
+            // Eq. 51): n must point the other way, from r into s.
+            if n.dot(&s.mass_gradient[i]) > 0.0 {
+                n = -n;
+            }
+            let pr = self.momentum[i];
+            let ps = s.velocity[i] * ms;
+            // Lian Eq. 52: r moves towards s along n.
+            if (pr * ms - ps * mr).dot(&n) <= 0.0 {
+                continue;
+            }
+            // Lian Eq. 55.
+            let stick = (ps * mr - pr * ms) / ((mr + ms) * dt);
+            let f = match law {
+                ContactLaw::Stick => stick,
+                ContactLaw::Slip { friction } => {
+                    // Lian Eqs. 56–58: f_n ≤ 0 pushes r back, away from s.
+                    let fn_ = stick.dot(&n);
+                    let tangential = stick - n * fn_;
+                    let ft = tangential.norm();
+                    let cap = friction * fn_.abs();
+                    if ft > cap {
+                        stats.slipping_nodes += 1;
+                        n * fn_ + tangential * (cap / ft)
+                    } else {
+                        stick
+                    }
+                }
+            };
+            stats.contact_nodes += 1;
+            let f_n = f.dot(&n);
+            stats.normal_impulse += f_n.abs() * dt;
+            stats.tangential_impulse += (f - n * f_n).norm() * dt;
+            self.force[i] = f;
+            impulse += f * dt;
+            // Lian Eq. 53 for the MPM body: −f.
+            let a = f / ms;
+            s.velocity[i] -= a * dt;
+            s.accel[i] -= a;
+        }
+        for d in 0..D {
+            stats.impulse[d] = impulse[d];
+        }
+        stats
+    }
+
+    /// Step 4(d) for the points: `v_K = v̄_K + Δt Σ_I N_I(x_K) f_I^r / m_I^r`
+    /// (Lian Eq. 59), at the positions the points were mapped from.
+    pub fn correct_points(
+        &self,
+        grid: &Grid<D>,
+        x: &[SVector<f64, D>],
+        dt: f64,
+        v: &mut [SVector<f64, D>],
+    ) {
+        let strides = grid.strides();
+        for (xk, vk) in x.iter().zip(v.iter_mut()) {
+            // Mapped by `map_points` already: on the grid.
+            let Some((pw, base)) = hat_weights(grid, xk) else {
+                continue;
+            };
+            pw.for_each(|o, w, _| {
+                let i = base + offset(o, &strides);
+                if w > 0.0 && self.mass[i] > 0.0 {
+                    *vk += self.force[i] * (w * dt / self.mass[i]);
+                }
+            });
+        }
+    }
+}
