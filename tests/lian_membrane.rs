@@ -396,3 +396,149 @@ fn bad_mesh_files_name_the_line() {
         assert!(e.message.contains(what), "{e}");
     }
 }
+
+fn vibration_scene() -> mpmice::scene::Scene {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/lian_membrane_vibration.toml"
+    );
+    mpmice::scene::load(std::path::Path::new(path)).expect("case parses")
+}
+
+#[test]
+fn the_vibration_case_runs_bit_identically_on_one_and_two_threads() {
+    let mut s = vibration_scene();
+    if let mpmice::scene::MeshSpec::Rectangle { cells, .. } = &mut s.membrane_elements[0].mesh {
+        *cells = [16, 16];
+    }
+    s.output.interval = None;
+    let dir = tempfile::tempdir().unwrap();
+    let mut outs = Vec::new();
+    for threads in [1usize, 2] {
+        let out = dir.path().join(format!("t{threads}"));
+        let opts = mpmice::driver::RunOptions {
+            out_dir: out.clone(),
+            threads,
+            progress: false,
+            ..Default::default()
+        };
+        let sum = mpmice::driver::run_scene(&s, &opts).unwrap();
+        assert_eq!(sum.n_elements, 256);
+        // Energy balance of the run (kinetic + strain + losses − work).
+        assert!(sum.energy_drift.abs() < 5e-3, "{}", sum.energy_drift);
+        outs.push((
+            std::fs::read(out.join("membrane_nodes_0001.csv")).unwrap(),
+            std::fs::read(out.join("membrane_elements_0001.vtu")).unwrap(),
+            std::fs::read(out.join("history.csv")).unwrap(),
+        ));
+    }
+    assert!(outs[0] == outs[1], "1- and 2-thread outputs differ");
+}
+
+#[test]
+fn bad_membrane_scenes_name_their_key() {
+    let good = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/lian_membrane_vibration.toml"
+    ))
+    .unwrap();
+    mpmice::scene::parse(&good).expect("the case is valid");
+    let edit = |from: &str, to: &str| {
+        assert_eq!(good.matches(from).count(), 1, "anchor {from}");
+        good.replacen(from, to, 1)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let bad_file = dir.path().join("bad.mesh");
+    std::fs::write(
+        &bad_file,
+        "node 1 0 0 0\nnode 2 1 0 0\nnode 3 1 1 0\nnode 4 0 1 0\nquad 1 1 2 3 7\n",
+    )
+    .unwrap();
+    let e0 = "membrane_elements[0]";
+    let cases: Vec<(String, String, &str)> = vec![
+        (
+            edit("thickness = 1e-3", "thickness = -1e-3"),
+            format!("{e0}.thickness"),
+            "> 0",
+        ),
+        (
+            edit("density = 1000.0", "density = 0.0"),
+            format!("{e0}.density"),
+            "> 0",
+        ),
+        (
+            edit("young = 1e6", "young = -5.0"),
+            format!("{e0}.young"),
+            "> 0",
+        ),
+        (
+            edit("poisson = 0.3", "poisson = 0.5"),
+            format!("{e0}.poisson"),
+            "0 ≤ ν < 0.5",
+        ),
+        (
+            edit("hourglass = 0.1", "hourglass = -0.1"),
+            format!("{e0}.hourglass"),
+            "≥ 0",
+        ),
+        (
+            edit("cells = [32, 32]", "cells = [0, 32]"),
+            format!("{e0}.mesh.rectangle.cells[0]"),
+            "1 … 16384",
+        ),
+        (
+            edit("edge_b = [0.0, 1.0, 0.0]", "edge_b = [2.0, 0.0, 0.0]"),
+            format!("{e0}.mesh.rectangle.edge_b"),
+            "parallel",
+        ),
+        (
+            edit(
+                "mesh = { rectangle = { corner = [0.0, 0.0, 0.0], edge_a = [1.0, 0.0, 0.0], \
+                 edge_b = [0.0, 1.0, 0.0], cells = [32, 32] } }",
+                &format!("mesh = {{ file = \"{}\" }}", bad_file.display()),
+            ),
+            format!("{e0}.mesh.file"),
+            "line 5: quad 1 names node 7",
+        ),
+        (
+            edit(r#"dofs = ["x", "y", "z"]"#, r#"dofs = ["x", "w"]"#),
+            format!("{e0}.fix[0].dofs[1]"),
+            "allowed: x, y, z",
+        ),
+        (
+            edit(
+                "{ boundary = true,",
+                "{ box = { lower = [5, 5, 5], upper = [6, 6, 6] },",
+            ),
+            format!("{e0}.fix[0]"),
+            "selects no node",
+        ),
+        (
+            edit(
+                "[time]",
+                "[grid]\ndim = 3\nlower = [0,0,0]\nupper = [1,1,1]\ncells = [1,1,1]\n\n[time]",
+            ),
+            "grid".to_string(),
+            "grid contact",
+        ),
+        (
+            edit("thickness = 1e-3", "thickness = 1e-3\nthicknes = 2"),
+            format!("{e0}.thicknes"),
+            "unknown field",
+        ),
+    ];
+    let mut wrong = Vec::new();
+    for (text, path, word) in &cases {
+        match mpmice::scene::parse(text) {
+            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
+            Err(e) if e.path != *path || !e.message.contains(word) => {
+                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
+            }
+            Err(_) => {}
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    // A scene with neither grid nor membrane elements still needs a grid.
+    let e = mpmice::scene::parse("[time]\nend = 1.0\n").unwrap_err();
+    assert_eq!(e.path, "grid", "{e}");
+}
