@@ -82,6 +82,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene } => {
             let s = mpmice::scene::load(&scene)?;
+            if !s.membrane_elements.is_empty() {
+                writeln!(
+                    std::io::stdout(),
+                    "{}: ok (3D, {} membrane element meshes, mode {})",
+                    scene.display(),
+                    s.membrane_elements.len(),
+                    s.time.mode.name()
+                )?;
+                return Ok(());
+            }
             writeln!(
                 std::io::stdout(),
                 "{}: ok ({}D, {} cells, {} materials, {} objects, mode {})",
@@ -113,7 +123,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 interrupt: Some(interrupt_flag()?),
             };
             let sum = mpmice::driver::run_scene(&s, &opts)?;
-            let rate = if sum.n_particles > 0 {
+            let rate = if sum.n_elements > 0 {
+                format!(
+                    "{} membrane elements, {:.3e} element-steps/s",
+                    sum.n_elements, sum.element_steps_per_s
+                )
+            } else if sum.n_particles > 0 {
                 format!(
                     "{} particles, {} cells, {:.3e} particle-steps/s",
                     sum.n_particles, sum.n_cells, sum.particle_steps_per_s

@@ -200,6 +200,21 @@ fn membranes_restart_bit_identically() {
 
 /// Runs `scene` to a checkpoint and returns it (the run stops by its step
 /// limit after the checkpoint).
+#[test]
+fn membrane_elements_restart_bit_identically() {
+    // Lian's membrane elements: node positions and velocities, element
+    // stress (co-rotational frame), thickness, normals and the energy
+    // accumulators travel in the checkpoint; masses, fixed nodes and loads
+    // come from the scene.
+    let mut s = case("lian_membrane_vibration.toml");
+    if let mpmice::scene::MeshSpec::Rectangle { cells, .. } = &mut s.membrane_elements[0].mesh {
+        *cells = [8, 8];
+    }
+    s.time.end = 0.2;
+    s.output.interval = Some(0.05);
+    assert_restart_is_bit_identical("membrane elements (Lian vibration)", &s);
+}
+
 fn a_checkpoint(scene: &Scene, dir: &Path) -> PathBuf {
     let mut s = scene.clone();
     s.output.checkpoint_interval = Some(0.25 * s.time.end);

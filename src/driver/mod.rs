@@ -1,7 +1,8 @@
 //! The one run loop and the models it drives.
 //!
 //! [`run_scene`] builds the scene's model — explicit solid, implicit solid,
-//! ICE (explicit or semi-implicit pressure) or coupled MPM-ICE — and hands
+//! ICE (explicit or semi-implicit pressure), coupled MPM-ICE or membrane
+//! finite elements — and hands
 //! it to [`run_model`], which owns time control, retries, the watchdog,
 //! snapshots, history, checkpoints, restart, a clean stop on interrupt,
 //! progress and the summary. A new system implements [`Model`] (see
@@ -31,6 +32,12 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
         .build()
         .map_err(|e| Error::io(&opts.out_dir, std::io::Error::other(e.to_string())))?;
     let threads = pool.current_num_threads();
+    if !scene.membrane_elements.is_empty() {
+        return pool.install(|| {
+            let mut m = models::MembraneFe::from_scene(scene)?;
+            run_model(&mut m, scene, opts, threads)
+        });
+    }
     pool.install(|| match scene.grid.dim {
         1 => run_dim::<1>(scene, opts, threads),
         2 => run_dim::<2>(scene, opts, threads),

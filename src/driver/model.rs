@@ -149,6 +149,18 @@ pub enum Geometry {
         /// Cell centres of the CSV rows (cell fields only; empty otherwise).
         centres: Vec<[f64; 3]>,
     },
+    /// A quadrilateral surface mesh (membrane elements); the fields are on
+    /// its nodes or on its quads.
+    Quads {
+        /// Node positions.
+        points: Vec<[f64; 3]>,
+        /// Corner node ids of each quad.
+        quads: Vec<[u32; 4]>,
+        /// Whether the fields are per quad (else per node).
+        on_cells: bool,
+        /// Quad centres of the CSV rows (quad fields only; empty otherwise).
+        centres: Vec<[f64; 3]>,
+    },
 }
 
 /// One group of snapshot fields: written as `NAME_NNNN.vtu|vti` (with a
@@ -173,6 +185,10 @@ pub enum Location {
     /// A grid cell (flat index of the model's cell layout) with its integer
     /// coordinates.
     Cell(usize, [isize; 3]),
+    /// A membrane finite element (index in its mesh).
+    Element(usize),
+    /// A membrane finite-element node (index in its mesh).
+    Node(usize),
 }
 
 impl std::fmt::Display for Location {
@@ -180,6 +196,8 @@ impl std::fmt::Display for Location {
         match self {
             Location::Particle(p) => write!(f, "particle {p}"),
             Location::Cell(c, ijk) => write!(f, "cell {c} {ijk:?}"),
+            Location::Element(e) => write!(f, "element {e}"),
+            Location::Node(n) => write!(f, "node {n}"),
         }
     }
 }
@@ -218,6 +236,8 @@ pub struct Counts {
     pub cells: usize,
     /// Fluid materials.
     pub fluid_materials: usize,
+    /// Membrane finite elements.
+    pub elements: usize,
 }
 
 /// How a model describes itself in the run summary.

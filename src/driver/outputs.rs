@@ -12,7 +12,7 @@ use std::time::Instant;
 use crate::driver::model::{FieldSet, Geometry, Values};
 use crate::error::{Error, Result};
 use crate::output::csv::write_columns;
-use crate::output::vtk::{write_vti, write_vtu_points, Field, PvdSeries};
+use crate::output::vtk::{write_vti, write_vtu_points, write_vtu_quads, Field, PvdSeries};
 use crate::scene::Format;
 
 /// Unit of a quantity per unit of the dimensions a run does not resolve
@@ -121,7 +121,7 @@ impl Outputs {
         for set in sets {
             if self.formats.contains(&Format::Vtk) {
                 let ext = match set.geometry {
-                    Geometry::Points(_) => "vtu",
+                    Geometry::Points(_) | Geometry::Quads { .. } => "vtu",
                     Geometry::Image { .. } => "vti",
                 };
                 let name = format!("{}_{k:04}.{ext}", set.name);
@@ -161,7 +161,7 @@ impl Outputs {
         if self.formats.contains(&Format::Vtk) {
             for set in sets {
                 let ext = match set.geometry {
-                    Geometry::Points(_) => "vtu",
+                    Geometry::Points(_) | Geometry::Quads { .. } => "vtu",
                     Geometry::Image { .. } => "vti",
                 };
                 let mut pvd = PvdSeries::new(self.dir.join(format!("{}.pvd", set.name)));
@@ -193,6 +193,18 @@ fn write_vtk(path: &Path, set: &FieldSet) -> std::io::Result<()> {
     let fields = vtk_fields(set);
     match &set.geometry {
         Geometry::Points(x) => write_vtu_points(path, x, &fields),
+        Geometry::Quads {
+            points,
+            quads,
+            on_cells,
+            ..
+        } => {
+            if *on_cells {
+                write_vtu_quads(path, points, quads, &[], &fields)
+            } else {
+                write_vtu_quads(path, points, quads, &fields, &[])
+            }
+        }
         Geometry::Image {
             origin,
             spacing,
@@ -224,6 +236,18 @@ fn write_csv(path: &Path, set: &FieldSet, dim: usize) -> std::io::Result<()> {
     let mut cols: Vec<Vec<f64>> = Vec::new();
     let coords: &[[f64; 3]] = match &set.geometry {
         Geometry::Points(x) => x,
+        Geometry::Quads {
+            points,
+            on_cells,
+            centres,
+            ..
+        } => {
+            if *on_cells {
+                centres
+            } else {
+                points
+            }
+        }
         Geometry::Image { centres, .. } => centres,
     };
     for d in 0..dim {

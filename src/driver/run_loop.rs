@@ -434,7 +434,7 @@ impl Run {
         let mut out = Outputs::new(
             &dir,
             &scene.output.formats,
-            scene.grid.dim,
+            scene.dim(),
             &model.history_columns(),
         )?;
         let ls = match &opts.restart {
@@ -628,7 +628,7 @@ fn summarise<M: Model>(
         it.finish(steps)
     });
     Summary {
-        dim: scene.grid.dim,
+        dim: scene.dim(),
         mode: scene.time.mode.name().to_string(),
         model: model.kind(),
         shape: desc.shape,
@@ -646,6 +646,8 @@ fn summarise<M: Model>(
             0.0
         },
         n_fluid_materials: counts.fluid_materials,
+        n_elements: counts.elements,
+        element_steps_per_s: per_step(counts.elements),
         retries: ls.iters.retries,
         threads,
         dt_min: if ls.dt_min.is_finite() {

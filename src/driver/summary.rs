@@ -42,6 +42,11 @@ pub struct Summary {
     pub cell_steps_per_s: f64,
     /// Fluid materials.
     pub n_fluid_materials: usize,
+    /// Membrane finite elements.
+    pub n_elements: usize,
+    /// Membrane element updates per second of stepping (output excluded; 0
+    /// without membrane elements).
+    pub element_steps_per_s: f64,
     /// Steps repeated with a smaller timestep (the loop's retries and the
     /// model's own cuts).
     pub retries: u64,

@@ -10,6 +10,12 @@
 //! tangent from its neighbours' current positions into a buffer kept between
 //! steps and turns each point's stress to its new frame, `σ = s t⊗t` (the
 //! tangential stress `s` is a scalar of the local frame, hence objective).
+//!
+//! Lian's membrane finite elements (Belytschko–Tsay quadrilaterals with
+//! their own nodes) are in [`element`], their meshes in [`quad_mesh`].
+
+pub mod element;
+pub mod quad_mesh;
 
 use nalgebra::{Matrix3, SVector};
 

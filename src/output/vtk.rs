@@ -2,6 +2,8 @@
 //!
 //! * [`write_vtu_points`]: particles as an `UnstructuredGrid` of `VTK_VERTEX`
 //!   cells (one per point), so ParaView shows them without a glyph filter.
+//! * [`write_vtu_quads`]: a quadrilateral surface mesh (membrane elements)
+//!   as an `UnstructuredGrid` of `VTK_QUAD` cells.
 //! * [`write_vti`]: a uniform grid as `ImageData` with point and cell data.
 //! * [`PvdSeries`]: a `.pvd` collection listing the files of a time series.
 //!
@@ -26,6 +28,9 @@ use super::{atomic_write, fmt_f64};
 
 /// VTK cell type id of a single-point cell.
 const VTK_VERTEX: u8 = 1;
+
+/// VTK cell type id of a four-node quadrilateral.
+const VTK_QUAD: u8 = 9;
 
 /// The values of one named field, one tuple per point or per cell.
 #[derive(Clone, Copy, Debug)]
@@ -159,6 +164,10 @@ enum Block<'a> {
         n: usize,
         start: i64,
     },
+    /// Quadrilateral connectivity as `Int64`, four ids a cell.
+    Quads(&'a [[u32; 4]]),
+    /// `Int64` offsets `4, 8, …` of `n` quadrilaterals.
+    QuadOffsets(usize),
     /// `n` copies of one `UInt8`.
     ConstU8 {
         n: usize,
@@ -172,6 +181,8 @@ impl Block<'_> {
             Block::Field(d) => (d.len(), 8 * d.components()),
             Block::Points(p) => (p.len(), 24),
             Block::Iota { n, .. } => (*n, 8),
+            Block::Quads(q) => (q.len(), 32),
+            Block::QuadOffsets(n) => (*n, 8),
             Block::ConstU8 { n, .. } => (*n, 1),
         };
         (n as u64)
@@ -190,6 +201,18 @@ impl Block<'_> {
                 for i in 0..*n {
                     // Indices fit in i64 for any slice that fits in memory.
                     w.write_all(&(start + i as i64).to_le_bytes())?;
+                }
+                Ok(())
+            }
+            Block::Quads(q) => {
+                for id in q.iter().flatten() {
+                    w.write_all(&i64::from(*id).to_le_bytes())?;
+                }
+                Ok(())
+            }
+            Block::QuadOffsets(n) => {
+                for i in 1..=*n {
+                    w.write_all(&(4 * i as i64).to_le_bytes())?;
                 }
                 Ok(())
             }
@@ -338,6 +361,57 @@ pub fn write_vtu_points(path: &Path, points: &[[f64; 3]], point_data: &[Field]) 
         Block::ConstU8 {
             n,
             value: VTK_VERTEX,
+        },
+    )?;
+    doc.line(3, "</Cells>");
+    doc.line(2, "</Piece>");
+    doc.line(1, "</UnstructuredGrid>");
+    doc.write(path)
+}
+
+/// Writes a quadrilateral surface mesh as a VTK XML `UnstructuredGrid`
+/// (`.vtu`) of `VTK_QUAD` cells with point data (one tuple per point) and
+/// cell data (one per quad).
+///
+/// # Errors
+/// [`io::ErrorKind::InvalidInput`] when a field has the wrong length or an
+/// invalid/duplicate name, or a quad names a point that does not exist;
+/// otherwise any I/O error of the write.
+pub fn write_vtu_quads(
+    path: &Path,
+    points: &[[f64; 3]],
+    quads: &[[u32; 4]],
+    point_data: &[Field],
+    cell_data: &[Field],
+) -> io::Result<()> {
+    let (n, nc) = (points.len(), quads.len());
+    check_fields("point", point_data, n)?;
+    check_fields("cell", cell_data, nc)?;
+    if let Some(q) = quads.iter().find(|q| q.iter().any(|&i| i as usize >= n)) {
+        return Err(invalid(format!("quad {q:?} names a point beyond {n}")));
+    }
+    let mut doc = Doc::new("UnstructuredGrid");
+    doc.line(1, "<UnstructuredGrid>");
+    doc.line(
+        2,
+        &format!("<Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{nc}\">"),
+    );
+    doc.fields(3, "PointData", point_data)?;
+    doc.fields(3, "CellData", cell_data)?;
+    doc.line(3, "<Points>");
+    doc.array(4, "Float64", "Points", 3, Block::Points(points))?;
+    doc.line(3, "</Points>");
+    doc.line(3, "<Cells>");
+    doc.array(4, "Int64", "connectivity", 1, Block::Quads(quads))?;
+    doc.array(4, "Int64", "offsets", 1, Block::QuadOffsets(nc))?;
+    doc.array(
+        4,
+        "UInt8",
+        "types",
+        1,
+        Block::ConstU8 {
+            n: nc,
+            value: VTK_QUAD,
         },
     )?;
     doc.line(3, "</Cells>");

@@ -6,12 +6,14 @@
 //! cross-references and names the offending key with its allowed range.
 
 mod build;
+mod membrane_elements;
 mod schema;
 
 pub use build::{
     build_coupled_run, build_fluid_run, build_implicit_run, build_solid_run, fill_particles,
     grid_of,
 };
+pub use membrane_elements::*;
 pub use schema::*;
 
 use crate::error::SceneError;

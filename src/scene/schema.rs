@@ -15,7 +15,8 @@ pub struct Scene {
     /// Free-text description.
     #[serde(default)]
     pub description: String,
-    /// The background grid.
+    /// The background grid (absent in a scene of membrane elements only).
+    #[serde(default = "GridSpec::absent")]
     pub grid: GridSpec,
     /// Time integration.
     pub time: TimeSpec,
@@ -23,6 +24,7 @@ pub struct Scene {
     #[serde(default)]
     pub mpm: MpmSpec,
     /// Materials, referred to by name.
+    #[serde(default)]
     pub materials: Vec<MaterialSpec>,
     /// Bodies filled with particles.
     #[serde(default)]
@@ -49,6 +51,10 @@ pub struct Scene {
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Lian's membrane finite elements (Sec. 4), each a mesh with its own
+    /// nodes; for now in scenes without grid, materials or objects.
+    #[serde(default)]
+    pub membrane_elements: Vec<super::membrane_elements::MembraneElementsSpec>,
 }
 
 /// The background grid.
@@ -2331,11 +2337,84 @@ fn vec_len(path: &str, v: &[f64], dim: usize) -> Result<(), SceneError> {
     Ok(())
 }
 
+impl GridSpec {
+    /// The grid of a scene without `[grid]`: dimension 0, no cells.
+    pub fn absent() -> Self {
+        Self {
+            dim: 0,
+            lower: Vec::new(),
+            upper: Vec::new(),
+            cells: Vec::new(),
+            boundary: BoundarySpec::default(),
+            axisymmetric: false,
+        }
+    }
+}
+
 impl Scene {
+    /// The spatial dimension: the grid's, 3 for membrane elements.
+    pub fn dim(&self) -> usize {
+        if self.membrane_elements.is_empty() {
+            self.grid.dim
+        } else {
+            3
+        }
+    }
+
+    /// Checks a scene of membrane elements: no grid, materials, objects or
+    /// regions (the grid contact with MPM, Lian Sec. 5, is not built yet),
+    /// explicit time integration, 3-component gravity, each mesh.
+    fn validate_membrane_elements(&self) -> Result<(), SceneError> {
+        let why = "a scene with [[membrane_elements]] has no MPM or fluid part yet (the grid \
+                   contact of Lian Sec. 5 is not built); remove it";
+        if self.grid.dim != 0 {
+            return Err(err("grid", why));
+        }
+        if !self.materials.is_empty() {
+            return Err(err("materials", why));
+        }
+        if !self.objects.is_empty() {
+            return Err(err("objects", why));
+        }
+        if !self.regions.is_empty() {
+            return Err(err("regions", why));
+        }
+        if self.time.mode != Mode::Explicit {
+            return Err(err(
+                "time.mode",
+                "membrane elements integrate explicitly; allowed: explicit",
+            ));
+        }
+        if let Some(gv) = &self.gravity {
+            vec_len("gravity", gv, 3)?;
+        }
+        for (i, m) in self.membrane_elements.iter().enumerate() {
+            if self.membrane_elements[..i].iter().any(|o| o.name == m.name) {
+                return Err(err(
+                    format!("membrane_elements[{i}].name"),
+                    format!("`{}` is used twice", m.name),
+                ));
+            }
+            m.validate(i)?;
+        }
+        Ok(())
+    }
+
     /// Checks ranges and cross-references; the error names the key path and
     /// the allowed values.
     pub fn validate(&self) -> Result<(), SceneError> {
+        if !self.membrane_elements.is_empty() {
+            self.validate_time()?;
+            self.validate_output()?;
+            return self.validate_membrane_elements();
+        }
         let g = &self.grid;
+        if g.dim == 0 {
+            return Err(err(
+                "grid",
+                "missing; every scene but one of membrane elements only needs [grid]",
+            ));
+        }
         let dim = g.dim;
         if !(1..=3).contains(&dim) {
             return Err(err("grid.dim", format!("must be 1, 2 or 3 (got {dim})")));
@@ -2375,20 +2454,8 @@ impl Scene {
                 }
             }
         }
+        self.validate_time()?;
         let t = &self.time;
-        positive("time.end", t.end)?;
-        if !(t.cfl.is_finite() && t.cfl > 0.0 && t.cfl <= 1.0) {
-            return Err(err(
-                "time.cfl",
-                format!("must satisfy 0 < cfl ≤ 1 (got {})", t.cfl),
-            ));
-        }
-        if let Some(dt) = t.dt {
-            positive("time.dt", dt)?;
-        }
-        if t.max_steps == Some(0) {
-            return Err(err("time.max_steps", "must be ≥ 1 (got 0)"));
-        }
 
         if !(1..=16).contains(&self.mpm.particles_per_cell) {
             return Err(err(
@@ -2637,6 +2704,28 @@ impl Scene {
                 "inflow faces set fluid states; the scene has no fluid",
             ));
         }
+        self.validate_output()
+    }
+
+    fn validate_time(&self) -> Result<(), SceneError> {
+        let t = &self.time;
+        positive("time.end", t.end)?;
+        if !(t.cfl.is_finite() && t.cfl > 0.0 && t.cfl <= 1.0) {
+            return Err(err(
+                "time.cfl",
+                format!("must satisfy 0 < cfl ≤ 1 (got {})", t.cfl),
+            ));
+        }
+        if let Some(dt) = t.dt {
+            positive("time.dt", dt)?;
+        }
+        if t.max_steps == Some(0) {
+            return Err(err("time.max_steps", "must be ≥ 1 (got 0)"));
+        }
+        Ok(())
+    }
+
+    fn validate_output(&self) -> Result<(), SceneError> {
         let out = &self.output;
         if let Some(iv) = out.interval {
             positive("output.interval", iv)?;

@@ -172,6 +172,7 @@ impl<const D: usize> Model for Coupled<D> {
             particles: run.fields.iter().map(|f| f.particles.len()).sum(),
             cells: run.fluid.layout.num_interior(),
             fluid_materials: run.num_fluids(),
+            elements: 0,
         }
     }
 

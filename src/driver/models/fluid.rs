@@ -176,6 +176,7 @@ impl<const D: usize> Model for Fluid<D> {
             particles: 0,
             cells: self.state.layout.num_interior(),
             fluid_materials: self.state.num_materials(),
+            elements: 0,
         }
     }
 

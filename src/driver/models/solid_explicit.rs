@@ -208,6 +208,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             particles: self.run.particles.len(),
             cells: self.run.grid.num_cells(),
             fluid_materials: 0,
+            elements: 0,
         }
     }
 

@@ -129,6 +129,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
             particles: self.run.particles.len(),
             cells: self.run.grid.num_cells(),
             fluid_materials: 0,
+            elements: 0,
         }
     }
 
