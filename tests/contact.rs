@@ -169,6 +169,7 @@ impl<const D: usize> Scene<D> {
             mass: &self.m,
             v: &self.v,
             normal: &self.n,
+            held: &[],
         };
         self.contact
             .map_points(&self.grid, &points)

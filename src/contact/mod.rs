@@ -18,12 +18,19 @@
 //! conserved to round-off.
 //!
 //! The points map to the grid with the linear hat functions (their 2^D
-//! surrounding nodes), whatever shape function the MPM body uses.
+//! surrounding nodes), whatever shape function the MPM body uses. Points
+//! held in every direction (a membrane's fixed edge) make their grid nodes
+//! a wall of infinite mass, so that the MPM body cannot push through them
+//! (with the finite mapped mass the stick force would stop only the share
+//! `m^r/(m^r + m^s)` of the approach); the wall takes that impulse.
 
 use nalgebra::SVector;
 
 use crate::grid::Grid;
 use crate::shape::{LinearHat, ParticleWeights};
+
+mod run;
+pub use run::{node_normals, MembraneContactRun};
 
 /// How the contact force acts tangentially.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +61,9 @@ pub struct PointBody<'a, const D: usize> {
     pub v: &'a [SVector<f64, D>],
     /// Surface normals (not necessarily unit).
     pub normal: &'a [SVector<f64, D>],
+    /// Points held in every direction (empty: none): a wall of infinite
+    /// mass for the contact (see [`GridContact::resolve`]).
+    pub held: &'a [bool],
 }
 
 /// The MPM body's side of a contact step: its nodal mass, its trial nodal
@@ -93,6 +103,20 @@ pub struct ContactStats {
     pub tangential_impulse: f64,
 }
 
+impl ContactStats {
+    /// Adds another step's or membrane's counts and impulses.
+    pub fn add(&mut self, o: &ContactStats) {
+        self.shared_nodes += o.shared_nodes;
+        self.contact_nodes += o.contact_nodes;
+        self.slipping_nodes += o.slipping_nodes;
+        self.normal_impulse += o.normal_impulse;
+        self.tangential_impulse += o.tangential_impulse;
+        for d in 0..3 {
+            self.impulse[d] += o.impulse[d];
+        }
+    }
+}
+
 /// Grid buffers of the contact (no allocation once sized): the point
 /// body's nodal mass, momentum and normal, the contact force on it, and
 /// the list of nodes it touches (so every pass is over that list, not the
@@ -109,6 +133,8 @@ pub struct GridContact<const D: usize> {
     pub force: Vec<SVector<f64, D>>,
     /// Nodes the point body reaches, in first-touch order.
     pub touched: Vec<usize>,
+    /// Whether a held point reaches the node.
+    pub held: Vec<bool>,
 }
 
 /// The 2^D linear-hat weights of point `x` and the flat index of their
@@ -141,6 +167,7 @@ impl<const D: usize> GridContact<D> {
             normal: vec![SVector::zeros(); n],
             force: vec![SVector::zeros(); n],
             touched: Vec::with_capacity(n.min(4096)),
+            held: vec![false; n],
         }
     }
 
@@ -155,6 +182,7 @@ impl<const D: usize> GridContact<D> {
             self.momentum[i] = SVector::zeros();
             self.normal[i] = SVector::zeros();
             self.force[i] = SVector::zeros();
+            self.held[i] = false;
         }
         self.touched.clear();
         let strides = grid.strides();
@@ -163,6 +191,7 @@ impl<const D: usize> GridContact<D> {
                 return Err(k);
             };
             let (m, p, n) = (body.mass[k], body.v[k] * body.mass[k], body.normal[k]);
+            let held = body.held.get(k).copied().unwrap_or(false);
             pw.for_each(|o, w, _| {
                 if w <= 0.0 {
                     return;
@@ -174,6 +203,7 @@ impl<const D: usize> GridContact<D> {
                 self.mass[i] += w * m;
                 self.momentum[i] += p * w;
                 self.normal[i] += n * w;
+                self.held[i] |= held;
             });
         }
         Ok(())
@@ -217,8 +247,14 @@ impl<const D: usize> GridContact<D> {
             if (pr * ms - ps * mr).dot(&n) <= 0.0 {
                 continue;
             }
-            // Lian Eq. 55.
-            let stick = (ps * mr - pr * ms) / ((mr + ms) * dt);
+            // Lian Eq. 55; where a held point reaches the node the point
+            // body is a wall (m^r → ∞): the MPM body takes its velocity,
+            // f^r = (p̄^s − m^s v̄^r)/Δt.
+            let stick = if self.held[i] {
+                (ps - pr * (ms / mr)) / dt
+            } else {
+                (ps * mr - pr * ms) / ((mr + ms) * dt)
+            };
             let f = match law {
                 ContactLaw::Stick => stick,
                 ContactLaw::Slip { friction } => {

@@ -34,7 +34,22 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
     let threads = pool.current_num_threads();
     if !scene.membrane_elements.is_empty() {
         return pool.install(|| {
-            let mut m = models::MembraneFe::from_scene(scene)?;
+            let fe = models::MembraneFe::from_scene(scene)?;
+            if scene.grid.dim == 0 {
+                let mut m = fe;
+                return run_model(&mut m, scene, opts, threads);
+            }
+            // Lian Sec. 5–6: MPM bodies and membranes in grid contact.
+            let solid = models::ExplicitSolid {
+                run: crate::scene::build_solid_run::<3>(scene)?,
+            };
+            let law = scene
+                .contact
+                .as_ref()
+                .map_or(crate::contact::ContactLaw::Slip { friction: 0.0 }, |c| {
+                    c.law()
+                });
+            let mut m = models::MembraneContact::new(solid, fe, law);
             run_model(&mut m, scene, opts, threads)
         });
     }

@@ -52,9 +52,49 @@ pub struct Scene {
     #[serde(default)]
     pub output: OutputSpec,
     /// Lian's membrane finite elements (Sec. 4), each a mesh with its own
-    /// nodes; for now in scenes without grid, materials or objects.
+    /// nodes: alone (no grid, materials or objects) or in a 3D scene with
+    /// MPM bodies, joined to them by the grid contact (`[contact]`).
     #[serde(default)]
     pub membrane_elements: Vec<super::membrane_elements::MembraneElementsSpec>,
+    /// Lian's grid contact between the MPM bodies and the membrane elements
+    /// (Sec. 5); scenes with both.
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+}
+
+/// How membrane elements and MPM bodies touch on the grid (Lian Sec. 5).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// `stick` (Lian Eq. 55) or `slip` (Coulomb, Eq. 58).
+    #[serde(default)]
+    pub law: ContactLawSpec,
+    /// Coulomb friction coefficient μ ≥ 0 (`slip`; 0 = free slip).
+    #[serde(default)]
+    pub friction: f64,
+}
+
+/// The contact law's name in a scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactLawSpec {
+    /// Shared velocity at contact nodes.
+    Stick,
+    /// Normal contact with Coulomb friction.
+    #[default]
+    Slip,
+}
+
+impl ContactSpec {
+    /// The kernel's law.
+    pub fn law(&self) -> crate::contact::ContactLaw {
+        match self.law {
+            ContactLawSpec::Stick => crate::contact::ContactLaw::Stick,
+            ContactLawSpec::Slip => crate::contact::ContactLaw::Slip {
+                friction: self.friction,
+            },
+        }
+    }
 }
 
 /// The background grid.
@@ -2206,7 +2246,9 @@ impl Scene {
     /// and USL otherwise.
     pub fn mpm_update(&self) -> UpdateScheme {
         self.mpm.update.unwrap_or_else(|| {
-            if self.materials.iter().any(|m| m.is_gas_point()) {
+            // Membrane contact runs the split step (USL or USF only).
+            if self.membrane_elements.is_empty() && self.materials.iter().any(|m| m.is_gas_point())
+            {
                 UpdateScheme::Musl
             } else {
                 UpdateScheme::Usl
@@ -2361,23 +2403,68 @@ impl Scene {
         }
     }
 
-    /// Checks a scene of membrane elements: no grid, materials, objects or
-    /// regions (the grid contact with MPM, Lian Sec. 5, is not built yet),
-    /// explicit time integration, 3-component gravity, each mesh.
+    /// Checks a scene of membrane elements: alone (no grid, materials,
+    /// objects or regions) or with MPM bodies on a 3D grid (no fluid in
+    /// cells, no York membrane points), explicit time integration,
+    /// 3-component gravity, each mesh, the contact settings.
     fn validate_membrane_elements(&self) -> Result<(), SceneError> {
-        let why = "a scene with [[membrane_elements]] has no MPM or fluid part yet (the grid \
-                   contact of Lian Sec. 5 is not built); remove it";
-        if self.grid.dim != 0 {
-            return Err(err("grid", why));
-        }
-        if !self.materials.is_empty() {
-            return Err(err("materials", why));
-        }
-        if !self.objects.is_empty() {
-            return Err(err("objects", why));
+        if self.grid.dim == 0 {
+            let why = "a scene of membrane elements alone has no MPM part; for MPM bodies in \
+                       contact with the membranes add a 3D [grid]";
+            if !self.materials.is_empty() {
+                return Err(err("materials", why));
+            }
+            if !self.objects.is_empty() {
+                return Err(err("objects", why));
+            }
+            if self.contact.is_some() {
+                return Err(err("contact", why));
+            }
+        } else {
+            if self.grid.dim != 3 {
+                return Err(err(
+                    "grid.dim",
+                    format!(
+                        "membrane elements live in 3D; allowed: 3 (got {})",
+                        self.grid.dim
+                    ),
+                ));
+            }
+            for (i, m) in self.materials.iter().enumerate() {
+                if m.in_cells() || m.kind == MaterialKind::Membrane {
+                    return Err(err(
+                        format!("materials[{i}].type"),
+                        "with membrane elements the MPM bodies are solids or gas points \
+                         (type = \"solid\", or \"fluid\" with frame = \"particles\")",
+                    ));
+                }
+            }
+            if self.mpm.update == Some(crate::mpm::UpdateScheme::Musl) {
+                return Err(err(
+                    "mpm.update",
+                    "membrane contact needs the split MPM step; allowed: usl, usf",
+                ));
+            }
         }
         if !self.regions.is_empty() {
-            return Err(err("regions", why));
+            return Err(err(
+                "regions",
+                "fluid regions are not allowed with membrane elements",
+            ));
+        }
+        if let Some(c) = &self.contact {
+            if !(c.friction.is_finite() && c.friction >= 0.0) {
+                return Err(err(
+                    "contact.friction",
+                    format!("must be a finite number ≥ 0 (got {})", c.friction),
+                ));
+            }
+            if c.law == ContactLawSpec::Stick && c.friction != 0.0 {
+                return Err(err(
+                    "contact.friction",
+                    "only with law = \"slip\" (stick has no friction limit)",
+                ));
+            }
         }
         if self.time.mode != Mode::Explicit {
             return Err(err(
@@ -2406,7 +2493,15 @@ impl Scene {
         if !self.membrane_elements.is_empty() {
             self.validate_time()?;
             self.validate_output()?;
-            return self.validate_membrane_elements();
+            self.validate_membrane_elements()?;
+            if self.grid.dim == 0 {
+                return Ok(());
+            }
+        } else if self.contact.is_some() {
+            return Err(err(
+                "contact",
+                "only in scenes with [[membrane_elements]] (Lian's grid contact)",
+            ));
         }
         let g = &self.grid;
         if g.dim == 0 {

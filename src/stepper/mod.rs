@@ -70,8 +70,10 @@ pub struct SolidRun<const D: usize> {
     pub steps: u64,
     /// Membranes (York Sec. 3.2) among the particles: chains and frames.
     pub membranes: Membranes<D>,
-    grid_state: GridState<D>,
-    scratch: StepScratch<D>,
+    /// Grid node fields (the split step of [`crate::contact`] uses them).
+    pub(crate) grid_state: GridState<D>,
+    /// Reusable step buffers.
+    pub(crate) scratch: StepScratch<D>,
 }
 
 impl<const D: usize> SolidRun<D> {

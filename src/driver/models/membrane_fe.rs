@@ -270,39 +270,13 @@ impl Model for MembraneFe {
     }
 
     fn save(&self, ck: &mut Checkpoint) {
-        for (i, m) in self.meshes.iter().enumerate() {
-            let n = |s: &str| format!("membrane{i}.{s}");
-            put_vectors(ck, &n("x"), &m.x);
-            put_vectors(ck, &n("v"), &m.v);
-            put_vectors(ck, &n("normal"), &m.normal);
-            ck.put_f64_with(&n("stress"), vec![m.num_elements(), 3], |buf| {
-                buf.extend(m.stress.iter().flatten().copied());
-            });
-            put_scalars(ck, &n("thickness"), &m.thickness);
-            put_scalars(ck, &n("strain_energy"), &m.strain_energy);
-            put_scalars(ck, &n("hourglass_work"), &m.hourglass_work);
-            put_scalars(ck, &n("external_work"), &m.external_work);
-            put_scalars(ck, &n("damping_work"), &m.damping_work);
-        }
+        self.save_meshes(ck);
         ck.put_f64("model.time", vec![1], vec![self.t]);
         ck.put_u64("model.steps", vec![1], vec![self.steps]);
     }
 
     fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
-        for (i, m) in self.meshes.iter_mut().enumerate() {
-            let n = |s: &str| format!("membrane{i}.{s}");
-            let (nn, ne) = (m.num_nodes(), m.num_elements());
-            m.x = take_vectors(ck, &n("x"), nn)?;
-            m.v = take_vectors(ck, &n("v"), nn)?;
-            m.normal = take_vectors(ck, &n("normal"), ne)?;
-            let s = ck.take_f64(&n("stress"), Some(&[ne, 3]))?;
-            m.stress = s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            m.thickness = take_scalars(ck, &n("thickness"), ne)?;
-            m.strain_energy = take_scalars(ck, &n("strain_energy"), ne)?;
-            m.hourglass_work = take_scalars(ck, &n("hourglass_work"), ne)?;
-            m.external_work = take_scalars(ck, &n("external_work"), nn)?;
-            m.damping_work = take_scalars(ck, &n("damping_work"), nn)?;
-        }
+        self.load_meshes(ck)?;
         self.t = ck.take_f64("model.time", Some(&[1]))?[0];
         self.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
         Ok(())
@@ -329,5 +303,47 @@ impl Model for MembraneFe {
             momentum_conserved: closed,
             ..Default::default()
         }
+    }
+}
+
+impl MembraneFe {
+    /// Writes every mesh's state (prefix `membrane{i}.`), not the time.
+    pub fn save_meshes(&self, ck: &mut Checkpoint) {
+        for (i, m) in self.meshes.iter().enumerate() {
+            let n = |s: &str| format!("membrane{i}.{s}");
+            put_vectors(ck, &n("x"), &m.x);
+            put_vectors(ck, &n("v"), &m.v);
+            put_vectors(ck, &n("normal"), &m.normal);
+            ck.put_f64_with(&n("stress"), vec![m.num_elements(), 3], |buf| {
+                buf.extend(m.stress.iter().flatten().copied());
+            });
+            put_scalars(ck, &n("thickness"), &m.thickness);
+            put_scalars(ck, &n("strain_energy"), &m.strain_energy);
+            put_scalars(ck, &n("hourglass_work"), &m.hourglass_work);
+            put_scalars(ck, &n("external_work"), &m.external_work);
+            put_scalars(ck, &n("damping_work"), &m.damping_work);
+        }
+    }
+
+    /// Reads what [`Self::save_meshes`] wrote.
+    ///
+    /// # Errors
+    /// A missing or mis-shaped array.
+    pub fn load_meshes(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
+        for (i, m) in self.meshes.iter_mut().enumerate() {
+            let n = |s: &str| format!("membrane{i}.{s}");
+            let (nn, ne) = (m.num_nodes(), m.num_elements());
+            m.x = take_vectors(ck, &n("x"), nn)?;
+            m.v = take_vectors(ck, &n("v"), nn)?;
+            m.normal = take_vectors(ck, &n("normal"), ne)?;
+            let s = ck.take_f64(&n("stress"), Some(&[ne, 3]))?;
+            m.stress = s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            m.thickness = take_scalars(ck, &n("thickness"), ne)?;
+            m.strain_energy = take_scalars(ck, &n("strain_energy"), ne)?;
+            m.hourglass_work = take_scalars(ck, &n("hourglass_work"), ne)?;
+            m.external_work = take_scalars(ck, &n("external_work"), nn)?;
+            m.damping_work = take_scalars(ck, &n("damping_work"), nn)?;
+        }
+        Ok(())
     }
 }

@@ -4,12 +4,14 @@
 pub mod arrays;
 pub mod coupled;
 pub mod fluid;
+pub mod membrane_contact;
 pub mod membrane_fe;
 pub mod solid_explicit;
 pub mod solid_implicit;
 
 pub use coupled::Coupled;
 pub use fluid::Fluid;
+pub use membrane_contact::MembraneContact;
 pub use membrane_fe::MembraneFe;
 pub use solid_explicit::{scene_name, ExplicitSolid};
 pub use solid_implicit::ImplicitSolid;

@@ -1,0 +1,186 @@
+//! Lian's coupled step (Lian, Liu, Zhang Sec. 6): MPM bodies (solids, gas
+//! points) on the grid and membranes of finite elements
+//! ([`MembraneMesh`]) on their own nodes, joined by the grid contact of
+//! [`super::GridContact`]. In 3D.
+//!
+//! One step, in the paper's order:
+//! 1–2. MPM trial solution on the grid: P2G, the mass gradient (Eq. 51),
+//!    stresses and the grid momentum equation (Eqs. 60–64).
+//! 3. Each membrane's trial solution: element forces (Eqs. 39–45) and the
+//!    trial nodal velocities (Eq. 46).
+//! 4. Contact per membrane: its nodes mapped to the grid (Eq. 49), the
+//!    contact force where the bodies approach (Eqs. 52–58), the MPM nodes
+//!    corrected (Eq. 53) and the membrane nodes (Eq. 59); fixed membrane
+//!    directions stay at rest (the wall takes the reaction).
+//! 5. G2P: particle velocities and positions (Eq. 65, Eq. 19).
+//! 6. Membrane positions (Eq. 47) and element stresses.
+
+use nalgebra::SVector;
+
+use super::{ContactLaw, ContactStats, GridContact, MpmNodes, PointBody};
+use crate::error::{Error, FailureSite, Result};
+use crate::membrane::element::{MembraneMesh, V3};
+use crate::mpm::{BodyForce, CoupledMpm, UpdateScheme};
+use crate::stepper::SolidRun;
+
+/// The buffers of the coupled step: per membrane its grid contact and
+/// nodal normals, and the MPM body's nodal mass gradient. The state itself
+/// (the MPM run, the membranes) stays with the caller.
+pub struct MembraneContactRun {
+    /// Stick or Coulomb slip.
+    pub law: ContactLaw,
+    /// One set of grid contact buffers per membrane.
+    contact: Vec<GridContact<3>>,
+    /// Nodal normals of each membrane (area-weighted element normals).
+    normals: Vec<Vec<V3>>,
+    /// Each membrane's nodes held in all three directions.
+    held: Vec<Vec<bool>>,
+    /// The MPM body's nodal mass gradient.
+    grad: Vec<SVector<f64, 3>>,
+    /// What the contact did over the run, all membranes together.
+    pub totals: ContactStats,
+    /// The last step's.
+    pub last: ContactStats,
+}
+
+fn failure(solid: &SolidRun<3>, what: String) -> Error {
+    Error::Numerical {
+        site: FailureSite {
+            step: solid.steps,
+            time: solid.t,
+            particle: None,
+            cell: None,
+        },
+        what,
+    }
+}
+
+impl MembraneContactRun {
+    /// Buffers for `solid`'s grid and `meshes`.
+    pub fn new(solid: &SolidRun<3>, meshes: &[MembraneMesh], law: ContactLaw) -> Self {
+        let n = solid.grid.num_nodes();
+        Self {
+            law,
+            contact: (0..meshes.len()).map(|_| GridContact::new(n)).collect(),
+            normals: meshes
+                .iter()
+                .map(|m| vec![V3::zeros(); m.num_nodes()])
+                .collect(),
+            held: meshes
+                .iter()
+                .map(|m| m.fixed.iter().map(|f| f.iter().all(|&b| b)).collect())
+                .collect(),
+            grad: vec![SVector::zeros(); n],
+            totals: ContactStats::default(),
+            last: ContactStats::default(),
+        }
+    }
+
+    /// One coupled step of `dt` (Lian Sec. 6, steps 1–6) of `solid` and
+    /// `meshes` (named `names`); advances `solid`'s time and step count.
+    /// The MPM update must be USL or USF (the split step, [`CoupledMpm`],
+    /// has no MUSL).
+    ///
+    /// # Errors
+    /// A particle off the grid or inverted, a membrane node off the grid, a
+    /// membrane element collapsed, inverted or not finite — each named.
+    pub fn step(
+        &mut self,
+        s: &mut SolidRun<3>,
+        meshes: &mut [MembraneMesh],
+        names: &[String],
+        dt: f64,
+    ) -> Result<f64> {
+        if s.params.scheme == UpdateScheme::Musl {
+            return Err(failure(
+                s,
+                "membrane contact needs the USL or USF update (mpm.update), not MUSL".into(),
+            ));
+        }
+        let mpm = CoupledMpm {
+            grid: &s.grid,
+            materials: &s.materials,
+            params: &s.params,
+            body: s.body.as_deref().map(|b| b as &dyn BodyForce<3>),
+            t: s.t,
+            dt,
+            step: s.steps,
+        };
+        // Steps 1–2: the MPM trial solution.
+        mpm.p2g(&s.particles, &mut s.grid_state, &mut s.scratch)?;
+        mpm.mass_gradient(&s.particles, &s.scratch, &mut self.grad);
+        mpm.solve(
+            &mut s.particles,
+            &mut s.grid_state,
+            &mut s.scratch,
+            None,
+            &[],
+        )?;
+        let mut step_stats = ContactStats::default();
+        for (k, mesh) in meshes.iter_mut().enumerate() {
+            // Step 3: the membrane's trial solution.
+            mesh.compute_forces(dt);
+            mesh.trial_velocities(dt);
+            node_normals(mesh, &mut self.normals[k]);
+            // Step 4: contact.
+            let body = PointBody {
+                x: &mesh.x,
+                mass: &mesh.mass,
+                v: &mesh.v,
+                normal: &self.normals[k],
+                held: &self.held[k],
+            };
+            if let Err(node) = self.contact[k].map_points(&s.grid, &body) {
+                let what = format!("membrane `{}` node {node} has left the grid", names[k]);
+                return Err(failure(s, what));
+            }
+            let gs = &mut s.grid_state;
+            let st = self.contact[k].resolve(
+                &mut MpmNodes {
+                    mass: &gs.mass,
+                    velocity: &mut gs.velocity_new,
+                    accel: &mut gs.accel,
+                    mass_gradient: &self.grad,
+                    mass_floor: s.params.mass_floor,
+                },
+                self.law,
+                dt,
+            );
+            self.contact[k].correct_points(&s.grid, &mesh.x, dt, &mut mesh.v);
+            // The wall holds a fixed direction; it takes the reaction.
+            mesh.apply_fixed();
+            step_stats.add(&st);
+        }
+        s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
+        s.grid.mirror_ghosts(&mut s.grid_state.accel);
+        // Step 5: G2P.
+        mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch)?;
+        // Step 6: the membranes move and update their stresses.
+        for (mesh, name) in meshes.iter_mut().zip(names) {
+            mesh.update_positions(dt);
+            if let Err(e) = mesh.update_stress(dt, s.steps) {
+                let what = format!("membrane `{name}` element {}: {}", e.element, e.failure);
+                return Err(failure(s, what));
+            }
+        }
+        s.t += dt;
+        s.steps += 1;
+        self.last = step_stats;
+        self.totals.add(&step_stats);
+        Ok(dt)
+    }
+}
+
+/// The nodal normals of a membrane: each quad's area vector
+/// `½ (x₃ − x₁) × (x₄ − x₂)` (its area times its unit normal, exact for a
+/// planar quad) added to its four corners.
+pub fn node_normals(mesh: &MembraneMesh, out: &mut [V3]) {
+    out.iter_mut().for_each(|n| *n = V3::zeros());
+    for q in &mesh.quads {
+        let p = q.map(|n| mesh.x[n as usize]);
+        let a = (p[2] - p[0]).cross(&(p[3] - p[1])) * 0.5;
+        for &n in q {
+            out[n as usize] += a;
+        }
+    }
+}

@@ -1,0 +1,156 @@
+//! Lian's coupled system as a model of the run loop: MPM bodies (solids,
+//! gas points) and membranes of finite elements joined by the grid contact
+//! (Lian Sec. 5–6, [`crate::contact::MembraneContactRun`]), in 3D. The MPM
+//! part is an [`ExplicitSolid`], the membranes a [`MembraneFe`]; this model
+//! steps them together and reports both.
+
+use crate::contact::{ContactLaw, MembraneContactRun};
+use crate::driver::model::{
+    Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
+};
+use crate::driver::models::{ExplicitSolid, MembraneFe};
+use crate::error::Error;
+use crate::output::checkpoint::{Checkpoint, CheckpointError};
+
+/// MPM bodies and element membranes in grid contact (3D).
+pub struct MembraneContact {
+    /// The MPM part.
+    pub solid: ExplicitSolid<3>,
+    /// The membranes (their time follows the MPM's).
+    pub membranes: MembraneFe,
+    /// The contact's buffers and totals.
+    pub contact: MembraneContactRun,
+}
+
+impl MembraneContact {
+    /// Joins the two parts with the contact `law`.
+    pub fn new(solid: ExplicitSolid<3>, membranes: MembraneFe, law: ContactLaw) -> Self {
+        let contact = MembraneContactRun::new(&solid.run, &membranes.meshes, law);
+        Self {
+            solid,
+            membranes,
+            contact,
+        }
+    }
+}
+
+/// History columns: the particles', the membranes', the contact's.
+const HISTORY: [(&str, &str); 11] = [
+    ("particle_kinetic", "J"),
+    ("particle_strain", "J"),
+    ("particle_potential", "J"),
+    ("membrane_kinetic", "J"),
+    ("membrane_strain", "J"),
+    ("membrane_external_work", "J"),
+    ("membrane_hourglass", "J"),
+    ("membrane_damping", "J"),
+    ("total", "J"),
+    ("contact_nodes", "1"),
+    ("contact_normal_impulse", "N s"),
+];
+
+impl Model for MembraneContact {
+    fn kind(&self) -> String {
+        "membrane_contact_3d".into()
+    }
+
+    fn time(&self) -> f64 {
+        self.solid.run.t
+    }
+
+    fn steps(&self) -> u64 {
+        self.solid.run.steps
+    }
+
+    fn stable_dt(&self) -> f64 {
+        self.solid.stable_dt().min(self.membranes.stable_dt())
+    }
+
+    fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error> {
+        let dt = if dt.exact {
+            dt.value
+        } else {
+            self.stable_dt().min(dt.value)
+        };
+        let fe = &mut self.membranes;
+        let dt = self
+            .contact
+            .step(&mut self.solid.run, &mut fe.meshes, &fe.names, dt)?;
+        fe.t = self.solid.run.t;
+        fe.steps = self.solid.run.steps;
+        Ok(StepStats {
+            dt,
+            ..Default::default()
+        })
+    }
+
+    fn annotate(&self, e: Error) -> Error {
+        self.solid.annotate(e)
+    }
+
+    fn field_sets(&self) -> Vec<FieldSet> {
+        let mut sets = self.solid.field_sets();
+        sets.extend(self.membranes.field_sets());
+        sets
+    }
+
+    fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
+        HISTORY.to_vec()
+    }
+
+    fn history_row(&self, row: &mut Vec<f64>) {
+        let mut solid = Vec::new();
+        self.solid.history_row(&mut solid);
+        let mut fe = Vec::new();
+        self.membranes.history_row(&mut fe);
+        // Solid: kinetic, strain, potential, total; membranes: kinetic,
+        // strain, external work, hourglass, damping, total.
+        row.extend_from_slice(&solid[..3]);
+        row.extend_from_slice(&fe[..5]);
+        row.push(solid[3] + fe[5]);
+        row.push(self.contact.last.contact_nodes as f64);
+        row.push(self.contact.totals.normal_impulse);
+    }
+
+    fn conserved(&self) -> Conserved {
+        let mut c = self.solid.conserved();
+        let m = self.membranes.conserved();
+        c.materials.extend(m.materials);
+        c.energies.kinetic += m.energies.kinetic;
+        c.energies.strain += m.energies.strain;
+        c.energies.potential += m.energies.potential;
+        c.momentum_scale += m.momentum_scale;
+        c
+    }
+
+    fn watchdog(&self) -> Option<Violation> {
+        self.solid.watchdog().or_else(|| self.membranes.watchdog())
+    }
+
+    fn save(&self, ck: &mut Checkpoint) {
+        // The MPM part writes the model's time and step count; the
+        // membranes take them from it on load.
+        self.solid.save(ck);
+        self.membranes.save_meshes(ck);
+    }
+
+    fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
+        self.solid.load(ck)?;
+        self.membranes.load_meshes(ck)?;
+        self.membranes.t = self.solid.run.t;
+        self.membranes.steps = self.solid.run.steps;
+        Ok(())
+    }
+
+    fn counts(&self) -> Counts {
+        let mut c = self.solid.counts();
+        c.elements = self.membranes.counts().elements;
+        c
+    }
+
+    fn describe(&self) -> Description {
+        let mut d = self.solid.describe();
+        d.momentum_conserved = d.momentum_conserved && self.membranes.describe().momentum_conserved;
+        d
+    }
+}

@@ -1,0 +1,217 @@
+//! Lian's coupled system (Sec. 5–6) through a scene: MPM blocks and
+//! membranes of finite elements in grid contact, in 3D. A block thrown at
+//! a free membrane conserves the total momentum; a block sliding on a
+//! membrane held flat keeps its tangential velocity with free slip and
+//! decelerates at μ g with Coulomb friction; a block dropped on a taut
+//! membrane is caught and thrown back without any particle passing below
+//! it; bad contact settings name their key.
+
+use mpmice::driver::model::{DtRequest, Model};
+use mpmice::driver::models::{ExplicitSolid, MembraneContact, MembraneFe};
+use mpmice::scene::{build_solid_run, parse};
+
+/// The model of a scene text (membrane elements with MPM bodies).
+fn model(text: &str) -> MembraneContact {
+    let scene = parse(text).expect("scene");
+    let fe = MembraneFe::from_scene(&scene).expect("membranes");
+    let solid = ExplicitSolid {
+        run: build_solid_run::<3>(&scene).expect("solid"),
+    };
+    let law = scene.contact.as_ref().expect("contact").law();
+    MembraneContact::new(solid, fe, law)
+}
+
+fn run_to(m: &mut MembraneContact, end: f64) {
+    while m.time() < end * (1.0 - 1e-12) {
+        m.step(DtRequest {
+            value: end - m.time(),
+            exact: false,
+        })
+        .expect("step");
+    }
+}
+
+/// A 0.2 × 0.2 × 0.1 block (E = 1e6, ρ = 1000) whose lower face lies
+/// `gap` above a 0.5 × 0.5 membrane (t = 1 mm, ρ = 1000) at z = 0, on a
+/// grid of h = 0.05; `extra` adds keys to the membrane table and the
+/// scene.
+fn scene(velocity: [f64; 3], gravity: f64, membrane: &str, contact: &str) -> String {
+    format!(
+        r#"
+gravity = [0.0, 0.0, {gravity}]
+[grid]
+dim = 3
+lower = [-0.35, -0.35, -0.2]
+upper = [0.35, 0.35, 0.3]
+cells = [14, 14, 10]
+[time]
+end = 1.0
+cfl = 0.4
+[mpm]
+shape = "gimp"
+update = "usl"
+particles_per_cell = 2
+[[materials]]
+name = "block"
+type = "solid"
+model = "neo_hookean"
+density = 1000.0
+youngs_modulus = 1e6
+poisson_ratio = 0.3
+[[objects]]
+material = "block"
+geometry = {{ type = "box", lower = [-0.1, -0.1, 0.0], upper = [0.1, 0.1, 0.1] }}
+velocity = {velocity:?}
+[[membrane_elements]]
+name = "sheet"
+mesh = {{ rectangle = {{ corner = [-0.25, -0.25, 0.0], edge_a = [0.5, 0.0, 0.0], edge_b = [0.0, 0.5, 0.0], cells = [20, 20] }} }}
+thickness = 1e-3
+density = 1000.0
+young = 1e7
+poisson = 0.3
+{membrane}
+[contact]
+{contact}
+"#
+    )
+}
+
+#[test]
+fn a_block_thrown_at_a_free_membrane_conserves_momentum() {
+    // No gravity, nothing fixed: the system is closed.
+    // A membrane of 2.5 kg against the 4 kg block.
+    let text = scene([0.2, 0.0, -1.0], 0.0, "", "law = \"stick\"");
+    let mut m = model(&text.replace("thickness = 1e-3", "thickness = 1e-2"));
+    let p0 = m.conserved().momentum();
+    let scale = m.conserved().momentum_scale;
+    run_to(&mut m, 0.02);
+    let c = m.conserved();
+    let p1 = c.momentum();
+    let drift = (0..3).map(|d| (p1[d] - p0[d]).abs()).fold(0.0, f64::max) / scale;
+    let sheet = c
+        .materials
+        .iter()
+        .find(|t| t.name == "sheet")
+        .expect("sheet");
+    let share = -sheet.momentum[2] / -p0[2];
+    eprintln!(
+        "free membrane: {} contact node-steps, membrane holds {share:.3} of p_z, drift {drift:.2e}",
+        m.contact.totals.contact_nodes
+    );
+    assert!(share > 0.1, "the contact moved only {share}");
+    // The MPM's mass floor drops the internal force of nodes at the edge
+    // of the block's support (tests/contact.rs); the contact itself adds
+    // round-off only.
+    assert!(drift < 1e-10, "momentum drift {drift:e}");
+}
+
+/// A block resting on a membrane whose every node is held, sliding at
+/// 1 m/s along x under g = 10 with friction μ; returns the mean
+/// deceleration over 0.1 s and the largest |v_z| of the block's mean
+/// velocity.
+fn slide(mu: f64) -> (f64, f64) {
+    let fix = "fix = [{ box = { lower = [-1.0, -1.0, -1.0], upper = [1.0, 1.0, 1.0] } }]";
+    let contact = format!("law = \"slip\"\nfriction = {mu}");
+    let mut m = model(&scene([1.0, 0.0, 0.0], -10.0, fix, &contact));
+    let mass = m.solid.run.particles.total_mass();
+    let v0 = m.solid.run.particles.momentum()[0] / mass;
+    let mut vz: f64 = 0.0;
+    while m.time() < 0.1 {
+        m.step(DtRequest {
+            value: 0.1 - m.time(),
+            exact: false,
+        })
+        .expect("step");
+        vz = vz.max((m.solid.run.particles.momentum()[2] / mass).abs());
+    }
+    let v1 = m.solid.run.particles.momentum()[0] / mass;
+    ((v0 - v1) / m.time(), vz)
+}
+
+#[test]
+fn free_slip_on_a_held_membrane_keeps_the_sliding_speed() {
+    let (decel, vz) = slide(0.0);
+    eprintln!("free slip on a held membrane: deceleration {decel:.3e}, max |v_z| {vz:.3e}");
+    assert!(decel.abs() < 1e-9, "deceleration {decel}");
+    // Held up: free fall would reach 1 m/s by t = 0.1.
+    assert!(vz < 0.1, "vertical speed {vz}");
+}
+
+#[test]
+fn coulomb_friction_on_a_held_membrane_decelerates_at_mu_g() {
+    let mu = 0.3;
+    let (decel, vz) = slide(mu);
+    eprintln!(
+        "Coulomb μ = {mu} on a held membrane: deceleration {decel:.4} (μ g = {}), max |v_z| {vz:.3e}",
+        mu * 10.0
+    );
+    assert!(
+        (decel / (mu * 10.0) - 1.0).abs() < 0.02,
+        "deceleration {decel}"
+    );
+}
+
+#[test]
+fn a_taut_membrane_catches_a_dropped_block_and_throws_it_back() {
+    // Edges held, pretension 1 MPa; the block starts 2 cm above it moving
+    // down at 2 m/s, no gravity.
+    let membrane = "prestress = [1e6, 1e6, 0.0]\nfix = [{ boundary = true }]";
+    let mut text = scene([0.0, 0.0, -2.0], 0.0, membrane, "law = \"slip\"");
+    text = text.replace("lower = [-0.1, -0.1, 0.0]", "lower = [-0.1, -0.1, 0.02]");
+    text = text.replace("upper = [0.1, 0.1, 0.1] }", "upper = [0.1, 0.1, 0.12] }");
+    let mut m = model(&text);
+    let mass = m.solid.run.particles.total_mass();
+    let mut lowest = f64::INFINITY;
+    let mut sag: f64 = 0.0;
+    let mut vz_end = 0.0;
+    while m.time() < 0.12 {
+        m.step(DtRequest {
+            value: 0.12 - m.time(),
+            exact: false,
+        })
+        .expect("step");
+        let p = &m.solid.run.particles;
+        let low = p.x.iter().map(|x| x[2]).fold(f64::INFINITY, f64::min);
+        let sheet = &m.membranes.meshes[0];
+        // The membrane under the block: its lowest node.
+        let under = sheet.x.iter().map(|x| x[2]).fold(f64::INFINITY, f64::min);
+        lowest = lowest.min(low - under);
+        sag = sag.max(-under);
+        vz_end = p.momentum()[2] / mass;
+    }
+    eprintln!(
+        "taut membrane: deepest sag {sag:.4} m, closest particle above the lowest membrane node {lowest:.4} m, final v_z {vz_end:.3} m/s"
+    );
+    assert!(sag > 0.005, "the membrane did not give ({sag})");
+    assert!(
+        lowest > 0.0,
+        "a particle went below the membrane ({lowest})"
+    );
+    assert!(vz_end > 0.5, "not thrown back (v_z = {vz_end})");
+}
+
+#[test]
+fn bad_contact_settings_name_their_key() {
+    let cases = [
+        (
+            scene([0.0; 3], 0.0, "", "law = \"slip\"\nfriction = -0.1"),
+            "contact.friction",
+        ),
+        (
+            scene([0.0; 3], 0.0, "", "law = \"stick\"\nfriction = 0.2"),
+            "contact.friction",
+        ),
+        (
+            scene([0.0; 3], 0.0, "", "law = \"slip\"")
+                .replace("update = \"usl\"", "update = \"musl\""),
+            "mpm.update",
+        ),
+    ];
+    for (text, key) in cases {
+        let e = parse(&text).expect_err("must be rejected");
+        eprintln!("{e}");
+        assert!(e.to_string().contains(key), "{e} does not name {key}");
+    }
+    let e = parse(&scene([0.0; 3], 0.0, "", "law = \"glue\"")).expect_err("unknown law");
+    assert!(e.to_string().contains("contact"), "{e}");
+}
