@@ -114,7 +114,7 @@ pub fn frame(p: &[V3; 4]) -> Option<Frame> {
     // Lian Eq. 35.
     let s = chi + psi;
     let sn = s.norm();
-    if !(nn > 0.0 && sn > 0.0) || !nn.is_finite() {
+    if !(nn > 0.0 && sn > 0.0 && nn.is_finite()) {
         return None;
     }
     let e3 = n / nn;
@@ -306,7 +306,7 @@ impl MembraneMesh {
             };
             let fr = frame(&p).ok_or(fail(ElementFailure::Collapsed))?;
             let g = local_geometry(&p, &fr);
-            if !(g.area > 0.0) {
+            if g.area.is_nan() || g.area <= 0.0 {
                 return Err(fail(ElementFailure::Collapsed));
             }
             // Lumped mass: a quarter of the element's mass to each corner.
@@ -593,7 +593,8 @@ impl MembraneMesh {
                 let Some(f1) = frame(&p1) else {
                     return Some(ElementFailure::Collapsed);
                 };
-                if !(local_geometry(&p1, &f1).area > 0.0) {
+                let a1 = local_geometry(&p1, &f1).area;
+                if a1.is_nan() || a1 <= 0.0 {
                     return Some(ElementFailure::Collapsed);
                 }
                 let n1 = f1.q.column(2).into_owned();
