@@ -100,13 +100,16 @@ pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
     } else {
         &[8, 16, 32][..]
     } {
-        let relaxed = point_load(c, 2.0 * omega, 6.0)?;
-        let undamped = point_load(c, 0.0, 3.0)?;
+        let relaxed = point_load(c, 2.0 * omega, 6.0, 0.0)?;
+        let ramped = point_load(c, 2.0 * omega, 6.0, 1.0)?;
+        let undamped = point_load(c, 0.0, 3.0, 0.0)?;
         notes.push(format!(
             "point load -0.01 sigma0 t L on the centre node, {c} x {c}: relaxed (damping \
-             2 omega11, 6 periods) hourglass/strain = {:.3e}; undamped, 3 periods: hourglass / \
-             work of the load = {:.3e}",
+             2 omega11, 6 periods) hourglass/strain = {:.3e} (load at once), {:.3e} (load ramped \
+             over one period); undamped, load at once, 3 periods: hourglass / work of the load \
+             = {:.3e}",
             relaxed.hourglass / relaxed.strain,
+            ramped.hourglass / ramped.strain,
             undamped.hourglass / undamped.work
         ));
     }
