@@ -562,6 +562,10 @@ impl MembraneMesh {
                 let q = &self.quads[e];
                 let p1 = corners(x, q);
                 let vq: [V3; 4] = std::array::from_fn(|k| v[q[k] as usize]);
+                let finite = |a: &[V3; 4]| a.iter().all(|c| c.iter().all(|x| x.is_finite()));
+                if !(finite(&p1) && finite(&vq)) {
+                    return Some(ElementFailure::NotFinite);
+                }
                 let pm: [V3; 4] = std::array::from_fn(|k| p1[k] - vq[k] * (0.5 * dt));
                 let Some(fm) = frame(&pm) else {
                     return Some(ElementFailure::Collapsed);
@@ -585,9 +589,7 @@ impl MembraneMesh {
                         + 0.5 * (s[1] + s_new[1]) * d[1]
                         + (s[2] + s_new[2]) * d[2]);
                 *s = s_new;
-                if !(s.iter().all(|c| c.is_finite()) && t.is_finite())
-                    || p1.iter().any(|c| !c.iter().all(|a| a.is_finite()))
-                {
+                if !(s.iter().all(|c| c.is_finite()) && t.is_finite()) {
                     return Some(ElementFailure::NotFinite);
                 }
                 let Some(f1) = frame(&p1) else {
