@@ -15,7 +15,9 @@
 //! (York Sec. 4.3: dog-bone membrane expansion — point positions at several
 //! times; radii at 0° and 90° and the energies against time), and
 //! `axisym_lame` (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick
-//! cylinder and sphere against the exact solutions).
+//! cylinder and sphere against the exact solutions), and `lian_vibration`
+//! (Lian Sec. 4 membrane elements: centre deflection of the pre-tensioned
+//! square membrane against the exact mode-(1,1) vibration).
 
 use std::path::PathBuf;
 
@@ -34,6 +36,10 @@ struct Args {
 }
 
 const FIGURES: &[(&str, &str)] = &[
+    (
+        "lian_vibration",
+        "pre-tensioned square membrane (Lian 4 elements): centre deflection vs time against exact mode (1,1)",
+    ),
     (
         "axisym_lame",
         "axisymmetric r-z MPM, Lame thick cylinder and sphere: sigma_r, sigma_theta vs r against exact",
@@ -88,6 +94,7 @@ fn main() -> anyhow::Result<()> {
         "york_fig6" => york_fig6(args.quick),
         "york_fig9" => york_fig9(args.quick),
         "axisym_lame" => axisym_lame(args.quick),
+        "lian_vibration" => lian_vibration(args.quick),
         "york_fig11" => york_dogbone_figures(args.quick, true),
         "york_fig13" => york_dogbone_figures(args.quick, false),
         other => bail!(
@@ -344,6 +351,65 @@ fn york_fig9(quick: bool) -> anyhow::Result<()> {
 /// `stress[(2,2)]`) of every particle against the exact curves, one PNG per
 /// problem (`axisym_lame_cylinder.png`, `axisym_lame_sphere.png`) and one
 /// CSV each.
+/// Centre deflection z(t) of the pre-tensioned square membrane
+/// (`SquareVibration`, 16 and 32 elements per side; quick: 8 and 16) over
+/// two exact periods against z = (V/ω) sin ωt, ω = 2π f₁₁.
+fn lian_vibration(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::membrane_fe::{square_membrane_f11, SquareVibration};
+    let out = out_dir()?;
+    let cfg = SquareVibration::default();
+    let f11 = square_membrane_f11(cfg.side, cfg.prestress, cfg.material.density);
+    let omega = 2.0 * std::f64::consts::PI * f11;
+    let end = 2.0 / f11;
+    let mut series = Vec::new();
+    let mut csv = String::from("cells,t [s],z_centre [m],z_exact [m]\n");
+    for n in if quick { [8, 16] } else { [16, 32] } {
+        let mut m = cfg.mesh(n)?;
+        let centre = n / 2 + (n + 1) * (n / 2);
+        let dt = cfg.cfl * m.stable_dt();
+        let (mut t, mut k) = (0.0, 0u64);
+        let mut pts = vec![(0.0, 0.0)];
+        while t < end {
+            m.step(dt, k)?;
+            k += 1;
+            t += dt;
+            let z = m.x[centre][2];
+            pts.push((t, z));
+            csv.push_str(&format!(
+                "{n},{t},{z},{}\n",
+                cfg.amplitude / omega * (omega * t).sin()
+            ));
+        }
+        series.push(PlotSeries {
+            label: format!("{n} x {n} elements"),
+            points: pts,
+            style: Style::Line,
+        });
+    }
+    series.push(PlotSeries {
+        label: "exact (V/omega) sin(omega t)".into(),
+        points: (0..=400)
+            .map(|k| {
+                let t = end * k as f64 / 400.0;
+                (t, cfg.amplitude / omega * (omega * t).sin())
+            })
+            .collect(),
+        style: Style::Line,
+    });
+    std::fs::write(out.join("lian_vibration.csv"), csv)?;
+    plot_xy(
+        &out.join("lian_vibration.png"),
+        "pre-tensioned square membrane, Belytschko-Tsay quads: centre deflection",
+        "t [s]",
+        "z centre [m]",
+        false,
+        false,
+        &series,
+    )?;
+    println!("wrote {}", out.join("lian_vibration.png").display());
+    Ok(())
+}
+
 fn axisym_lame(quick: bool) -> anyhow::Result<()> {
     use mpmice::diagnostics::axisymmetric::{Lame, LameShape, Relax};
     let out = out_dir()?;

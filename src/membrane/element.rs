@@ -114,7 +114,7 @@ pub fn frame(p: &[V3; 4]) -> Option<Frame> {
     // Lian Eq. 35.
     let s = chi + psi;
     let sn = s.norm();
-    if !(nn > 0.0 && sn > 0.0) || !nn.is_finite() {
+    if !(nn > 0.0 && sn > 0.0 && nn.is_finite()) {
         return None;
     }
     let e3 = n / nn;
@@ -306,7 +306,7 @@ impl MembraneMesh {
             };
             let fr = frame(&p).ok_or(fail(ElementFailure::Collapsed))?;
             let g = local_geometry(&p, &fr);
-            if !(g.area > 0.0) {
+            if g.area.is_nan() || g.area <= 0.0 {
                 return Err(fail(ElementFailure::Collapsed));
             }
             // Lumped mass: a quarter of the element's mass to each corner.
@@ -562,6 +562,10 @@ impl MembraneMesh {
                 let q = &self.quads[e];
                 let p1 = corners(x, q);
                 let vq: [V3; 4] = std::array::from_fn(|k| v[q[k] as usize]);
+                let finite = |a: &[V3; 4]| a.iter().all(|c| c.iter().all(|x| x.is_finite()));
+                if !(finite(&p1) && finite(&vq)) {
+                    return Some(ElementFailure::NotFinite);
+                }
                 let pm: [V3; 4] = std::array::from_fn(|k| p1[k] - vq[k] * (0.5 * dt));
                 let Some(fm) = frame(&pm) else {
                     return Some(ElementFailure::Collapsed);
@@ -585,15 +589,14 @@ impl MembraneMesh {
                         + 0.5 * (s[1] + s_new[1]) * d[1]
                         + (s[2] + s_new[2]) * d[2]);
                 *s = s_new;
-                if !(s.iter().all(|c| c.is_finite()) && t.is_finite())
-                    || p1.iter().any(|c| !c.iter().all(|a| a.is_finite()))
-                {
+                if !(s.iter().all(|c| c.is_finite()) && t.is_finite()) {
                     return Some(ElementFailure::NotFinite);
                 }
                 let Some(f1) = frame(&p1) else {
                     return Some(ElementFailure::Collapsed);
                 };
-                if !(local_geometry(&p1, &f1).area > 0.0) {
+                let a1 = local_geometry(&p1, &f1).area;
+                if a1.is_nan() || a1 <= 0.0 {
                     return Some(ElementFailure::Collapsed);
                 }
                 let n1 = f1.q.column(2).into_owned();

@@ -274,7 +274,7 @@ pub fn check_quads(mesh: &QuadMesh) -> Option<(usize, String)> {
         let scale = (0..4)
             .map(|k| (p[(k + 1) % 4] - p[k]).norm())
             .fold(0.0, f64::max);
-        if !(g.area > 1e-12 * scale * scale) {
+        if g.area.is_nan() || g.area <= 1e-12 * scale * scale {
             return Some((
                 e,
                 format!(

@@ -341,7 +341,7 @@ impl MembraneElementsSpec {
                     }
                 }
                 let (a, b) = (V3::from(*edge_a), V3::from(*edge_b));
-                if !(a.cross(&b).norm() > 1e-12 * a.norm() * b.norm()) {
+                if a.cross(&b).norm() <= 1e-12 * a.norm() * b.norm() {
                     return Err(err(
                         p("rectangle.edge_b"),
                         "must not be zero or parallel to edge_a",

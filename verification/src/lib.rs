@@ -6,6 +6,7 @@ pub mod coupled_studies;
 pub mod harness;
 pub mod ice_studies;
 pub mod impm_studies;
+pub mod lian_studies;
 pub mod mpm_studies;
 pub mod york_studies;
 
@@ -82,6 +83,11 @@ pub const STUDIES: &[Study] = &[
         "york_dogbone",
         "York 4.3 dog-bone membrane expansion: radius, pressure, hoop vs p r / t, gas kept, vs h",
         york_studies::york_dogbone,
+    ),
+    (
+        "lian_membrane",
+        "Lian 4 Belytschko-Tsay membrane quads: pre-tensioned square period vs c/(sqrt2 L), Hencky disc w0, point-load hourglass share",
+        lian_studies::lian_membrane,
     ),
     (
         "ice_sod",

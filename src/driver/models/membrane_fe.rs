@@ -69,18 +69,21 @@ impl MembraneFe {
 
     /// Node positions, quads (node ids offset per mesh) and the mesh index
     /// of every node and element, all meshes together.
-    fn geometry(&self) -> (Vec<[f64; 3]>, Vec<[u32; 4]>, Vec<f64>, Vec<f64>) {
+    fn geometry(&self) -> JoinedMesh {
         let (mut x, mut quads, mut nb, mut eb) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (b, m) in self.meshes.iter().enumerate() {
             let off = x.len() as u32;
             x.extend(m.x.iter().map(|p| [p[0], p[1], p[2]]));
             quads.extend(m.quads.iter().map(|q| q.map(|n| n + off)));
-            nb.extend(std::iter::repeat(b as f64).take(m.num_nodes()));
-            eb.extend(std::iter::repeat(b as f64).take(m.num_elements()));
+            nb.extend(std::iter::repeat_n(b as f64, m.num_nodes()));
+            eb.extend(std::iter::repeat_n(b as f64, m.num_elements()));
         }
         (x, quads, nb, eb)
     }
 }
+
+/// All meshes as one: positions, quads, mesh index of each node and element.
+type JoinedMesh = (Vec<[f64; 3]>, Vec<[u32; 4]>, Vec<f64>, Vec<f64>);
 
 fn v3(v: &V3) -> [f64; 3] {
     [v[0], v[1], v[2]]

@@ -1,0 +1,121 @@
+//! Lian's Belytschko–Tsay membrane elements (Lian, Liu, Zhang Sec. 4) on
+//! their own: the period of a pre-tensioned square membrane against
+//! f₁₁ = c/(√2 L), Hencky's clamped disc under pressure, and the share of
+//! the hourglass forces under a point load.
+
+use anyhow::{Context, Result};
+
+use crate::harness::{Point, Series, StudyResult};
+use mpmice::diagnostics::membrane_fe::{
+    hencky, point_load, square_membrane_f11, HenckyDisc, SquareVibration,
+};
+
+/// Square membrane (L = 1, t = 1 mm, ρ = 1000, E = 1 MPa, ν = 0.3,
+/// σ₀ = 10 kPa, edges fixed, κ = 0.1) at 8 … 64 elements per side (quick:
+/// 8, 16): relative period error of mode (1,1); Hencky disc (a = 1,
+/// t = 1 mm, E = 1 GPa, ν = 0.3, p a/(E t) = 1e-5) at 8 … 32 elements
+/// across (quick: 8, 16): relative centre-deflection error; point load on
+/// the square, relaxed, at 8 … 32: hourglass over strain energy (notes).
+///
+/// # Errors
+/// An element failure.
+pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
+    let vib = SquareVibration::default();
+    let ns: &[usize] = if quick { &[8, 16] } else { &[8, 16, 32, 64] };
+    let mut notes = vec![format!(
+        "square: L = {}, t = {}, rho = {}, E = {}, nu = {}, sigma0 = {}, kappa = {}, CFL {}, \
+         initial v_z = {} sin(pi x) sin(pi y); period between the 1st and 3rd zero crossings of \
+         the centre node; exact T = sqrt(2) L / sqrt(sigma0/rho)",
+        vib.side,
+        vib.thickness,
+        vib.material.density,
+        vib.material.young,
+        vib.material.poisson,
+        vib.prestress,
+        vib.material.hourglass,
+        vib.cfl,
+        vib.amplitude
+    )];
+    let mut pts = Vec::new();
+    for &n in ns {
+        let r = vib.run(n).with_context(|| format!("square {n} x {n}"))?;
+        let ups = r.elements as f64 * r.steps as f64 / r.wall_s.max(1e-12);
+        notes.push(format!(
+            "square {n} x {n}: T = {:.8e} (exact {:.8e}), error {:.3e}, {} steps, {:.2} s",
+            r.period, r.exact, r.error, r.steps, r.wall_s
+        ));
+        pts.push(
+            Point::new(1.0 / n as f64, r.error, r.wall_s, ups)
+                .with_extra("steps", r.steps as f64)
+                .with_extra("elements", r.elements as f64),
+        );
+    }
+    let mut series = vec![Series::new(
+        "square membrane period, mode (1,1)",
+        "relative",
+        pts,
+    )];
+
+    let disc = HenckyDisc::default();
+    let (b0, k) = hencky(disc.material.poisson);
+    notes.push(format!(
+        "Hencky disc: a = {}, t = {}, E = {}, nu = {}, rho = {}, pa/(Et) = {}, butterfly mesh, \
+         mass-proportional damping 2 omega1, end {} / omega1; Hencky with Chien's correction \
+         (Fichter 1997): b0 = {b0:.10}, K = {k:.10} (power series, checked by an RK4 shooting \
+         solution)",
+        disc.radius,
+        disc.thickness,
+        disc.material.young,
+        disc.material.poisson,
+        disc.material.density,
+        disc.load,
+        disc.periods
+    ));
+    let cs: &[usize] = if quick { &[8, 16] } else { &[8, 16, 32] };
+    let mut pts = Vec::new();
+    for &c in cs {
+        let r = disc.run(c).with_context(|| format!("disc {c}"))?;
+        let ups = r.elements as f64 * r.steps as f64 / r.wall_s.max(1e-12);
+        notes.push(format!(
+            "disc {c} across: w0 = {:.8e} (Hencky {:.8e}), error {:.3e}, KE/U {:.1e}, \
+             hourglass/U {:.2e}, {} steps, {:.2} s",
+            r.w0, r.exact, r.error, r.kinetic_ratio, r.hourglass_ratio, r.steps, r.wall_s
+        ));
+        pts.push(
+            Point::new(2.0 * disc.radius / c as f64, r.error, r.wall_s, ups)
+                .with_extra("w0", r.w0)
+                .with_extra("hourglass_over_strain", r.hourglass_ratio)
+                .with_extra("steps", r.steps as f64),
+        );
+    }
+    series.push(Series::new(
+        "Hencky disc centre deflection",
+        "relative",
+        pts,
+    ));
+
+    let omega = 2.0 * std::f64::consts::PI * square_membrane_f11(1.0, 1e4, 1000.0);
+    for &c in if quick {
+        &[8usize][..]
+    } else {
+        &[8, 16, 32][..]
+    } {
+        let relaxed = point_load(c, 2.0 * omega, 6.0, 0.0)?;
+        let ramped = point_load(c, 2.0 * omega, 6.0, 1.0)?;
+        let undamped = point_load(c, 0.0, 3.0, 0.0)?;
+        notes.push(format!(
+            "point load -0.01 sigma0 t L on the centre node, {c} x {c}: relaxed (damping \
+             2 omega11, 6 periods) hourglass/strain = {:.3e} (load at once), {:.3e} (load ramped \
+             over one period); undamped, load at once, 3 periods: hourglass / work of the load \
+             = {:.3e}",
+            relaxed.hourglass / relaxed.strain,
+            ramped.hourglass / ramped.strain,
+            undamped.hourglass / undamped.work
+        ));
+    }
+    Ok(StudyResult {
+        study: "lian_membrane".into(),
+        series,
+        notes,
+    })
+}
