@@ -215,3 +215,32 @@ fn bad_contact_settings_name_their_key() {
     let e = parse(&scene([0.0; 3], 0.0, "", "law = \"glue\"")).expect_err("unknown law");
     assert!(e.to_string().contains("contact"), "{e}");
 }
+
+#[test]
+fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
+    // Lian Sec. 7.3 at element = cell = 0.2 (the paper: 0.1), to t = 0.5.
+    use mpmice::diagnostics::lian_gas::GasExpansion;
+    let case = GasExpansion {
+        element: 0.2,
+        cell: 0.2,
+        per_cell: 2,
+        end: 0.5,
+        every: 0.05,
+    };
+    let dir = std::env::temp_dir().join("mpmice_test_lian_gas");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let r = case.run(&dir).expect("run");
+    let last = r.t.len() - 1;
+    // An inextensible quarter perimeter of 1.5 closes on the circle
+    // R = 1.5/(π/2) (the stretch p R/(E t) is about 5e-5).
+    let circle = 1.5 / std::f64::consts::FRAC_PI_2;
+    let err = (r.r_mean[last] / circle - 1.0).abs();
+    eprintln!(
+        "gas expansion h = 0.2, t = 0.5: mean radius {:.4} (circle {circle:.4}, {err:.3e}), r0 {:.4}, r90 {:.4}, escaped {}, energy {:.4} -> {:.4}",
+        r.r_mean[last], r.r0[last], r.r90[last], r.escaped, r.energy[0], r.energy[last]
+    );
+    assert_eq!(r.escaped, 0, "gas points outside the membrane");
+    // Started as the rectangle 1 × 2 (quarter: r(0°) = 0.5, r(90°) = 1).
+    assert_eq!((r.r0[0], r.r90[0]), (0.5, 1.0));
+    assert!(err < 0.02, "mean radius {}", r.r_mean[last]);
+}

@@ -90,6 +90,11 @@ pub const STUDIES: &[Study] = &[
         lian_studies::lian_membrane,
     ),
     (
+        "lian_gas_expansion",
+        "Lian 7.3 gas expanding in a membrane of elements (grid contact, 3D quarter): final radius vs the inextensible circle, radii at 0/90 deg, energy, vs h",
+        lian_studies::lian_gas_expansion,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,
