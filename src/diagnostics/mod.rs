@@ -7,4 +7,5 @@ pub mod impm;
 pub mod mms;
 pub mod riemann;
 pub mod york;
+pub mod york_airbag;
 pub mod york_membrane;
