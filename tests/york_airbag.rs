@@ -189,3 +189,93 @@ pressure = 1.0
     );
     assert!((m0.volume - exact_volume).abs() < 0.01 * exact_volume);
 }
+
+/// York Sec. 4.4's airbag impact at 20 mm cells (the study `york_airbag`
+/// runs 20, 10, 5 mm): the bag and probe masses are York's; after the
+/// damped inflation the probe's kinetic energy goes into the gas, the
+/// fabric and back, with the total energy conserved; the bag's gas follows
+/// the adiabat `p V^γ = const` (p from the gas's `p V` over the enclosed
+/// volume); no gas point leaves the bag; the probe stops and rebounds.
+#[test]
+fn airbag_impact_conserves_energy_and_follows_the_adiabat() {
+    use mpmice::diagnostics::york_airbag::{run_airbag, Airbag};
+    let r = run_airbag(&Airbag {
+        h: 0.02,
+        ..Airbag::default()
+    })
+    .expect("airbag run");
+    let outside = r.history.iter().map(|s| s.outside).max().unwrap_or(0);
+    println!(
+        "airbag h = 20 mm: bag {:.4} kg, probe {:.4} kg, peak penetration {:.4} m at {:.4} s, \
+         end velocity {:+.3} m/s, peak p {:.1} / pV {:.1} Pa, adiabat drift {:.2e} / {:.2e}, \
+         energy error {:.2e}, outside {outside}, {:.1} s",
+        r.bag_mass,
+        r.probe_mass,
+        r.peak_penetration.0,
+        r.peak_penetration.1,
+        r.rebound_velocity,
+        r.peak_pressure.0,
+        r.peak_pressure.1,
+        r.adiabat_drift.0,
+        r.adiabat_drift.1,
+        r.energy_error,
+        r.wall_s
+    );
+    assert!(
+        (r.bag_mass - 0.3672).abs() < 0.01 * 0.3672,
+        "bag {}",
+        r.bag_mass
+    );
+    assert!(
+        (r.probe_mass - 6.03).abs() < 1e-3 * 6.03,
+        "probe {}",
+        r.probe_mass
+    );
+    assert_eq!(outside, 0, "gas points left the bag");
+    // Measured: energy error 1.1e-3 of the probe's kinetic energy, adiabat
+    // drift 4.5e-3 (the point-mean pressure's: 4.4e-2); 25 s.
+    assert!(r.energy_error < 0.01, "energy error {}", r.energy_error);
+    assert!(
+        r.adiabat_drift.1 < 0.01,
+        "p V^γ drift {}",
+        r.adiabat_drift.1
+    );
+    let v0 = Airbag::PROBE_SPEED;
+    assert!(
+        r.rebound_velocity > 0.0 && r.rebound_velocity < v0,
+        "end velocity {}",
+        r.rebound_velocity
+    );
+}
+
+#[test]
+fn the_airbag_case_builds_with_yorks_masses() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/york_airbag.toml"
+    ))
+    .expect("case file");
+    let run = build(&text);
+    let tau = std::f64::consts::TAU;
+    let mass = |name: &str| {
+        let m = run
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .expect(name);
+        tau * (0..run.particles.len())
+            .filter(|&i| run.particles.material[i] as usize == m)
+            .map(|i| run.particles.mass[i])
+            .sum::<f64>()
+    };
+    // York: bag 367.2 g, probe 6.03 kg; gas 1.2156 kg/m³ in the bag.
+    let (bag, probe, air) = (mass("fabric"), mass("probe"), mass("air"));
+    let v_bag = 4.0 / 3.0 * std::f64::consts::PI * 0.3575 * 0.3575 * 0.17875;
+    println!(
+        "case: bag {bag:.4} kg, probe {probe:.4} kg, air {air:.5} kg (York {:.5})",
+        1.2156 * v_bag
+    );
+    assert!((bag - 0.3672).abs() < 0.005 * 0.3672);
+    assert!((probe - 6.03).abs() < 1e-3 * 6.03);
+    assert!((air - 1.2156 * v_bag).abs() < 0.02 * 1.2156 * v_bag);
+}

@@ -84,6 +84,11 @@ pub const STUDIES: &[Study] = &[
         york_studies::york_dogbone,
     ),
     (
+        "york_airbag",
+        "York 4.4 airbag impact (axisymmetric membrane points): penetration, pressure, p V^gamma, energy vs h",
+        york_studies::york_airbag,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,
