@@ -634,7 +634,9 @@ fn york_airbag_figures(quick: bool, shapes: bool) -> anyhow::Result<()> {
             .map(|x| (1e3 * x.t, f(x)))
             .collect::<Vec<_>>()
     };
-    let plots: [(&str, &str, &str, Vec<(&str, Vec<(f64, f64)>)>); 3] = [
+    /// Curves of one plot: (label, points).
+    type Curves<'a> = Vec<(&'a str, Vec<(f64, f64)>)>;
+    let plots: [(&str, &str, &str, Curves); 3] = [
         (
             "york_fig17_displacement.png",
             "York Fig. 17: probe displacement into the airbag",
