@@ -207,7 +207,7 @@ fn airbag_impact_conserves_energy_and_follows_the_adiabat() {
     let outside = r.history.iter().map(|s| s.outside).max().unwrap_or(0);
     println!(
         "airbag h = 20 mm: bag {:.4} kg, probe {:.4} kg, peak penetration {:.4} m at {:.4} s, \
-         end velocity {:+.3} m/s, peak p {:.1} / pV {:.1} Pa, adiabat drift {:.2e} / {:.2e}, \
+         rebound velocity {:+.3} m/s, peak p {:.1} / pV {:.1} Pa, adiabat drift {:.2e} / {:.2e}, \
          energy error {:.2e}, outside {outside}, {:.1} s",
         r.bag_mass,
         r.probe_mass,

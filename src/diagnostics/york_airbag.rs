@@ -212,7 +212,7 @@ impl Default for Airbag {
             young: 6.0e8,
             inflate_time: 0.04,
             inflate_damping: 200.0,
-            impact_time: 0.08,
+            impact_time: 0.12,
             history_interval: 2.0e-4,
             gas_margin_over_h: 0.25,
             gas_viscosity: 0.2,
@@ -443,8 +443,11 @@ pub struct AirbagRun {
     pub history: Vec<AirbagSample>,
     /// Largest penetration [m] and its time [s].
     pub peak_penetration: (f64, f64),
-    /// Probe velocity at the end [m/s] (> 0: rebounding).
+    /// Largest probe velocity away from the bag after the peak [m/s]
+    /// (the rebound velocity once the probe has left the bag).
     pub rebound_velocity: f64,
+    /// Probe velocity at the end [m/s].
+    pub end_velocity: f64,
     /// Largest mean gas point pressure [Pa] and largest `p V` pressure.
     pub peak_pressure: (f64, f64),
     /// Largest |p V^γ / (p V^γ)₀ − 1| (point-mean, p V pressures).
@@ -642,7 +645,8 @@ pub fn run_airbag(cfg: &Airbag) -> crate::error::Result<AirbagRun> {
     let mut out = AirbagRun {
         inflated,
         peak_penetration: (0.0, 0.0),
-        rebound_velocity: history.last().map_or(0.0, |s| s.probe_velocity),
+        rebound_velocity: 0.0,
+        end_velocity: history.last().map_or(0.0, |s| s.probe_velocity),
         peak_pressure: (0.0, 0.0),
         adiabat_drift: (0.0, 0.0),
         energy_error: 0.0,
@@ -659,6 +663,7 @@ pub fn run_airbag(cfg: &Airbag) -> crate::error::Result<AirbagRun> {
         if s.penetration > out.peak_penetration.0 {
             out.peak_penetration = (s.penetration, s.t);
         }
+        out.rebound_velocity = out.rebound_velocity.max(s.probe_velocity);
         out.peak_pressure.0 = out.peak_pressure.0.max(s.mean_pressure);
         out.peak_pressure.1 = out.peak_pressure.1.max(s.volume_pressure);
         out.adiabat_drift.0 = out.adiabat_drift.0.max((s.adiabat_mean - 1.0).abs());

@@ -359,9 +359,9 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
             let i = r.inflated;
             let gas_ke = r.history.last().map_or(0.0, |s| s.gas_kinetic);
             notes.push(format!(
-            "mu = {mu} Pa s, h = {h}: gas kinetic energy {:.2} J at release, {gas_ke:.2} J at the end; bag mass {:.4} kg, probe mass {:.4} kg; after inflation p {:.1} (pV {:.1}) Pa, volume {:.5} m^3 (gas point volumes {:.5}, those inside {:.5}); peak penetration {:.4} m at {:.4} s, velocity at end {:+.3} m/s, peak pressure {:.1} (pV {:.1}) Pa, p V^gamma drift {:.2e} (pV {:.2e}), energy error {:.2e} of the probe's kinetic energy, gas points outside max {}, {} steps, {} particles, {:.1} s",
+            "mu = {mu} Pa s, h = {h}: gas kinetic energy {:.2} J at release, {gas_ke:.2} J at the end; bag mass {:.4} kg, probe mass {:.4} kg; after inflation p {:.1} (pV {:.1}) Pa, volume {:.5} m^3 (gas point volumes {:.5}, those inside {:.5}); peak penetration {:.4} m at {:.4} s, rebound velocity {:+.3} m/s (at the end {:+.3}), peak pressure {:.1} (pV {:.1}) Pa, p V^gamma drift {:.2e} (pV {:.2e}), energy error {:.2e} of the probe's kinetic energy, gas points outside max {}, {} steps, {} particles, {:.1} s",
             i.gas_kinetic, r.bag_mass, r.probe_mass, i.mean_pressure, i.volume_pressure, i.volume, i.gas_volume, i.gas_volume_inside,
-            r.peak_penetration.0, r.peak_penetration.1, r.rebound_velocity, r.peak_pressure.0,
+            r.peak_penetration.0, r.peak_penetration.1, r.rebound_velocity, r.end_velocity, r.peak_pressure.0,
             r.peak_pressure.1, r.adiabat_drift.0, r.adiabat_drift.1, r.energy_error,
             r.history.iter().map(|s| s.outside).max().unwrap_or(0), r.steps, r.particles, r.wall_s
         ));
