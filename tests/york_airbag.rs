@@ -232,11 +232,12 @@ fn airbag_impact_conserves_energy_and_follows_the_adiabat() {
         r.probe_mass
     );
     assert_eq!(outside, 0, "gas points left the bag");
-    // Measured: energy error 1.1e-3 of the probe's kinetic energy, adiabat
-    // drift 4.5e-3 (the point-mean pressure's: 4.4e-2); 25 s.
+    // Measured (120 ms of impact): energy error 3.6e-3 of the probe's
+    // kinetic energy, adiabat drift 7.7e-3 (the point-mean pressure's:
+    // 4.4e-2; the gas viscosity heats the gas), rebound 3.43 m/s; ~25 s.
     assert!(r.energy_error < 0.01, "energy error {}", r.energy_error);
     assert!(
-        r.adiabat_drift.1 < 0.01,
+        r.adiabat_drift.1 < 0.015,
         "p V^γ drift {}",
         r.adiabat_drift.1
     );

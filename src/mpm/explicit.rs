@@ -1142,7 +1142,8 @@ fn g2p<
         return Err(ctx.fail(
             Some(p),
             None,
-            "deformation gradient inverted or not finite (J ≤ 0); try a smaller CFL",
+            "deformation gradient inverted or not finite (J ≤ 0; a membrane point: stretch not \
+             positive, or in r–z its ring reached the axis, r ≤ 0); try a smaller CFL",
         ));
     }
     Ok(())
