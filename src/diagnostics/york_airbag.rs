@@ -558,8 +558,12 @@ pub fn run_airbag(cfg: &Airbag) -> crate::error::Result<AirbagRun> {
     }
     run.params.damping = cfg.inflate_damping;
     run.time.end = cfg.inflate_time;
+    // A numerical failure names the particle's material too.
+    let named = |run: &SolidRun<2>, e| {
+        crate::driver::models::arrays::name_particle_material(e, &run.particles, &run.materials)
+    };
     while !run.finished() {
-        run.step()?;
+        run.step().map_err(|e| named(&run, e))?;
     }
     let steps_inflate = run.steps;
     // Release: the probe one cell above the bag's front.
@@ -627,7 +631,7 @@ pub fn run_airbag(cfg: &Airbag) -> crate::error::Result<AirbagRun> {
     let mut peak_shape = (0.0, Vec::new());
     let mut peak = f64::NEG_INFINITY;
     while !run.finished() {
-        run.step()?;
+        run.step().map_err(|e| named(&run, e))?;
         if run.t - t0 >= next * (1.0 - 1e-9) || run.finished() {
             let s = sample(&run, z0, ref_mean, ref_vol);
             if s.penetration > peak {
