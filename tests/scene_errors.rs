@@ -905,10 +905,73 @@ fn bad_membrane_input_names_its_key() {
             "grid.dim",
             "2D only",
         ),
+    ];
+    assert_each_names_its_key(&cases);
+}
+
+/// Membranes of revolution (York Sec. 3.2 in r–z): the membrane scene made
+/// axisymmetric is accepted, and so is a surface closed at the axis (an
+/// open polyline from the axis to the axis, whose end points sit half an
+/// interval off it); a curve reaching r < 0, a closed curve touching the
+/// axis and a circle crossing it are rejected naming the key.
+#[test]
+fn axisymmetric_membranes_stay_off_the_axis_naming_the_key() {
+    let axi = |s: String| {
+        s.replacen("dim = 2", "dim = 2\naxisymmetric = true", 1)
+            .replacen("x_lower = \"fixed\"", "x_lower = \"symmetry\"", 1)
+    };
+    let good = axi(MEMBRANE.to_string());
+    let run = mpmice::scene::build_solid_run::<2>(&mpmice::scene::parse(&good).expect("valid"))
+        .expect("builds");
+    // Per radian: mass ρ h Δ r of each point.
+    for p in 0..48 {
+        let r = run.particles.x[p][0];
+        assert!((run.particles.mass[p] - 0.0025 * r).abs() < 1e-15);
+    }
+    let square = "vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true";
+    let pole = axi(membrane_edit(
+        square,
+        "vertices = [[0.0, 0.2], [0.6, 0.2], [0.6, 0.8], [0.0, 0.8]]",
+    ));
+    let run = mpmice::scene::build_solid_run::<2>(&mpmice::scene::parse(&pole).expect("valid"))
+        .expect("builds");
+    let c = run.membranes.chains[0];
+    // Length 1.8 at spacing 0.05: 36 points at the middles of 36 intervals.
+    assert_eq!((c.count, c.closed), (36, false));
+    assert!((run.particles.x[0][0] - 0.025).abs() < 1e-12);
+    assert!((run.particles.x[35][0] - 0.025).abs() < 1e-12);
+    let cases: Vec<(String, &str, &str)> = vec![
         (
-            membrane_edit("dim = 2", "dim = 2\naxisymmetric = true"),
-            "grid.axisymmetric",
-            "plane 2D only",
+            axi(membrane_edit(
+                square,
+                "vertices = [[-0.1, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true",
+            )),
+            "objects[0].geometry.vertices[0]",
+            "x ≥ 0",
+        ),
+        (
+            axi(membrane_edit(
+                square,
+                "vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [-0.2, 0.8]]",
+            )),
+            "objects[0].geometry.vertices[3]",
+            "x ≥ 0",
+        ),
+        (
+            axi(membrane_edit(
+                square,
+                "vertices = [[0.0, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true",
+            )),
+            "objects[0].geometry.vertices[0]",
+            "x > 0 on a closed one",
+        ),
+        (
+            axi(membrane_edit(
+                "{ type = \"polyline\", vertices = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8]], closed = true }",
+                "{ type = \"circle\", center = [0.2, 0.5], radius = 0.25 }",
+            )),
+            "objects[0].geometry.center",
+            "radius",
         ),
     ];
     assert_each_names_its_key(&cases);

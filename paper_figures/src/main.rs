@@ -14,6 +14,9 @@
 //! piston–container with Eq. 27's periods), `york_fig11` / `york_fig13`
 //! (York Sec. 4.3: dog-bone membrane expansion — point positions at several
 //! times; radii at 0° and 90° and the energies against time), and
+//! `york_fig16` / `york_fig17` (York Sec. 4.4: airbag impact — bag shapes
+//! at release, peak penetration and end; probe displacement, bag pressure
+//! and energies against time), and
 //! `axisym_lame` (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick
 //! cylinder and sphere against the exact solutions), and `lian_vibration`
 //! (Lian Sec. 4 membrane elements: centre deflection of the pre-tensioned
@@ -73,6 +76,14 @@ const FIGURES: &[(&str, &str)] = &[
         "dog-bone membrane expansion (York 4.3): radii at 0 and 90 deg and energies vs time",
     ),
     (
+        "york_fig16",
+        "airbag impact (York 4.4): bag and probe at release, peak penetration and end",
+    ),
+    (
+        "york_fig17",
+        "airbag impact (York 4.4): probe displacement, bag pressure (point mean, pV) and energies vs time",
+    ),
+    (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
     ),
@@ -97,6 +108,8 @@ fn main() -> anyhow::Result<()> {
         "lian_vibration" => lian_vibration(args.quick),
         "york_fig11" => york_dogbone_figures(args.quick, true),
         "york_fig13" => york_dogbone_figures(args.quick, false),
+        "york_fig16" => york_airbag_figures(args.quick, true),
+        "york_fig17" => york_airbag_figures(args.quick, false),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -614,5 +627,133 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
         &energy,
     )?;
     println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// York Figs. 16–17: the airbag impact at cell size 10 mm (`--quick`:
+/// 20 mm). `shapes`: the bag's meridian and the probe at release, at the
+/// peak penetration and at the end (`york_fig16.png`, `york_fig16.csv`);
+/// otherwise the probe's displacement into the bag, the bag pressure (point
+/// mean and `p V` over the enclosed volume) and the energies against time
+/// (`york_fig17_displacement.png`, `york_fig17_pressure.png`,
+/// `york_fig17_energy.png`, `york_fig17.csv`).
+fn york_airbag_figures(quick: bool, shapes: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::york_airbag::{run_airbag, Airbag, AirbagSample};
+    let out = out_dir()?;
+    let h = if quick { 0.02 } else { 0.01 };
+    let r = run_airbag(&Airbag {
+        h,
+        ..Airbag::default()
+    })?;
+    if shapes {
+        let mut csv = String::from("t,kind,r,z\n");
+        let mut series = Vec::new();
+        for (t, pts) in &r.shapes {
+            let pen = r
+                .history
+                .iter()
+                .min_by(|a, b| (a.t - t).abs().total_cmp(&(b.t - t).abs()))
+                .map_or(0.0, |s| s.penetration);
+            let z0 = r.probe_bottom0 - pen;
+            let (pr, pl) = (Airbag::PROBE_RADIUS, Airbag::PROBE_LENGTH);
+            let probe = vec![(0.0, z0), (pr, z0), (pr, z0 + pl), (0.0, z0 + pl)];
+            for p in pts {
+                csv.push_str(&format!("{t},membrane,{},{}\n", p[0], p[1]));
+            }
+            for p in &probe {
+                csv.push_str(&format!("{t},probe,{},{}\n", p.0, p.1));
+            }
+            series.push(PlotSeries {
+                label: format!("bag, t = {:.1} ms", 1e3 * t),
+                points: pts.iter().map(|p| (p[0], p[1])).collect(),
+                style: Style::Line,
+            });
+            series.push(PlotSeries {
+                label: format!("probe, t = {:.1} ms", 1e3 * t),
+                points: probe,
+                style: Style::Line,
+            });
+        }
+        series.push(PlotSeries {
+            label: String::new(),
+            points: vec![(0.0, 0.0), (Airbag::R_MAX, Airbag::Z_MAX)],
+            style: Style::Markers,
+        });
+        std::fs::write(out.join("york_fig16.csv"), csv)?;
+        let path = out.join("york_fig16.png");
+        plot_xy(
+            &path,
+            &format!("York Fig. 16: airbag and probe (r-z), h = {} mm", 1e3 * h),
+            "r [m]",
+            "z [m]",
+            false,
+            false,
+            &series,
+        )?;
+        println!("wrote {}", path.display());
+        return Ok(());
+    }
+    std::fs::write(out.join("york_fig17.csv"), r.history_csv())?;
+    let col = |f: &dyn Fn(&AirbagSample) -> f64| {
+        r.history
+            .iter()
+            .map(|x| (1e3 * x.t, f(x)))
+            .collect::<Vec<_>>()
+    };
+    /// Curves of one plot: (label, points).
+    type Curves<'a> = Vec<(&'a str, Vec<(f64, f64)>)>;
+    let plots: [(&str, &str, &str, Curves); 3] = [
+        (
+            "york_fig17_displacement.png",
+            "York Fig. 17: probe displacement into the airbag",
+            "displacement [mm]",
+            vec![("probe", col(&|x| 1e3 * x.penetration))],
+        ),
+        (
+            "york_fig17_pressure.png",
+            "airbag pressure",
+            "pressure [Pa]",
+            vec![
+                ("gas point mean", col(&|x| x.mean_pressure)),
+                ("sum p V / V_bag", col(&|x| x.volume_pressure)),
+            ],
+        ),
+        (
+            "york_fig17_energy.png",
+            "airbag energies (change from release)",
+            "energy [J]",
+            vec![
+                ("probe kinetic", col(&|x| x.probe_kinetic)),
+                (
+                    "gas internal",
+                    col(&|x| x.gas_internal - r.inflated.gas_internal),
+                ),
+                ("gas kinetic", col(&|x| x.gas_kinetic)),
+                ("membrane strain", col(&|x| x.membrane_strain)),
+                ("total", col(&|x| x.total - r.inflated.total)),
+            ],
+        ),
+    ];
+    for (file, title, ylabel, lines) in plots {
+        let series: Vec<PlotSeries> = lines
+            .into_iter()
+            .map(|(label, points)| PlotSeries {
+                label: label.into(),
+                points,
+                style: Style::Line,
+            })
+            .collect();
+        let path = out.join(file);
+        plot_xy(
+            &path,
+            &format!("{title}, h = {} mm", 1e3 * h),
+            "t [ms]",
+            ylabel,
+            false,
+            false,
+            &series,
+        )?;
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }

@@ -9,4 +9,5 @@ pub mod membrane_fe;
 pub mod mms;
 pub mod riemann;
 pub mod york;
+pub mod york_airbag;
 pub mod york_membrane;

@@ -171,19 +171,39 @@ fn segment_length<const D: usize>(c: &MembraneChain, k: usize, x: &[SVector<f64,
 /// `spacing`: `n + 1` points from end to end when open, `n` when closed.
 /// Returns the points and the interval Δ (the perimeter or length / n).
 pub fn resample(vertices: &[[f64; 2]], closed: bool, spacing: f64) -> (Vec<[f64; 2]>, f64) {
+    resample_offset(vertices, closed, spacing, [false, false])
+}
+
+/// [`resample`] with an open polyline's ends optionally left bare: where
+/// `bare[e]` the first (last) point sits half an interval Δ inside that end
+/// instead of on it, so the end point's segment `Δ` runs to the curve's end
+/// (an axisymmetric surface closed at the axis: no ring of radius 0). The
+/// length is `(n + a + b) Δ` with `a, b = ½` at bare ends, 0 otherwise.
+pub fn resample_offset(
+    vertices: &[[f64; 2]],
+    closed: bool,
+    spacing: f64,
+    bare: [bool; 2],
+) -> (Vec<[f64; 2]>, f64) {
     let nv = vertices.len();
     let nseg = if closed { nv } else { nv - 1 };
     let seg = |i: usize| (vertices[i], vertices[(i + 1) % nv]);
     let len = |a: [f64; 2], b: [f64; 2]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
     let total: f64 = (0..nseg).map(|i| len(seg(i).0, seg(i).1)).sum();
+    let half = |b: bool| if b && !closed { 0.5 } else { 0.0 };
+    let (a0, b0) = (half(bare[0]), half(bare[1]));
     // (less a rounding allowance: a length of exactly k spacings gives k)
-    let n = ((total / spacing - 1e-9).ceil() as usize).max(if closed { 3 } else { 1 });
-    let delta = total / n as f64;
+    let n = ((total / spacing - a0 - b0 - 1e-9).ceil().max(0.0) as usize).max(if closed {
+        3
+    } else {
+        1
+    });
+    let delta = total / (n as f64 + a0 + b0);
     let npts = if closed { n } else { n + 1 };
     let mut out = Vec::with_capacity(npts);
     let (mut i, mut start) = (0usize, 0.0f64);
     for k in 0..npts {
-        let s = (k as f64 * delta).min(total);
+        let s = ((k as f64 + a0) * delta).min(total);
         while i + 1 < nseg && start + len(seg(i).0, seg(i).1) < s {
             start += len(seg(i).0, seg(i).1);
             i += 1;
@@ -343,6 +363,15 @@ mod tests {
         );
         assert_eq!(c.len(), 16);
         assert!((dc - 0.25).abs() < 1e-15);
+        // Both ends bare: points at the middles of n equal intervals.
+        let (p, d) = resample_offset(&[[0.0, 0.0], [0.0, 1.0]], false, 0.3, [true, true]);
+        assert_eq!(p.len(), 4);
+        assert!((d - 0.25).abs() < 1e-15);
+        assert!((p[0][1] - 0.125).abs() < 1e-15 && (p[3][1] - 0.875).abs() < 1e-15);
+        // One bare end: the other end keeps its point.
+        let (p, d) = resample_offset(&[[0.0, 0.0], [0.0, 1.0]], false, 0.3, [true, false]);
+        assert!((d - 1.0 / 3.5).abs() < 1e-15);
+        assert!((p[0][1] - 0.5 * d).abs() < 1e-15 && (p[p.len() - 1][1] - 1.0).abs() < 1e-15);
     }
 
     #[test]

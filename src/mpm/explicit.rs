@@ -950,19 +950,25 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
 }
 
 /// The stress update of a membrane point (York Sec. 3.2) with unit tangent
-/// `t`: the strain rate projected on the tangent, `ε̇_tt = t·L·t`, advances
-/// the tangential stress `s` ([`crate::material::MembraneLaw::update`]);
-/// the stress goes back to the global frame as `σ = s t⊗t + ν s e₃⊗e₃`
-/// (York Eq. 15 takes it from there). The point's volume follows its
-/// length at constant thickness, `V = λ V⁰` with `λ ← λ(1 + Δt ε̇_tt)`, and
-/// `work` gathers the stress power `V s ε̇_tt` per unit reference volume.
-/// Returns false when the stretch is not positive and finite.
+/// `t`: the strain rate projected on the tangent, `ε̇_tt = t·L·t`, and the
+/// out-of-plane rate `eps_hoop` (0 in plane 2D; the hoop rate `v_r / r` of
+/// a ring in r–z) advance the in-surface stresses `(s_tt, s₃₃)`
+/// ([`crate::material::MembraneLaw::update`], plane stress through the
+/// thickness); the stress goes back to the global frame as
+/// `σ = s_tt t⊗t + s₃₃ e₃⊗e₃` (York Eq. 15 takes it from there; in r–z
+/// the kernels' hoop term carries `s₃₃ = σ_θθ` to the nodes). The point's
+/// volume follows its length and (r–z) its radius at constant thickness,
+/// `V = λ V⁰` with `λ ← λ(1 + Δt ε̇_tt)(1 + Δt ε̇₃₃)` (per radian
+/// `V = r h Δs`), and `work` gathers the stress power
+/// `V (s_tt ε̇_tt + s₃₃ ε̇₃₃)` per unit reference volume. Returns false when
+/// the stretch is not positive and finite.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 fn membrane_update<const D: usize>(
     m: &crate::material::MembraneLaw,
     t: &SVector<f64, D>,
     l: &SMatrix<f64, D, D>,
+    eps_hoop: f64,
     dt: f64,
     vol0: f64,
     stress: &mut Matrix3<f64>,
@@ -970,24 +976,24 @@ fn membrane_update<const D: usize>(
     vol: &mut f64,
 ) -> bool {
     let eps_rate = t.dot(&(l * t));
-    let lam = *vol / vol0 * (1.0 + dt * eps_rate);
+    let lam = *vol / vol0 * (1.0 + dt * eps_rate) * (1.0 + dt * eps_hoop);
     if !(lam.is_finite() && lam > 0.0) {
         return false;
     }
     // The in-plane trace of σ = s t⊗t is s in any frame.
-    let s_old: f64 = (0..D).map(|i| stress[(i, i)]).sum();
-    let s = m.update(s_old, eps_rate, dt);
+    let s_old = [(0..D).map(|i| stress[(i, i)]).sum(), stress[(2, 2)]];
+    let s = m.update(s_old, [eps_rate, eps_hoop], dt);
     let mut sigma = Matrix3::zeros();
     for i in 0..D {
         for j in 0..D {
-            sigma[(i, j)] = s * t[i] * t[j];
+            sigma[(i, j)] = s[0] * t[i] * t[j];
         }
     }
     if D < 3 {
-        sigma[(2, 2)] += m.out_of_plane(s);
+        sigma[(2, 2)] = s[1];
     }
     *stress = sigma;
-    *work += dt * lam * 0.5 * (s_old + s) * eps_rate;
+    *work += dt * lam * 0.5 * ((s_old[0] + s[0]) * eps_rate + (s_old[1] + s[1]) * eps_hoop);
     *vol = lam * vol0;
     true
 }
@@ -1097,7 +1103,22 @@ fn g2p<
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
                 if has_membrane {
                     if let Some(m) = ctx.materials[mat[p] as usize].membrane() {
-                        if !membrane_update(m, &tangent[p], &l, dt, vol0[p], sp, wp, vp_vol) {
+                        // r–z: a membrane point is a ring of radius r > 0
+                        // whose hoop rate is v_r / r.
+                        let eps_hoop = if AXI { v_r / r_old } else { 0.0 };
+                        if (AXI && r_old <= 0.0)
+                            || !membrane_update(
+                                m,
+                                &tangent[p],
+                                &l,
+                                eps_hoop,
+                                dt,
+                                vol0[p],
+                                sp,
+                                wp,
+                                vp_vol,
+                            )
+                        {
                             failed.fetch_min(p, Ordering::Relaxed);
                         }
                         return;
@@ -1161,7 +1182,8 @@ fn g2p<
         return Err(ctx.fail(
             Some(p),
             None,
-            "deformation gradient inverted or not finite (J ≤ 0); try a smaller CFL",
+            "deformation gradient inverted or not finite (J ≤ 0; a membrane point: stretch not \
+             positive, or in r–z its ring reached the axis, r ≤ 0); try a smaller CFL",
         ));
     }
     Ok(())

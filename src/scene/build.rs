@@ -99,15 +99,27 @@ fn membrane_material(m: &MaterialSpec) -> SolidMaterial {
 /// The ordered points of a membrane object's curve (York Sec. 3.2) at most
 /// `spacing` apart, whether the curve is closed, and the arc length Δ
 /// between neighbours.
-fn membrane_curve(g: &Geometry, spacing: f64) -> (Vec<[f64; 2]>, bool, f64) {
+///
+/// Axisymmetric (`axis`): an open polyline's end on the axis (r = 0) gets
+/// no point (a ring of radius 0 has no volume and no hoop rate); the points
+/// start half an interval from it and the end point's segment reaches the
+/// axis ([`membrane::resample_offset`]). Returns, per point, the share of
+/// Δ its segment covers (½ at an end that has a point, 1 elsewhere).
+fn membrane_curve(g: &Geometry, spacing: f64, axis: bool) -> (Vec<[f64; 2]>, bool, f64, [f64; 2]) {
     match g {
         Geometry::Polyline { vertices, closed } => {
-            let (p, d) = membrane::resample(vertices, *closed, spacing);
-            (p, *closed, d)
+            let on_axis = |v: &[f64; 2]| axis && !*closed && v[0] == 0.0;
+            let bare = [
+                on_axis(&vertices[0]),
+                on_axis(&vertices[vertices.len() - 1]),
+            ];
+            let (p, d) = membrane::resample_offset(vertices, *closed, spacing, bare);
+            let share = bare.map(|b| if b { 1.0 } else { 0.5 });
+            (p, *closed, d, share)
         }
         Geometry::Circle { center, radius } => {
             let (p, d) = membrane::circle_points([center[0], center[1]], *radius, spacing);
-            (p, true, d)
+            (p, true, d, [1.0; 2])
         }
         Geometry::DogBone {
             center,
@@ -123,10 +135,10 @@ fn membrane_curve(g: &Geometry, spacing: f64) -> (Vec<[f64; 2]>, bool, f64) {
                 spacing / 64.0,
             );
             let (p, d) = membrane::resample(&outline, true, spacing);
-            (p, true, d)
+            (p, true, d, [1.0; 2])
         }
         // Validation admits only the curves above.
-        _ => (Vec::new(), true, spacing),
+        _ => (Vec::new(), true, spacing, [1.0; 2]),
     }
 }
 
@@ -231,15 +243,24 @@ fn fill_objects<const D: usize>(
             .unwrap_or_else(SVector::zeros);
         if let Some(law) = materials[mat_index].membrane() {
             // York Sec. 3: mass from the areal density ρ h and the spacing
-            // (per unit depth in 2D); an open chain's ends carry half.
+            // (per unit depth in 2D, per radian in r–z: V = r h Δ); an open
+            // chain's ends carry half unless they sit next to the axis.
             let spacing = obj.spacing.unwrap_or(grid.h.min());
-            let (pts, closed, delta) = membrane_curve(&obj.geometry, spacing);
+            let axi = grid.axisymmetric;
+            let (pts, closed, delta, ends) = membrane_curve(&obj.geometry, spacing, axi);
             let before = particles.len();
             let s0 = obj.prestress.unwrap_or(0.0);
+            // Plane 2D: s₃₃ = ν s₀ (ε₃₃ = 0); r–z: an equal biaxial
+            // prestress (meridian and hoop, as in a sphere).
+            let s0_3 = if axi { s0 } else { law.out_of_plane(s0) };
             for (k, xy) in pts.iter().enumerate() {
-                let end = !closed && (k == 0 || k + 1 == pts.len());
-                let share = if end { 0.5 } else { 1.0 };
-                let vol = law.thickness * delta * share;
+                let share = match (closed, k) {
+                    (false, 0) => ends[0],
+                    (false, k) if k + 1 == pts.len() => ends[1],
+                    _ => 1.0,
+                };
+                let r = if axi { xy[0] } else { 1.0 };
+                let vol = law.thickness * delta * share * r;
                 let x = SVector::<f64, D>::from_fn(|d, _| if d < 2 { xy[d] } else { 0.0 });
                 particles.push(
                     x,
@@ -253,8 +274,8 @@ fn fill_objects<const D: usize>(
                 // The prestress as an in-plane trace; the first frame update
                 // turns it along the tangent.
                 particles.stress[p][(0, 0)] = s0;
-                particles.stress[p][(2, 2)] = law.out_of_plane(s0);
-                particles.work[p] = law.energy_of(s0);
+                particles.stress[p][(2, 2)] = s0_3;
+                particles.work[p] = law.energy_of([s0, s0_3]);
             }
             if let Some(q) = (before..particles.len()).find(|&q| {
                 (0..D).any(|d| {

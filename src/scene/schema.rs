@@ -2204,23 +2204,7 @@ impl Scene {
                 ),
             ));
         }
-        if let Some(i) = self
-            .materials
-            .iter()
-            .position(|m| m.kind == MaterialKind::Membrane)
-        {
-            // A membrane of revolution needs its hoop stress from v_r/r in
-            // the membrane law (plane stress in the meridian and hoop
-            // directions); its 2D law is plane strain along the sheet.
-            return Err(err(
-                "grid.axisymmetric",
-                format!(
-                    "membranes (`{}`, materials[{i}]) are plane 2D only for now; allowed with \
-                     membranes: grid.axisymmetric = false",
-                    self.materials[i].name
-                ),
-            ));
-        }
+        self.validate_axisymmetric_membranes()?;
         if g.lower[0] < 0.0 {
             return Err(err(
                 "grid.lower",
@@ -2237,6 +2221,68 @@ impl Scene {
                 "must be \"symmetry\" when grid.axisymmetric = true and grid.lower[0] = 0 \
                  (the face is the axis r = 0)",
             ));
+        }
+        Ok(())
+    }
+
+    /// Membranes of revolution (York Sec. 3.2 in r–z): every point of a
+    /// membrane curve at r ≥ 0; a closed curve (a torus-like surface) at
+    /// r > 0 everywhere, since a ring of radius 0 has no hoop rate `v_r/r`.
+    /// An open polyline may end on the axis (r = 0: a surface closed at its
+    /// pole).
+    fn validate_axisymmetric_membranes(&self) -> Result<(), SceneError> {
+        for (i, o) in self.objects.iter().enumerate() {
+            let is_membrane = self
+                .materials
+                .iter()
+                .any(|m| m.name == o.material && m.kind == MaterialKind::Membrane);
+            if !is_membrane {
+                continue;
+            }
+            let p = |k: &str| format!("objects[{i}].geometry.{k}");
+            let radial = "is the radius r in an axisymmetric scene (grid.axisymmetric = true)";
+            match &o.geometry {
+                Geometry::Polyline { vertices, closed } => {
+                    for (k, v) in vertices.iter().enumerate() {
+                        if v[0] < 0.0 || (*closed && v[0] == 0.0) {
+                            return Err(err(
+                                p(&format!("vertices[{k}]")),
+                                format!(
+                                    "x = {} {radial}; allowed: x ≥ 0 on an open polyline (an \
+                                     end at x = 0 closes the surface at the axis), x > 0 on a \
+                                     closed one",
+                                    v[0]
+                                ),
+                            ));
+                        }
+                    }
+                }
+                Geometry::Circle { center, radius } if center[0] - radius <= 0.0 => {
+                    return Err(err(
+                        p("center"),
+                        format!(
+                            "center[0] − radius = {} {radial}; allowed: > 0 (the ring of \
+                             revolution must stay off the axis)",
+                            center[0] - radius
+                        ),
+                    ));
+                }
+                Geometry::DogBone {
+                    center,
+                    lobe_radius,
+                    lobe_offset,
+                    ..
+                } if center[0] - lobe_offset - lobe_radius <= 0.0 => {
+                    return Err(err(
+                        p("center"),
+                        format!(
+                            "center[0] − lobe_offset − lobe_radius = {} {radial}; allowed: > 0",
+                            center[0] - lobe_offset - lobe_radius
+                        ),
+                    ));
+                }
+                _ => {}
+            }
         }
         Ok(())
     }

@@ -85,6 +85,11 @@ pub const STUDIES: &[Study] = &[
         york_studies::york_dogbone,
     ),
     (
+        "york_airbag",
+        "York 4.4 airbag impact (axisymmetric membrane points): penetration, pressure, p V^gamma, energy vs h",
+        york_studies::york_airbag,
+    ),
+    (
         "lian_membrane",
         "Lian 4 Belytschko-Tsay membrane quads: pre-tensioned square period vs c/(sqrt2 L), Hencky disc w0, point-load hourglass share",
         lian_studies::lian_membrane,
