@@ -500,8 +500,10 @@ fn bad_membrane_scenes_name_their_key() {
                 "[time]",
                 "[grid]\ndim = 3\nlower = [0,0,0]\nupper = [1,1,1]\ncells = [1,1,1]\n\n[time]",
             ),
-            "grid".to_string(),
-            "grid contact",
+            // A grid brings MPM bodies (in contact with the membranes):
+            // without materials it is incomplete.
+            "materials".to_string(),
+            "at least one material",
         ),
         (
             edit("thickness = 1e-3", "thickness = 1e-3\nthicknes = 2"),
