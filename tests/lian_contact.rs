@@ -226,6 +226,7 @@ fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
         per_cell: 2,
         end: 0.5,
         every: 0.05,
+        law: mpmice::contact::ContactLaw::Stick,
     };
     let dir = std::env::temp_dir().join("mpmice_test_lian_gas");
     std::fs::create_dir_all(&dir).expect("dir");

@@ -27,6 +27,8 @@ pub struct GasExpansion {
     pub end: f64,
     /// History interval.
     pub every: f64,
+    /// The contact law between gas and membrane.
+    pub law: ContactLaw,
 }
 
 /// What a run gives.
@@ -83,6 +85,7 @@ impl GasExpansion {
             per_cell: 4,
             end,
             every: 0.01,
+            law: ContactLaw::Stick,
         }
     }
 
@@ -133,13 +136,17 @@ fix = [
   {{ box = {{ lower = [-0.001, 0.99, -1.0], upper = [0.001, 1.01, 1.0] }}, dofs = ["x"] }},
 ]
 [contact]
-law = "slip"
+law = "{law}"
 "#,
             end = self.end,
             ppc = self.per_cell,
             z0 = z[0],
             z1 = z[1],
             mesh = mesh.display(),
+            law = match self.law {
+                ContactLaw::Stick => "stick",
+                ContactLaw::Slip { .. } => "slip",
+            },
         )
     }
 
@@ -156,7 +163,7 @@ law = "slip"
         let solid = ExplicitSolid {
             run: build_solid_run::<3>(&scene)?,
         };
-        let mut m = MembraneContact::new(solid, fe, ContactLaw::Slip { friction: 0.0 });
+        let mut m = MembraneContact::new(solid, fe, self.law);
         let start = Instant::now();
         let mut out = GasExpansionRun::default();
         let mut row = Vec::new();

@@ -128,11 +128,13 @@ pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
 /// R = 1.5/(π/2) = 0.9549 (quarter perimeter 1.5; the stretch at p R/(E t)
 /// ≈ 5e-5 is negligible; the paper reports 0.96); extras: the radii at 0°
 /// and 90°, their relative difference, the energy change and the escaped
-/// gas points. `LIAN_GAS_END` sets the end time (default 3).
+/// gas points; one series with stick contact, one with free slip.
+/// `LIAN_GAS_END` sets the end time (default 3).
 ///
 /// # Errors
 /// A failed run.
 pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
+    use mpmice::contact::ContactLaw;
     use mpmice::diagnostics::lian_gas::GasExpansion;
     let end = std::env::var("LIAN_GAS_END")
         .ok()
@@ -150,21 +152,27 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
         "end t = {end}; reference: inextensible quarter perimeter 1.5 -> R = {exact:.6}; paper 0.96, \
          energy loss about 5 %"
     )];
-    let mut pts = Vec::new();
-    for &(h, per_cell) in sizes {
-        let case = GasExpansion {
-            element: h,
-            cell: h,
-            per_cell,
-            end,
-            every: 0.01,
-        };
-        let r = case.run(&dir).with_context(|| format!("h = {h}"))?;
-        let last = r.t.len() - 1;
-        let (r0, r90, rm) = (r.r0[last], r.r90[last], r.r_mean[last]);
-        let de = r.energy[last] / r.energy[0] - 1.0;
-        notes.push(format!(
-            "h = {h}: mean radius {rm:.4}, r(0°) {r0:.4}, r(90°) {r90:.4}, |r0 - r90|/r {:.3e}, \
+    let mut series = Vec::new();
+    for (name, law) in [
+        ("stick", ContactLaw::Stick),
+        ("slip", ContactLaw::Slip { friction: 0.0 }),
+    ] {
+        let mut pts = Vec::new();
+        for &(h, per_cell) in sizes {
+            let case = GasExpansion {
+                element: h,
+                cell: h,
+                per_cell,
+                end,
+                every: 0.01,
+                law,
+            };
+            let r = case.run(&dir).with_context(|| format!("{name}, h = {h}"))?;
+            let last = r.t.len() - 1;
+            let (r0, r90, rm) = (r.r0[last], r.r90[last], r.r_mean[last]);
+            let de = r.energy[last] / r.energy[0] - 1.0;
+            notes.push(format!(
+            "{name}, h = {h}: mean radius {rm:.4}, r(0°) {r0:.4}, r(90°) {r90:.4}, |r0 - r90|/r {:.3e}, \
              energy change {de:+.3e}, gas kinetic {:.3e} (of {:.4} total), escaped {}, {} steps, {:.1} s",
             (r0 - r90).abs() / rm,
             r.gas_kinetic[last],
@@ -173,23 +181,29 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
             r.steps,
             r.wall_s
         ));
-        pts.push(
-            Point::new(
-                h,
-                (rm - exact).abs() / exact,
-                r.wall_s,
-                r.steps as f64 / r.wall_s,
-            )
-            .with_extra("r_mean", rm)
-            .with_extra("r_0", r0)
-            .with_extra("r_90", r90)
-            .with_extra("energy_change", de)
-            .with_extra("escaped", r.escaped as f64),
-        );
+            pts.push(
+                Point::new(
+                    h,
+                    (rm - exact).abs() / exact,
+                    r.wall_s,
+                    r.steps as f64 / r.wall_s,
+                )
+                .with_extra("r_mean", rm)
+                .with_extra("r_0", r0)
+                .with_extra("r_90", r90)
+                .with_extra("energy_change", de)
+                .with_extra("escaped", r.escaped as f64),
+            );
+        }
+        series.push(Series::new(
+            format!("final mean radius, {name} contact"),
+            "relative",
+            pts,
+        ));
     }
     Ok(StudyResult {
         study: "lian_gas_expansion".into(),
-        series: vec![Series::new("final mean radius", "relative", pts)],
+        series,
         notes,
     })
 }
