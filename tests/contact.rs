@@ -110,7 +110,6 @@ impl<const D: usize> Scene<D> {
             }
             x.push(p);
         }
-        let nn = num;
         let mut normal = SVector::<f64, D>::zeros();
         normal[D - 1] = 1.0;
         let nodes = grid.num_nodes();
@@ -126,10 +125,10 @@ impl<const D: usize> Scene<D> {
             gs: GridState::new(nodes),
             scratch: StepScratch::default(),
             grad: vec![SVector::zeros(); nodes],
-            contact: GridContact::new(nodes),
-            m: vec![layer_mass; nn],
-            v: vec![SVector::zeros(); nn],
-            n: vec![normal; nn],
+            contact: GridContact::new(&grid),
+            m: vec![layer_mass; num],
+            v: vec![SVector::zeros(); num],
+            n: vec![normal; num],
             x,
             gravity,
             dt: 0.3 * H / c,
@@ -189,8 +188,7 @@ impl<const D: usize> Scene<D> {
         self.grid.mirror_ghosts(&mut self.gs.accel);
         mpm.g2p(&mut self.particles, &self.gs, &mut self.scratch)
             .expect("g2p");
-        self.contact
-            .correct_points(&self.grid, &self.x, self.dt, &mut self.v);
+        self.contact.correct_points(self.dt, &mut self.v);
         for (x, v) in self.x.iter_mut().zip(&self.v) {
             *x += v * self.dt;
         }

@@ -27,10 +27,11 @@
 use nalgebra::SVector;
 
 use crate::grid::Grid;
+use crate::mpm::explicit::offset;
 use crate::shape::{LinearHat, ParticleWeights};
 
 mod run;
-pub use run::{node_normals, MembraneContactRun};
+pub use run::{node_normals, MembraneContactStep};
 
 /// How the contact force acts tangentially.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,7 +122,7 @@ impl ContactStats {
 /// body's nodal mass, momentum and normal, the contact force on it, and
 /// the list of nodes it touches (so every pass is over that list, not the
 /// whole grid — a membrane is a surface in a volume of nodes).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct GridContact<const D: usize> {
     /// `m_I^r` (Lian Eq. 49).
     pub mass: Vec<f64>,
@@ -135,6 +136,11 @@ pub struct GridContact<const D: usize> {
     pub touched: Vec<usize>,
     /// Whether a held point reaches the node.
     pub held: Vec<bool>,
+    /// Each point's weights and first node from [`Self::map_points`], for
+    /// the correction back (Eq. 59) at the same positions.
+    weights: Vec<(ParticleWeights<D, 2>, usize)>,
+    /// The grid's strides.
+    strides: [usize; D],
 }
 
 /// The 2^D linear-hat weights of point `x` and the flat index of their
@@ -152,15 +158,10 @@ fn hat_weights<const D: usize>(
     Some((pw, grid.node_index(pw.base())))
 }
 
-/// Flat offset of a stencil multi-index.
-#[inline]
-fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
-    (0..D).map(|d| m[d] * strides[d]).sum()
-}
-
 impl<const D: usize> GridContact<D> {
-    /// Buffers for a grid of `n` nodes.
-    pub fn new(n: usize) -> Self {
+    /// Buffers for `grid`.
+    pub fn new(grid: &Grid<D>) -> Self {
+        let n = grid.num_nodes();
         Self {
             mass: vec![0.0; n],
             momentum: vec![SVector::zeros(); n],
@@ -168,6 +169,8 @@ impl<const D: usize> GridContact<D> {
             force: vec![SVector::zeros(); n],
             touched: Vec::with_capacity(n.min(4096)),
             held: vec![false; n],
+            weights: Vec::new(),
+            strides: grid.strides(),
         }
     }
 
@@ -185,11 +188,13 @@ impl<const D: usize> GridContact<D> {
             self.held[i] = false;
         }
         self.touched.clear();
-        let strides = grid.strides();
+        self.weights.clear();
+        let strides = self.strides;
         for k in 0..body.x.len() {
             let Some((pw, base)) = hat_weights(grid, &body.x[k]) else {
                 return Err(k);
             };
+            self.weights.push((pw, base));
             let (m, p, n) = (body.mass[k], body.v[k] * body.mass[k], body.normal[k]);
             let held = body.held.get(k).copied().unwrap_or(false);
             pw.for_each(|o, w, _| {
@@ -289,20 +294,11 @@ impl<const D: usize> GridContact<D> {
     }
 
     /// Step 4(d) for the points: `v_K = v̄_K + Δt Σ_I N_I(x_K) f_I^r / m_I^r`
-    /// (Lian Eq. 59), at the positions the points were mapped from.
-    pub fn correct_points(
-        &self,
-        grid: &Grid<D>,
-        x: &[SVector<f64, D>],
-        dt: f64,
-        v: &mut [SVector<f64, D>],
-    ) {
-        let strides = grid.strides();
-        for (xk, vk) in x.iter().zip(v.iter_mut()) {
-            // Mapped by `map_points` already: on the grid.
-            let Some((pw, base)) = hat_weights(grid, xk) else {
-                continue;
-            };
+    /// (Lian Eq. 59), with the weights of the last [`Self::map_points`] (the
+    /// positions the points were mapped from; `v` in the same order).
+    pub fn correct_points(&self, dt: f64, v: &mut [SVector<f64, D>]) {
+        let strides = self.strides;
+        for ((pw, base), vk) in self.weights.iter().zip(v.iter_mut()) {
             pw.for_each(|o, w, _| {
                 let i = base + offset(o, &strides);
                 if w > 0.0 && self.mass[i] > 0.0 {

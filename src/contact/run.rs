@@ -26,7 +26,7 @@ use crate::stepper::SolidRun;
 /// The buffers of the coupled step: per membrane its grid contact and
 /// nodal normals, and the MPM body's nodal mass gradient. The state itself
 /// (the MPM run, the membranes) stays with the caller.
-pub struct MembraneContactRun {
+pub struct MembraneContactStep {
     /// Stick or Coulomb slip.
     pub law: ContactLaw,
     /// One set of grid contact buffers per membrane.
@@ -55,13 +55,15 @@ fn failure(solid: &SolidRun<3>, what: String) -> Error {
     }
 }
 
-impl MembraneContactRun {
+impl MembraneContactStep {
     /// Buffers for `solid`'s grid and `meshes`.
     pub fn new(solid: &SolidRun<3>, meshes: &[MembraneMesh], law: ContactLaw) -> Self {
         let n = solid.grid.num_nodes();
         Self {
             law,
-            contact: (0..meshes.len()).map(|_| GridContact::new(n)).collect(),
+            contact: (0..meshes.len())
+                .map(|_| GridContact::new(&solid.grid))
+                .collect(),
             normals: meshes
                 .iter()
                 .map(|m| vec![V3::zeros(); m.num_nodes()])
@@ -146,7 +148,7 @@ impl MembraneContactRun {
                 self.law,
                 dt,
             );
-            self.contact[k].correct_points(&s.grid, &mesh.x, dt, &mut mesh.v);
+            self.contact[k].correct_points(dt, &mut mesh.v);
             // The wall holds a fixed direction; it takes the reaction.
             mesh.apply_fixed();
             step_stats.add(&st);

@@ -94,7 +94,6 @@ impl GasExpansion {
         let depth = self.cell;
         let n = (1.6 / self.cell).round() as usize;
         let upper = n as f64 * self.cell;
-        let z = [0.0, depth];
         format!(
             r#"
 [grid]
@@ -120,7 +119,7 @@ cv = 1.0
 viscosity = 0.1
 [[objects]]
 material = "gas"
-geometry = {{ type = "box", lower = [0.0, 0.0, {z0}], upper = [0.45, 0.95, {z1}] }}
+geometry = {{ type = "box", lower = [0.0, 0.0, 0.0], upper = [0.45, 0.95, {depth}] }}
 density = 1.0
 pressure = 10.0
 [[membrane_elements]]
@@ -140,8 +139,6 @@ law = "{law}"
 "#,
             end = self.end,
             ppc = self.per_cell,
-            z0 = z[0],
-            z1 = z[1],
             mesh = mesh.display(),
             law = match self.law {
                 ContactLaw::Stick => "stick",
@@ -189,7 +186,7 @@ law = "{law}"
     }
 }
 
-/// Mid-depth membrane polyline (the nodes on z = 0) in order.
+/// The membrane's outline: its nodes on z = 0, in order.
 fn outline(m: &MembraneContact) -> Vec<(f64, f64)> {
     let sheet = &m.membranes.meshes[0];
     sheet

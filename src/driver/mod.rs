@@ -43,12 +43,7 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
             let solid = models::ExplicitSolid {
                 run: crate::scene::build_solid_run::<3>(scene)?,
             };
-            let law = scene
-                .contact
-                .as_ref()
-                .map_or(crate::contact::ContactLaw::Slip { friction: 0.0 }, |c| {
-                    c.law()
-                });
+            let law = scene.contact.clone().unwrap_or_default().law();
             let mut m = models::MembraneContact::new(solid, fe, law);
             run_model(&mut m, scene, opts, threads)
         });

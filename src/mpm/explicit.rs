@@ -743,7 +743,7 @@ fn clear<const D: usize>(gs: &mut GridState<D>) {
 
 /// Flat node offsets of a stencil multi-index.
 #[inline(always)]
-fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
+pub(crate) fn offset<const D: usize>(m: [usize; D], strides: &[usize; D]) -> usize {
     let mut o = 0;
     for d in 0..D {
         o += m[d] * strides[d];

@@ -62,8 +62,9 @@ pub struct Scene {
     pub contact: Option<ContactSpec>,
 }
 
-/// How membrane elements and MPM bodies touch on the grid (Lian Sec. 5).
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// How membrane elements and MPM bodies touch on the grid (Lian Sec. 5);
+/// the default (no `[contact]` table) is free slip.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// `stick` (Lian Eq. 55) or `slip` (Coulomb, Eq. 58).

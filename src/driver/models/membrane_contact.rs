@@ -1,10 +1,10 @@
 //! Lian's coupled system as a model of the run loop: MPM bodies (solids,
 //! gas points) and membranes of finite elements joined by the grid contact
-//! (Lian Sec. 5–6, [`crate::contact::MembraneContactRun`]), in 3D. The MPM
+//! (Lian Sec. 5–6, [`crate::contact::MembraneContactStep`]), in 3D. The MPM
 //! part is an [`ExplicitSolid`], the membranes a [`MembraneFe`]; this model
 //! steps them together and reports both.
 
-use crate::contact::{ContactLaw, MembraneContactRun};
+use crate::contact::{ContactLaw, MembraneContactStep};
 use crate::driver::model::{
     Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
 };
@@ -19,13 +19,13 @@ pub struct MembraneContact {
     /// The membranes (their time follows the MPM's).
     pub membranes: MembraneFe,
     /// The contact's buffers and totals.
-    pub contact: MembraneContactRun,
+    pub contact: MembraneContactStep,
 }
 
 impl MembraneContact {
     /// Joins the two parts with the contact `law`.
     pub fn new(solid: ExplicitSolid<3>, membranes: MembraneFe, law: ContactLaw) -> Self {
-        let contact = MembraneContactRun::new(&solid.run, &membranes.meshes, law);
+        let contact = MembraneContactStep::new(&solid.run, &membranes.meshes, law);
         Self {
             solid,
             membranes,
@@ -99,15 +99,16 @@ impl Model for MembraneContact {
     }
 
     fn history_row(&self, row: &mut Vec<f64>) {
-        let mut solid = Vec::new();
-        self.solid.history_row(&mut solid);
-        let mut fe = Vec::new();
-        self.membranes.history_row(&mut fe);
-        // Solid: kinetic, strain, potential, total; membranes: kinetic,
-        // strain, external work, hourglass, damping, total.
-        row.extend_from_slice(&solid[..3]);
-        row.extend_from_slice(&fe[..5]);
-        row.push(solid[3] + fe[5]);
+        // Solid: kinetic, strain, potential, total; then the membranes:
+        // kinetic, strain, external work, hourglass, damping, total. The
+        // solid's total goes, the membranes' becomes the sum.
+        let start = row.len();
+        self.solid.history_row(row);
+        let solid_total = row.remove(start + 3);
+        self.membranes.history_row(row);
+        if let Some(total) = row.last_mut() {
+            *total += solid_total;
+        }
         row.push(self.contact.last.contact_nodes as f64);
         row.push(self.contact.totals.normal_impulse);
     }
