@@ -44,6 +44,8 @@
 //! 11. Specific volumes (Eqs. 40–41); 12. fluid advection
 //!     ([`ice::stage_advect`]); 13. G2P (Eqs. 26–27).
 
+pub mod reaction;
+
 use std::ops::Mul;
 
 use nalgebra::SVector;
@@ -255,6 +257,10 @@ pub struct CoupledRun<const D: usize> {
     node_scalar: Vec<f64>,
     /// Per cell: a field's exchange temperature change.
     cell_scalar: Vec<f64>,
+    /// Reactions (solid field → product fluid), applied at the end of each
+    /// step ([`reaction`]).
+    pub reactions: Vec<reaction::Reaction>,
+    burn_scratch: reaction::BurnScratch<D>,
 }
 
 impl<const D: usize> CoupledRun<D> {
@@ -420,6 +426,8 @@ impl<const D: usize> CoupledRun<D> {
             cfl,
             steps: 0,
             ws,
+            reactions: Vec::new(),
+            burn_scratch: reaction::BurnScratch::default(),
         };
         run.initialise()?;
         Ok(run)
@@ -569,6 +577,13 @@ impl<const D: usize> CoupledRun<D> {
         Ok(())
     }
 
+    /// Sets every reaction's time-step limit for the first step (a dry
+    /// run of the burn: nothing changes). Called by whoever adds reactions
+    /// to a new run.
+    pub fn init_reactions(&mut self) {
+        self.react(0.0);
+    }
+
     /// Steps until time `t_end` (the last step shortened to land on it).
     ///
     /// # Errors
@@ -601,7 +616,12 @@ impl<const D: usize> CoupledRun<D> {
             .filter(|f| f.rigid_velocity.is_none() && !f.particles.is_empty())
             .map(|f| stable_dt(&self.grid, &self.materials, &f.particles, self.cfl))
             .fold(f64::INFINITY, f64::min);
-        fluid_dt.min(solid_dt)
+        let burn_dt = self
+            .reactions
+            .iter()
+            .map(|r| r.dt_limit)
+            .fold(f64::INFINITY, f64::min);
+        fluid_dt.min(solid_dt).min(burn_dt)
     }
 
     /// Accumulated MPM phase times, summed over the fields.
@@ -866,7 +886,51 @@ impl<const D: usize> CoupledRun<D> {
         }
         // Step 12: fluid advection and the commit of the cell state.
         let info = ice::stage_advect(&mut self.fluid, &self.ice, &mut self.ws, info)?;
+        // Step 4 (operator split, [`reaction`]): the step's burn, with its
+        // Δt and pressure; the next equilibration fits the product in.
+        self.react(info.dt);
         Ok(info)
+    }
+
+    /// What the reactions have done since the start, summed.
+    pub fn reaction_totals(&self) -> reaction::ReactionTotals {
+        let mut t = reaction::ReactionTotals::default();
+        for r in &self.reactions {
+            t.mass += r.totals.mass;
+            t.energy += r.totals.energy;
+            t.heat += r.totals.heat;
+        }
+        t
+    }
+
+    /// Applies every reaction's surface burn over a step of `dt`.
+    fn react(&mut self, dt: f64) {
+        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        for r in &mut self.reactions {
+            let product_cv = self.fluid.materials[r.product].eos.specific_heat_cv();
+            let pc = &mut self.fluid.cells[r.product];
+            let mut cells = reaction::ProductCells {
+                mass: &mut pc.mass,
+                velocity: &mut pc.velocity,
+                temperature: &mut pc.temperature,
+                cv: product_cv,
+            };
+            let (step, dt_limit) = reaction::burn(
+                &self.fluid.layout,
+                &r.law,
+                r.reactant_cv,
+                dt,
+                &self.fluid.pressure,
+                &mut self.fields[r.field].particles,
+                uniform_t,
+                &mut cells,
+                &mut self.burn_scratch,
+            );
+            r.dt_limit = dt_limit;
+            r.totals.mass += step.mass;
+            r.totals.energy += step.energy;
+            r.totals.heat += step.heat;
+        }
     }
 }
 

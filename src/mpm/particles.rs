@@ -88,6 +88,31 @@ impl<const D: usize> Particles<D> {
         out
     }
 
+    /// Keeps the particles `p` with `keep[p]`, in order, in place (no
+    /// allocation).
+    pub fn retain(&mut self, keep: &[bool]) {
+        fn retain_by<T>(v: &mut Vec<T>, keep: &[bool]) {
+            let mut i = 0;
+            v.retain(|_| {
+                i += 1;
+                keep[i - 1]
+            });
+        }
+        retain_by(&mut self.x, keep);
+        retain_by(&mut self.x0, keep);
+        retain_by(&mut self.v, keep);
+        retain_by(&mut self.mass, keep);
+        retain_by(&mut self.vol0, keep);
+        retain_by(&mut self.vol, keep);
+        retain_by(&mut self.half_size, keep);
+        retain_by(&mut self.f, keep);
+        retain_by(&mut self.stress, keep);
+        retain_by(&mut self.work, keep);
+        retain_by(&mut self.material, keep);
+        retain_by(&mut self.temperature, keep);
+        retain_by(&mut self.plastic_strain, keep);
+    }
+
     /// Appends copies of all of `other`'s particles.
     pub fn append(&mut self, other: &Self) {
         for p in 0..other.len() {

@@ -938,5 +938,33 @@ pub fn build_coupled_run<const D: usize>(
     .map_err(|e| SceneError::new("materials", e.to_string()))?;
     run.body = body;
     run.rigid_ramp = cs.rigid_ramp;
+    // Reactions: the reactant's field is its solid material's (one field
+    // per solid material, in order), the product its fluid index.
+    let solid_names: Vec<&MaterialSpec> = scene
+        .materials
+        .iter()
+        .filter(|m| m.kind == MaterialKind::Solid)
+        .collect();
+    for r in &scene.reactions {
+        let field = solid_names
+            .iter()
+            .position(|m| m.name == r.reactant)
+            .expect("validated: the reactant is a solid material");
+        let product = fluid_names
+            .iter()
+            .position(|n| *n == r.product)
+            .expect("validated: the product is a fluid material");
+        run.reactions.push(crate::coupling::reaction::Reaction {
+            field,
+            product,
+            law: r.law(),
+            reactant_cv: solid_names[field]
+                .cv
+                .expect("validated: the reactant has cv"),
+            totals: Default::default(),
+            dt_limit: f64::INFINITY,
+        });
+    }
+    run.init_reactions();
     Ok(run)
 }

@@ -48,6 +48,10 @@ pub struct Scene {
     /// Internal-energy sources of fluid materials.
     #[serde(default)]
     pub heat_sources: Vec<HeatSourceSpec>,
+    /// Reactions of coupled scenes: a solid reactant burning on its surface
+    /// into a fluid product (Guilkey Sec. 5).
+    #[serde(default)]
+    pub reactions: Vec<ReactionSpec>,
     /// What to write.
     #[serde(default)]
     pub output: OutputSpec,
@@ -584,6 +588,39 @@ pub struct HeatSourceSpec {
     pub start: f64,
     /// End of the window (> start).
     pub end: f64,
+}
+
+/// A surface burn `Γ = A K pⁿ` of a solid reactant into a fluid product
+/// (Guilkey Sec. 5; [`crate::coupling::reaction`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReactionSpec {
+    /// Name of a deformable solid material (it needs `cv`).
+    pub reactant: String,
+    /// Name of a fluid material.
+    pub product: String,
+    /// `K` [kg/(m² s Paⁿ)], ≥ 0.
+    pub rate_constant: f64,
+    /// `n` ≥ 0 (default 0: a constant regression rate).
+    #[serde(default)]
+    pub pressure_exponent: f64,
+    /// The reactant burns where its temperature is at least this [K] (> 0).
+    pub threshold_temperature: f64,
+    /// Heat of reaction `Q` [J/kg] ≥ 0 (default 0).
+    #[serde(default)]
+    pub heat_of_reaction: f64,
+}
+
+impl ReactionSpec {
+    /// The rate law.
+    pub fn law(&self) -> crate::coupling::reaction::BurnLaw {
+        crate::coupling::reaction::BurnLaw {
+            rate_constant: self.rate_constant,
+            pressure_exponent: self.pressure_exponent,
+            threshold_temperature: self.threshold_temperature,
+            heat_of_reaction: self.heat_of_reaction,
+        }
+    }
 }
 
 /// Region filled by an object.
@@ -2389,6 +2426,56 @@ impl Scene {
                 ));
             }
         }
+        self.validate_reactions()
+    }
+
+    /// `[[reactions]]` of a coupled scene: a deformable solid reactant with
+    /// `cv`, a fluid product, and the law's parameters in range.
+    fn validate_reactions(&self) -> Result<(), SceneError> {
+        for (i, r) in self.reactions.iter().enumerate() {
+            let p = |k: &str| format!("reactions[{i}].{k}");
+            match self.materials.iter().find(|m| m.name == r.reactant) {
+                Some(m) if m.kind == MaterialKind::Solid && !m.rigid && !m.is_gas_point() => {
+                    if m.cv.is_none() {
+                        return Err(err(
+                            p("reactant"),
+                            format!(
+                                "material `{}` needs `cv` (its internal energy goes into \
+                                 the product)",
+                                r.reactant
+                            ),
+                        ));
+                    }
+                }
+                _ => {
+                    return Err(err(
+                        p("reactant"),
+                        format!(
+                            "`{}` is not a deformable solid material of this scene",
+                            r.reactant
+                        ),
+                    ))
+                }
+            }
+            match self.materials.iter().find(|m| m.name == r.product) {
+                Some(m) if m.kind == MaterialKind::Fluid && !m.is_gas_point() => {}
+                _ => {
+                    return Err(err(
+                        p("product"),
+                        format!(
+                            "`{}` is not a fluid material (in cells) of this scene",
+                            r.product
+                        ),
+                    ))
+                }
+            }
+            if self.reactions[..i].iter().any(|o| o.reactant == r.reactant) {
+                return Err(err(p("reactant"), "a reactant may have one reaction only"));
+            }
+            r.law()
+                .validate()
+                .map_err(|(key, allowed)| err(p(key), format!("must be {allowed}")))?;
+        }
         Ok(())
     }
 }
@@ -2661,6 +2748,13 @@ impl Scene {
                 return Err(err(
                     "heat_sources",
                     "heat sources heat fluid materials; this scene has none",
+                ));
+            }
+            if !self.reactions.is_empty() {
+                return Err(err(
+                    "reactions",
+                    "reactions burn a solid into a fluid: a coupled scene (solid and \
+                     fluid materials) only",
                 ));
             }
         }

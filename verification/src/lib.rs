@@ -8,6 +8,7 @@ pub mod ice_studies;
 pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
+pub mod reaction_studies;
 pub mod york_studies;
 
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
@@ -19,6 +20,11 @@ pub type Study = (
 
 /// Every study the binary knows.
 pub const STUDIES: &[Study] = &[
+    (
+        "reaction_burn",
+        "Guilkey 5 surface burn: burning area of a disk and turned squares vs h; slab burnt mass vs K A t",
+        reaction_studies::reaction_burn,
+    ),
     (
         "cylinder_order",
         "Guilkey 4.1 pressurised cylinder, MPM-ICE, Eq. 43 vs dx and Fig. 3a",

@@ -19,6 +19,15 @@ use crate::material::eos::EquationOfState;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 use crate::stepper::Energies;
 
+/// History columns of a run with reactions (sums over its reactions since
+/// the start): the reactant mass converted, the energy the products received
+/// with it (`Σ Δm (c_v,s T + Q + ½|v|²)`) and the heat of reaction in it.
+const REACTION_HISTORY: [(&str, &str); 3] = [
+    ("reacted_mass", "kg"),
+    ("reaction_energy", "J"),
+    ("reaction_heat", "J"),
+];
+
 /// A coupled run.
 pub struct Coupled<const D: usize> {
     /// The run.
@@ -27,7 +36,8 @@ pub struct Coupled<const D: usize> {
 
 impl<const D: usize> Coupled<D> {
     /// Energies of the whole system: kinetic (fluid + particles), internal
-    /// of the fluids (in `strain`) plus the particles' strain energy.
+    /// of the fluids (in `strain`) plus the particles' strain energy, and in
+    /// `potential` minus the energy the reactions released into the fluids.
     fn energies(&self) -> Energies {
         let run = &self.run;
         let mut e = cell_energies(&run.fluid);
@@ -42,6 +52,12 @@ impl<const D: usize> Coupled<D> {
             e.kinetic += f.particles.kinetic_energy();
             e.strain += f.particles.strain_energy(&run.materials);
         }
+        // The reactions' input to the products (the reactant's internal
+        // and kinetic energy and the heat of reaction; the solid is
+        // isothermal and its chemical energy is not otherwise counted) is
+        // the balance term, so that the total is conserved by the exact
+        // dynamics (as the membrane elements put −W_ext there).
+        e.potential -= run.reaction_totals().energy;
         e
     }
 }
@@ -95,11 +111,20 @@ impl<const D: usize> Model for Coupled<D> {
     }
 
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {
-        FLUID_HISTORY.to_vec()
+        let mut c = FLUID_HISTORY.to_vec();
+        if !self.run.reactions.is_empty() {
+            // Summed over the reactions since the start of the run.
+            c.extend(REACTION_HISTORY);
+        }
+        c
     }
 
     fn history_row(&self, row: &mut Vec<f64>) {
         fluid_history_row(&self.run.fluid, row);
+        if !self.run.reactions.is_empty() {
+            let t = self.run.reaction_totals();
+            row.extend([t.mass, t.energy, t.heat]);
+        }
     }
 
     fn conserved(&self) -> Conserved {
@@ -150,6 +175,14 @@ impl<const D: usize> Model for Coupled<D> {
             save_particles(ck, &format!("field{i}"), &f.particles);
         }
         save_carried(ck, "workspace", run.ice_workspace());
+        if !run.reactions.is_empty() {
+            let data = run
+                .reactions
+                .iter()
+                .flat_map(|r| [r.totals.mass, r.totals.energy, r.totals.heat])
+                .collect();
+            ck.put_f64("reactions.totals", vec![run.reactions.len(), 3], data);
+        }
         ck.put_u64("model.steps", vec![1], vec![run.steps]);
     }
 
@@ -162,6 +195,15 @@ impl<const D: usize> Model for Coupled<D> {
         }
         let cells = run.fluid.layout.len();
         load_carried(ck, "workspace", run.ice_workspace_mut(), cells)?;
+        if !run.reactions.is_empty() {
+            let n = run.reactions.len();
+            let data = ck.take_f64("reactions.totals", Some(&[n, 3]))?;
+            for (r, t) in run.reactions.iter_mut().zip(data.chunks_exact(3)) {
+                r.totals.mass = t[0];
+                r.totals.energy = t[1];
+                r.totals.heat = t[2];
+            }
+        }
         run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
         Ok(())
     }
