@@ -1134,6 +1134,22 @@ fn bad_mie_gruneisen_and_jwl_input_names_its_key() {
             "not read",
         ),
         (
+            // Γ0 = 0: p(ρ) only, so a region cannot give the density.
+            mg_edit("gruneisen = 0.5", "gruneisen = 0.0")
+                .replace("temperature = 293.0, velocity", "density = 998.0, velocity"),
+            "regions[0].states[0].density",
+            "give temperature",
+        ),
+        (
+            mg_edit(
+                "type = \"fluid\"",
+                "type = \"fluid\"\nframe = \"particles\"",
+            )
+            .replace("gruneisen = 0.5", "gruneisen = 0.0"),
+            "materials[0].gruneisen",
+            "gas points",
+        ),
+        (
             edit(
                 "model = \"linear_elastic\"",
                 "model = \"linear_elastic\"\ngruneisen = 2.0",

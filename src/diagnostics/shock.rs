@@ -79,6 +79,27 @@ pub fn wall_shock_scene(scene: &Scene, cells: usize, up: f64) -> Result<Scene, S
     Ok(s)
 }
 
+/// The scene with its first material replaced by copper (Steinberg,
+/// UCRL-MA-106439: ρ₀ = 8930 kg/m³, c₀ = 3940 m/s, s = 1.49, Γ₀ = 2.02;
+/// c_v = 383 J/(kg K)), at the same reference temperature and pressure.
+pub fn copper(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    if let Some(m) = s.materials.first_mut() {
+        m.name = "copper".into();
+        m.reference_density = Some(8930.0);
+        m.c0 = Some(3940.0);
+        m.s = Some(1.49);
+        m.gruneisen = Some(2.02);
+        m.cv = Some(383.0);
+    }
+    for r in &mut s.regions {
+        for st in &mut r.states {
+            st.material = "copper".into();
+        }
+    }
+    s
+}
+
 fn mie_gruneisen(scene: &Scene) -> Result<MieGruneisen, SceneError> {
     match scene.materials.first().map(|m| m.fluid_eos()) {
         Some(Ok(FluidEos::MieGruneisen(m))) => Ok(m),
@@ -123,6 +144,7 @@ pub fn wall_shock(scene: &Scene, samples: usize) -> Result<WallShock, Error> {
     let samples = samples.max(2);
     let (mut steps, mut wall_s, mut p_max) = (0u64, 0.0, 0.0f64);
     let mut fit = LineFit::default();
+    let mut row = Vec::new();
     for k in 0..samples {
         let t = t_end * (0.25 + 0.75 * k as f64 / (samples - 1) as f64);
         let run = run_fluid(state, &params, t, 10_000_000)?;
@@ -132,7 +154,8 @@ pub fn wall_shock(scene: &Scene, samples: usize) -> Result<WallShock, Error> {
         for &c in &state.layout.interior {
             p_max = p_max.max(state.p_eq[c].abs());
         }
-        let x = front(&state, p_mid).ok_or_else(|| {
+        cell_profile(&state, &mut row);
+        let x = front_of(&row, p_mid).ok_or_else(|| {
             SceneError::new(
                 "time.end",
                 format!("no shock front found at t = {t:.6e} (has it left the domain?)"),
@@ -164,24 +187,164 @@ pub fn wall_shock(scene: &Scene, samples: usize) -> Result<WallShock, Error> {
     })
 }
 
-/// Position (from the lower boundary) where the pressure, scanned from the
-/// upper end, first reaches `p_mid`, interpolated linearly between cell
-/// centres.
-fn front(state: &IceState<1>, p_mid: f64) -> Option<f64> {
-    let cells = &state.layout.interior;
-    let lower = state.layout.lower[0];
-    for i in (0..cells.len()).rev() {
-        let (c, p) = (cells[i], state.p_eq[cells[i]]);
+/// The wall shock of [`wall_shock`] with the material of `scene` (its
+/// first, a Mie–Grüneisen fluid) on gas material points (York Sec. 3.3,
+/// `frame = "particles"`, York's artificial viscosity with the paper's
+/// constants, GIMP, MUSL): a 2D strip one cell high, `cells` cells of
+/// `1/cells` m along x, 3 × 3 points per cell, a symmetry plane (wall) at
+/// `x = 0` and a free surface at the far end. The release from the free
+/// surface runs into the material at `c₀`, so the shock is followed over
+/// `0.4 L` only (it meets the release later for every `u_p` here);
+/// `samples` fit times in the last three quarters.
+///
+/// # Errors
+/// Scene errors, and any failure of the run.
+pub fn gas_point_wall_shock(
+    scene: &Scene,
+    cells: usize,
+    up: f64,
+    samples: usize,
+) -> Result<WallShock, Error> {
+    let eos = mie_gruneisen(scene)?;
+    let m = &scene.materials[0];
+    let (rho0, p0, t0) = (
+        eos.reference_density(),
+        eos.reference_pressure(),
+        eos.reference_temperature(),
+    );
+    let h = 1.0 / cells as f64;
+    let us_exact = eos.shock_speed(up);
+    let t_end = 0.4 / (us_exact - up);
+    let text = format!(
+        r#"
+[grid]
+dim = 2
+lower = [0.0, 0.0]
+upper = [1.0, {h}]
+cells = [{cells}, 1]
+boundary = {{ x_lower = "symmetry", x_upper = "free", y_lower = "symmetry", y_upper = "symmetry" }}
+
+[time]
+end = {t_end}
+cfl = 0.4
+
+[mpm]
+shape = "gimp"
+update = "musl"
+
+[[materials]]
+name = "{name}"
+type = "fluid"
+frame = "particles"
+eos = "mie_gruneisen"
+reference_density = {rho0}
+c0 = {c0}
+s = {s}
+gruneisen = {g0}
+cv = {cv}
+reference_temperature = {t0}
+reference_pressure = {p0}
+
+[[objects]]
+material = "{name}"
+geometry = {{ type = "box", lower = [0.0, 0.0], upper = [1.0, {h}] }}
+particles_per_cell = 3
+density = {rho0}
+pressure = {p0}
+velocity = [{v}, 0.0]
+"#,
+        name = m.name,
+        c0 = eos.c0(),
+        s = eos.s(),
+        g0 = eos.gruneisen(),
+        cv = crate::material::eos::EquationOfState::specific_heat_cv(&eos),
+        v = -up,
+    );
+    let scene = crate::scene::parse(&text)?;
+    let mut run = crate::scene::build_solid_run::<2>(&scene)?;
+    let gas = run.materials[0].gas().copied().ok_or_else(|| {
+        SceneError::new(
+            "materials[0].frame",
+            "expected gas points (frame = \"particles\")",
+        )
+    })?;
+    let p_exact = p0 + rho0 * us_exact * up;
+    let p_mid = 0.5 * (p0 + p_exact);
+    let samples = samples.max(2);
+    let start = std::time::Instant::now();
+    let mut fit = LineFit::default();
+    let mut p_max = 0.0f64;
+    let mut next = 0;
+    let mut row: Vec<(f64, f64)> = Vec::new();
+    // Pressure of the points of the lowest row, sorted by x.
+    let profile = |run: &crate::stepper::SolidRun<2>, row: &mut Vec<(f64, f64)>| {
+        let pt = &run.particles;
+        row.clear();
+        for i in 0..pt.len() {
+            if pt.x0[i][1] < h / 3.0 {
+                let rho = pt.mass[i] / pt.vol[i];
+                let e = pt.work[i] * pt.vol0[i] / pt.mass[i];
+                row.push((pt.x[i][0], gas.pressure(rho, e)));
+            }
+        }
+        row.sort_by(|a, b| a.0.total_cmp(&b.0));
+    };
+    while !run.finished() {
+        run.step()?;
+        let t_next = t_end * (0.25 + 0.75 * next as f64 / (samples - 1) as f64);
+        if next < samples && run.t >= t_next * (1.0 - 1e-12) {
+            profile(&run, &mut row);
+            p_max = row.iter().fold(p_max, |a, r| a.max(r.1.abs()));
+            let x = front_of(&row, p_mid).ok_or_else(|| {
+                SceneError::new("time.end", format!("no shock front at t = {:.6e}", run.t))
+            })?;
+            fit.add(run.t, x);
+            next += 1;
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    profile(&run, &mut row);
+    let x_s = fit.at(run.t);
+    let mid: Vec<f64> = row
+        .iter()
+        .filter(|r| r.0 >= 0.25 * x_s && r.0 <= 0.75 * x_s)
+        .map(|r| r.1)
+        .collect();
+    Ok(WallShock {
+        up,
+        h,
+        us_exact,
+        us: fit.slope() + up,
+        p_exact,
+        p_post: mid.iter().sum::<f64>() / mid.len() as f64,
+        p_max,
+        steps: run.steps,
+        wall_s,
+    })
+}
+
+/// Position where the pressure of `(x, p)` points sorted by `x`, scanned
+/// from the largest `x`, first reaches `p_mid` (linear interpolation).
+fn front_of(row: &[(f64, f64)], p_mid: f64) -> Option<f64> {
+    for i in (0..row.len()).rev() {
+        let (x, p) = row[i];
         if p >= p_mid {
-            let x = state.layout.centre(c)[0] - lower;
-            let Some(&up) = cells.get(i + 1) else {
+            let Some(&(x1, p1)) = row.get(i + 1) else {
                 return Some(x);
             };
-            let (x1, p1) = (state.layout.centre(up)[0] - lower, state.p_eq[up]);
             return Some(x + (p_mid - p) / (p1 - p) * (x1 - x));
         }
     }
     None
+}
+
+/// `(x, p)` of the interior cells (x from the lower boundary), in order.
+fn cell_profile(state: &IceState<1>, row: &mut Vec<(f64, f64)>) {
+    row.clear();
+    let lower = state.layout.lower[0];
+    for &c in &state.layout.interior {
+        row.push((state.layout.centre(c)[0] - lower, state.p_eq[c]));
+    }
 }
 
 /// Least-squares straight line through `(t, x)` points.

@@ -1444,6 +1444,13 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     }
     // The EOS's own range checks (Mie–Grüneisen, JWL), naming their key.
     m.fluid_eos().map_err(|e| eos_error(p, e))?;
+    if m.is_gas_point() && m.pressure_ignores_temperature() {
+        return Err(err(
+            p("gruneisen"),
+            "must be > 0 for gas points (frame = \"particles\"): a point's pressure follows its \
+             energy",
+        ));
+    }
     if let Some(mu) = m.viscosity {
         if !(mu.is_finite() && mu >= 0.0) {
             return Err(err(p("viscosity"), format!("must be ≥ 0 (got {mu})")));
@@ -1550,6 +1557,13 @@ impl MaterialSpec {
             .into(),
             Some(EosKind::IdealGas) | None => IdealGas::new(get(self.gamma), get(self.cv))?.into(),
         })
+    }
+
+    /// A Mie–Grüneisen fluid with `gruneisen = 0`: `p(ρ)` only, so neither
+    /// a temperature from `(ρ, p)` nor a gas point's energy from its
+    /// pressure exists.
+    fn pressure_ignores_temperature(&self) -> bool {
+        self.eos == Some(EosKind::MieGruneisen) && self.gruneisen == Some(0.0)
     }
 
     /// Lowest admissible pressure of a fluid material (exclusive;
@@ -2173,6 +2187,16 @@ impl Scene {
                 ));
             }
             sum += st.volume_fraction;
+            if st.density.is_some() && m.pressure_ignores_temperature() {
+                return Err(err(
+                    q("density"),
+                    format!(
+                        "`{}` has eos = \"mie_gruneisen\" with gruneisen = 0: its pressure does \
+                         not depend on temperature, so give temperature instead",
+                        m.name
+                    ),
+                ));
+            }
             match (st.density, st.temperature) {
                 (Some(d), None) => positive(&q("density"), d)?,
                 (None, Some(t)) => positive(&q("temperature"), t)?,
