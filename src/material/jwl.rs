@@ -93,7 +93,7 @@ impl Jwl {
             cv,
         };
         let p_ref = eos.pressure(rho0, t0);
-        if !(p_ref > 0.0) {
+        if p_ref.is_nan() || p_ref <= 0.0 {
             return Err(EosError::Invalid {
                 field: "a",
                 allowed: "A, B, R1, R2, omega with a positive pressure p(rho0, T0) at the \
