@@ -976,3 +976,187 @@ fn axisymmetric_membranes_stay_off_the_axis_naming_the_key() {
     ];
     assert_each_names_its_key(&cases);
 }
+
+/// The Mie–Grüneisen water of `cases/mie_gruneisen_shock.toml` and a JWL
+/// products scene: unphysical parameters are rejected with the key named.
+const MG_CASE: &str = include_str!("../cases/mie_gruneisen_shock.toml");
+
+const JWL: &str = r#"
+[grid]
+dim = 1
+lower = [0.0]
+upper = [1.0]
+cells = [20]
+boundary = { x_lower = "fixed", x_upper = "fixed" }
+
+[time]
+end = 1e-6
+
+[[materials]]
+name = "products"
+type = "fluid"
+eos = "jwl"
+a = 371.2e9
+b = 3.231e9
+r1 = 4.15
+r2 = 0.95
+omega = 0.3
+reference_density = 1630.0
+cv = 1000.0
+
+[[regions]]
+pressure = 1e9
+states = [{ material = "products", volume_fraction = 1.0, temperature = 3000.0 }]
+"#;
+
+fn mg_edit(from: &str, to: &str) -> String {
+    assert_eq!(MG_CASE.matches(from).count(), 1, "edit anchor `{from}`");
+    MG_CASE.replacen(from, to, 1)
+}
+
+fn jwl_edit(from: &str, to: &str) -> String {
+    assert_eq!(JWL.matches(from).count(), 1, "edit anchor `{from}`");
+    JWL.replacen(from, to, 1)
+}
+
+#[test]
+fn the_mie_gruneisen_and_jwl_scenes_are_accepted() {
+    mpmice::scene::parse(MG_CASE).expect("Mie–Grüneisen case");
+    let s = mpmice::scene::parse(JWL).expect("JWL scene");
+    let (st, _) = mpmice::scene::build_fluid_run::<1>(&s).expect("JWL builds");
+    assert!((st.p_eq[st.layout.interior[0]] / 1e9 - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn bad_mie_gruneisen_and_jwl_input_names_its_key() {
+    let cases: &[(String, &str, &str)] = &[
+        (
+            mg_edit("gruneisen = 0.5", "gruneisen = -0.1"),
+            "materials[0].gruneisen",
+            ">= 0",
+        ),
+        (
+            mg_edit("gruneisen = 0.5", "gruneisen = 4.0"),
+            "materials[0].gruneisen",
+            "< 2 s",
+        ),
+        (mg_edit("c0 = 1483.0", "c0 = 0.0"), "materials[0].c0", "> 0"),
+        (
+            mg_edit("c0 = 1483.0", "c0 = -5.0"),
+            "materials[0].c0",
+            "> 0",
+        ),
+        (
+            mg_edit("\ns = 1.75\n", "\ns = -1.0\n"),
+            "materials[0].s",
+            "[1, 4]",
+        ),
+        (
+            mg_edit("\ns = 1.75\n", "\ns = 6.0\n"),
+            "materials[0].s",
+            "singular",
+        ),
+        (
+            mg_edit("reference_density = 998.0", "reference_density = 0.0"),
+            "materials[0].reference_density",
+            "> 0",
+        ),
+        (
+            mg_edit("reference_density = 998.0", "reference_density = -998.0"),
+            "materials[0].reference_density",
+            "> 0",
+        ),
+        (
+            mg_edit(
+                "reference_temperature = 293.0",
+                "reference_temperature = 0.0",
+            ),
+            "materials[0].reference_temperature",
+            "> 0",
+        ),
+        (
+            mg_edit("cv = 4180.0", "cv = 1e6"),
+            "materials[0].cv",
+            "tension",
+        ),
+        (mg_edit("c0 = 1483.0\n", ""), "materials[0].c0", "missing"),
+        (
+            mg_edit("cv = 4180.0", "cv = 4180.0\ngamma = 1.4"),
+            "materials[0].gamma",
+            "not read by eos = \"mie_gruneisen\"",
+        ),
+        (
+            mg_edit("cv = 4180.0", "cv = 4180.0\nomega = 0.3"),
+            "materials[0].omega",
+            "reference_pressure",
+        ),
+        (
+            // Below the hyperbolic limit (p0 − K)/(1 + Γ0) ≈ −1.46 GPa.
+            mg_edit("\npressure = 101325.0", "\npressure = -2e9"),
+            "regions[0].pressure",
+            "must be >",
+        ),
+        (
+            // ω > R1, R2: p(ρ0, T0) < 0 at the reference state.
+            jwl_edit("omega = 0.3", "omega = 5.0\nreference_temperature = 1.0"),
+            "materials[0].a",
+            "positive pressure",
+        ),
+        (jwl_edit("r1 = 4.15", "r1 = 0.0"), "materials[0].r1", "> 0"),
+        (jwl_edit("r2 = 0.95", "r2 = -1.0"), "materials[0].r2", "> 0"),
+        (
+            jwl_edit("omega = 0.3", "omega = 0.0"),
+            "materials[0].omega",
+            "> 0",
+        ),
+        (
+            jwl_edit("reference_density = 1630.0", "reference_density = 0.0"),
+            "materials[0].reference_density",
+            "> 0",
+        ),
+        (jwl_edit("a = 371.2e9\n", ""), "materials[0].a", "missing"),
+        (
+            jwl_edit("omega = 0.3", "omega = 0.3\ns = 1.5"),
+            "materials[0].s",
+            "not read by eos = \"jwl\"",
+        ),
+        (
+            jwl_edit("pressure = 1e9", "pressure = -1e5"),
+            "regions[0].pressure",
+            "must be > 0",
+        ),
+        (
+            mg_edit(
+                "type = \"fluid\"\neos = \"mie_gruneisen\"",
+                "type = \"fluid\"\neos = \"mie_gruneisen\"\np_inf = 1e8",
+            ),
+            "materials[0].p_inf",
+            "not read",
+        ),
+        (
+            // Γ0 = 0: p(ρ) only, so a region cannot give the density.
+            mg_edit("gruneisen = 0.5", "gruneisen = 0.0")
+                .replace("temperature = 293.0, velocity", "density = 998.0, velocity"),
+            "regions[0].states[0].density",
+            "give temperature",
+        ),
+        (
+            mg_edit(
+                "type = \"fluid\"",
+                "type = \"fluid\"\nframe = \"particles\"",
+            )
+            .replace("gruneisen = 0.5", "gruneisen = 0.0"),
+            "materials[0].gruneisen",
+            "gas points",
+        ),
+        (
+            edit(
+                "model = \"linear_elastic\"",
+                "model = \"linear_elastic\"\ngruneisen = 2.0",
+            ),
+            "materials[0].gruneisen",
+            "only for fluid",
+        ),
+    ];
+    assert_each_names_its_key(cases);
+}

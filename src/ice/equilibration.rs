@@ -46,14 +46,12 @@ pub struct EquilibrationFailure {
     pub pressure: f64,
 }
 
-/// Lowest admissible pressure of an EOS (exclusive): `−p_∞`.
+/// Lowest admissible pressure of an EOS (exclusive), e.g. `−p_∞`
+/// ([`FluidEos::min_pressure`]; Guilkey Fig. 1: the solid's threshold law
+/// is defined for p > 0 only).
+#[inline]
 pub fn min_pressure(eos: &FluidEos) -> f64 {
-    match eos {
-        FluidEos::IdealGas(_) => 0.0,
-        FluidEos::StiffenedGas(s) => -s.p_inf(),
-        // Guilkey Fig. 1: the threshold law is defined for p > 0 only.
-        FluidEos::Solid(_) => 0.0,
-    }
+    eos.min_pressure()
 }
 
 /// `S(p)` and `dS/dp`; `None` when some EOS has no density at `p`.

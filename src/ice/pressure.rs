@@ -79,6 +79,8 @@ pub fn equilibrate<const D: usize>(
         eos[r] = state.materials[r].eos;
     }
     let max_it = AtomicUsize::new(0);
+    // A failure names the material where the cells hold only one.
+    let only: Option<Box<str>> = (nm == 1).then(|| state.materials[0].name.as_str().into());
     // Split the borrows: inputs (mass, temperature) read, outputs written.
     let IceState {
         layout,
@@ -131,8 +133,8 @@ pub fn equilibrate<const D: usize>(
                             step: step_no,
                             time: t_now,
                             cell: lay.coords(c).to_vec(),
-                            material: None,
-                            material_name: None,
+                            material: only.as_ref().map(|_| 0),
+                            material_name: only.clone(),
                         },
                         residual: e.residual,
                         iterations: e.iterations,

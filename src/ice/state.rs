@@ -266,7 +266,7 @@ impl<const D: usize> MaterialInit<D> {
 }
 
 /// Temperature with `p(ρ, T) = p` for an EOS linear in `T` at fixed `ρ`
-/// (both [`crate::material::eos::FluidEos`] variants are), checked.
+/// (every [`crate::material::eos::FluidEos`] variant is), checked.
 pub(crate) fn temperature_from_rho_p(eos: &impl EquationOfState, rho: f64, p: f64) -> f64 {
     let t0 = 1.0;
     let t = t0 + (p - eos.pressure(rho, t0)) / eos.dp_dt(rho, t0);

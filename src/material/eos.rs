@@ -70,6 +70,8 @@
 
 use super::equation_of_state::{check_gt, check_temperature};
 pub use super::equation_of_state::{EosError, EquationOfState};
+pub use super::jwl::Jwl;
+pub use super::mie_gruneisen::MieGruneisen;
 pub use super::solid_eos::SolidEos;
 
 /// Calorically perfect (ideal) gas.
@@ -366,16 +368,36 @@ pub enum FluidEos {
     /// [`SolidEos`]: the bulk response of a solid material in the cells of
     /// a coupled MPM-ICE scene (Guilkey Fig. 1).
     Solid(SolidEos),
+    /// [`MieGruneisen`]: linear `U_s–u_p` Hugoniot reference (Lian Eq. 66).
+    MieGruneisen(MieGruneisen),
+    /// [`Jwl`]: Jones–Wilkins–Lee detonation products.
+    Jwl(Jwl),
 }
 
 impl FluidEos {
-    /// Short stable identifier of the variant: `"ideal_gas"` or
-    /// `"stiffened_gas"`.
+    /// Short stable identifier of the variant: `"ideal_gas"`,
+    /// `"stiffened_gas"`, `"solid"`, `"mie_gruneisen"` or `"jwl"`.
     pub fn name(&self) -> &'static str {
         match self {
             Self::IdealGas(_) => "ideal_gas",
             Self::StiffenedGas(_) => "stiffened_gas",
             Self::Solid(_) => "solid",
+            Self::MieGruneisen(_) => "mie_gruneisen",
+            Self::Jwl(_) => "jwl",
+        }
+    }
+
+    /// Lowest admissible pressure (exclusive), the same at every
+    /// temperature: `0` for an ideal gas, JWL products and the solid's
+    /// threshold law (Guilkey Fig. 1), `−p_∞` for a stiffened gas,
+    /// [`MieGruneisen::min_pressure`] for Mie–Grüneisen. Above it
+    /// [`EquationOfState::density`] has a root at every `T > 0` (JWL: up to
+    /// the maximum of its isotherm).
+    pub fn min_pressure(&self) -> f64 {
+        match self {
+            Self::IdealGas(_) | Self::Solid(_) | Self::Jwl(_) => 0.0,
+            Self::StiffenedGas(s) => -s.p_inf(),
+            Self::MieGruneisen(m) => m.min_pressure(),
         }
     }
 }
@@ -392,6 +414,18 @@ impl From<SolidEos> for FluidEos {
     }
 }
 
+impl From<MieGruneisen> for FluidEos {
+    fn from(eos: MieGruneisen) -> Self {
+        Self::MieGruneisen(eos)
+    }
+}
+
+impl From<Jwl> for FluidEos {
+    fn from(eos: Jwl) -> Self {
+        Self::Jwl(eos)
+    }
+}
+
 impl From<StiffenedGas> for FluidEos {
     fn from(eos: StiffenedGas) -> Self {
         Self::StiffenedGas(eos)
@@ -405,6 +439,8 @@ macro_rules! dispatch {
             FluidEos::IdealGas($eos) => $call,
             FluidEos::StiffenedGas($eos) => $call,
             FluidEos::Solid($eos) => $call,
+            FluidEos::MieGruneisen($eos) => $call,
+            FluidEos::Jwl($eos) => $call,
         }
     };
 }
@@ -484,7 +520,7 @@ mod tests {
         match eos {
             FluidEos::IdealGas(_) => (0.0, 0.0),
             FluidEos::StiffenedGas(sg) => (sg.gamma() * sg.p_inf(), sg.p_inf()),
-            FluidEos::Solid(_) => unreachable!("no solid in these tests"),
+            _ => unreachable!("ideal and stiffened gases only in these tests"),
         }
     }
 

@@ -2,7 +2,9 @@
 //! the multifield model: the thermal and caloric closure relations
 //! (Guilkey Eqs. 10–11), their derivatives and the error type. The concrete
 //! laws live in [`super::eos`] (ideal and stiffened gas, the cell-fluid
-//! enum) and [`super::solid_eos`] (the solid's bulk response); the choice of
+//! enum), [`super::mie_gruneisen`] (liquids and metals), [`super::jwl`]
+//! (detonation products) and [`super::solid_eos`] (the solid's bulk
+//! response); the choice of
 //! compressibility and the energy convention are explained in
 //! [`super::eos`].
 
@@ -29,7 +31,8 @@ pub enum EosError {
         /// The requested pressure.
         p: f64,
         /// Infimum of the admissible pressures (exclusive): `0` for an ideal
-        /// gas, `−p_∞` for a stiffened gas.
+        /// gas and JWL products, `−p_∞` for a stiffened gas, the tension
+        /// limit `(p₀ − K)/(1 + Γ₀)` for Mie–Grüneisen.
         p_min: f64,
     },
 }

@@ -8,7 +8,8 @@
 //! ```
 //!
 //! with `p` from the fluid equation of state ([`FluidEos`]: the ideal gas of
-//! York Eq. 22, or a stiffened gas) at the point's density and specific
+//! York Eq. 22, a stiffened gas, Mie–Grüneisen or JWL) at the point's
+//! density and specific
 //! internal energy (`e = c_v T`), the density from continuity (York Eq. 16,
 //! `ρ = m / V`, `V = J V⁰`), the internal energy advanced per point (York
 //! Eq. 23) and the Wilkins-type artificial viscosity `q` in compression only
@@ -36,7 +37,8 @@
 //! York Eq. 23 adds `σⁿ⁺¹ : Δε / ρⁿ⁺¹` to the specific internal energy. We
 //! use the same step with the thermodynamic pressure time-centred,
 //! `Δe = −((pⁿ + pⁿ⁺¹)/2 + q) Δv + 2μ ε̇′:ε̇′ Δt / ρⁿ⁺¹` (`v = 1/ρ`),
-//! which both EOS make linear in `eⁿ⁺¹` (p is linear in e at fixed ρ), so it
+//! which every fluid EOS makes linear in `eⁿ⁺¹` (p is linear in e at fixed
+//! ρ), so it
 //! is solved exactly without iteration. It is second order in time and keeps
 //! an isentropic compression on its isentrope; `q` is taken at the new
 //! level as in the paper.
@@ -147,7 +149,8 @@ impl GasPoint {
     }
 
     /// Specific internal energy at which the EOS gives pressure `p` at
-    /// density `rho` (both EOS are linear in e at fixed ρ).
+    /// density `rho` (every fluid EOS is linear in e at fixed ρ; a
+    /// Mie–Grüneisen fluid needs Γ₀ > 0, which the scene checks).
     pub fn energy_of(&self, rho: f64, p: f64) -> f64 {
         let cv = self.eos.specific_heat_cv();
         let (t0, t1) = (1.0, 2.0);

@@ -1,6 +1,6 @@
 //! Materials: solid constitutive models (`solid`), the equation-of-state
 //! interface (`equation_of_state`), fluid equations of state (`eos`,
-//! `solid_eos`), J2 plasticity (`plasticity`), the gas on material points
+//! `solid_eos`, `mie_gruneisen`, `jwl`), J2 plasticity (`plasticity`), the gas on material points
 //! (`gas_point`, York Sec. 3.3) and the membrane law (`membrane`, York
 //! Sec. 3.2).
 //! Imports no physics module.
@@ -8,7 +8,9 @@
 pub mod eos;
 pub mod equation_of_state;
 pub mod gas_point;
+pub mod jwl;
 pub mod membrane;
+pub mod mie_gruneisen;
 pub mod plasticity;
 pub mod solid;
 pub mod solid_eos;

@@ -3,8 +3,8 @@
 use nalgebra::SVector;
 
 use super::schema::{
-    EosKind, FluidVariant, Geometry, LimiterKind, MaterialKind, MaterialSpec, Mode,
-    NewtonSolverKind, PressureSolverKind, Scene,
+    FluidVariant, Geometry, LimiterKind, MaterialKind, MaterialSpec, Mode, NewtonSolverKind,
+    PressureSolverKind, Scene,
 };
 use crate::error::SceneError;
 use crate::grid::{Boundary, Grid};
@@ -14,7 +14,7 @@ use crate::ice::{
     Advection, CellLayout, ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState,
     InflowState, Limiter, MaterialInit,
 };
-use crate::material::eos::{EquationOfState, FluidEos, IdealGas, StiffenedGas};
+use crate::material::eos::{EosError, EquationOfState, FluidEos};
 use crate::material::{
     ArtificialViscosity, ElasticConstants, GasPoint, MembraneLaw, SolidMaterial, SolidModel,
 };
@@ -599,22 +599,20 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
 }
 
 fn fluid_eos(m: &MaterialSpec, i: usize) -> Result<FluidEos, SceneError> {
-    let gamma = m.gamma.unwrap_or_default();
-    let cv = m.cv.unwrap_or_default();
-    let eos: Result<FluidEos, _> = match m.eos {
-        Some(EosKind::StiffenedGas) => {
-            StiffenedGas::new(gamma, m.p_inf.unwrap_or_default(), cv).map(FluidEos::from)
-        }
-        _ => IdealGas::new(gamma, cv).map(FluidEos::from),
-    };
-    eos.map_err(|e| SceneError::new(format!("materials[{i}]"), e.to_string()))
+    m.fluid_eos().map_err(|e| {
+        let key = match e {
+            EosError::Invalid { field, .. } => format!("materials[{i}].{field}"),
+            _ => format!("materials[{i}]"),
+        };
+        SceneError::new(key, e.to_string())
+    })
 }
 
 /// Volume fraction given to a fluid material absent from a region.
 pub const TRACE_VOLUME_FRACTION: f64 = 1e-10;
 
-/// Temperature at which `eos` gives pressure `p` at density `rho` (both EOS
-/// are linear in T at fixed ρ).
+/// Temperature at which `eos` gives pressure `p` at density `rho` (every
+/// fluid EOS is linear in T at fixed ρ).
 fn temperature_of(eos: &FluidEos, rho: f64, p: f64) -> f64 {
     let t0 = 1.0;
     t0 + (p - eos.pressure(rho, t0)) / eos.dp_dt(rho, t0)

@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;
 use crate::grid::Boundary;
+use crate::material::eos::{EosError, FluidEos, IdealGas, Jwl, MieGruneisen, StiffenedGas};
 use crate::material::SolidModel;
 use crate::mpm::UpdateScheme;
 use crate::shape::ShapeKind;
@@ -465,7 +466,35 @@ pub enum EosKind {
     IdealGas,
     /// p = (γ − 1) ρ c_v T − γ p_inf (liquids).
     StiffenedGas,
+    /// Mie–Grüneisen with a linear U_s–u_p Hugoniot (Lian Eq. 66; water,
+    /// metals): keys `c0`, `s`, `gruneisen`, `reference_density`, `cv`,
+    /// optional `reference_temperature`, `reference_pressure`.
+    MieGruneisen,
+    /// Jones–Wilkins–Lee detonation products: keys `a`, `b`, `r1`, `r2`,
+    /// `omega`, `reference_density`, `cv`, optional `reference_temperature`.
+    Jwl,
 }
+
+impl EosKind {
+    /// The scene names of every EOS.
+    pub const NAMES: &'static str = "ideal_gas, stiffened_gas, mie_gruneisen, jwl";
+
+    /// The scene name of this EOS.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::IdealGas => "ideal_gas",
+            Self::StiffenedGas => "stiffened_gas",
+            Self::MieGruneisen => "mie_gruneisen",
+            Self::Jwl => "jwl",
+        }
+    }
+}
+
+/// Default `reference_temperature` of the Mie–Grüneisen and JWL EOS [K].
+pub const DEFAULT_EOS_REFERENCE_TEMPERATURE: f64 = 300.0;
+/// Default `reference_pressure` of the Mie–Grüneisen EOS [Pa] (one
+/// atmosphere).
+pub const DEFAULT_EOS_REFERENCE_PRESSURE: f64 = 101_325.0;
 
 /// A material. Solids: `model`, `density` and elastic constants, given either
 /// as `youngs_modulus` and `poisson_ratio` or as `bulk_modulus` and
@@ -501,6 +530,30 @@ pub struct MaterialSpec {
     pub cv: Option<f64>,
     /// Stiffening pressure p_inf ≥ 0 (stiffened gas).
     pub p_inf: Option<f64>,
+    /// Mie–Grüneisen: bulk sound speed c₀ > 0 of `U_s = c₀ + s u_p`.
+    pub c0: Option<f64>,
+    /// Mie–Grüneisen: Hugoniot slope s in [1, 4] of `U_s = c₀ + s u_p`.
+    pub s: Option<f64>,
+    /// Mie–Grüneisen: Grüneisen coefficient Γ₀ in [0, 2 s).
+    pub gruneisen: Option<f64>,
+    /// Mie–Grüneisen and JWL: reference density ρ₀ > 0.
+    pub reference_density: Option<f64>,
+    /// Mie–Grüneisen and JWL: reference temperature T₀ > 0 (default
+    /// 300 K): MG has `p(ρ₀, T₀) = reference_pressure`; JWL must have
+    /// `p(ρ₀, T₀) > 0`.
+    pub reference_temperature: Option<f64>,
+    /// Mie–Grüneisen: pressure at `(ρ₀, T₀)` (default 101325 Pa).
+    pub reference_pressure: Option<f64>,
+    /// JWL: A [Pa].
+    pub a: Option<f64>,
+    /// JWL: B [Pa].
+    pub b: Option<f64>,
+    /// JWL: R₁ > 0.
+    pub r1: Option<f64>,
+    /// JWL: R₂ > 0.
+    pub r2: Option<f64>,
+    /// JWL: ω > 0.
+    pub omega: Option<f64>,
     /// Dynamic viscosity μ ≥ 0 (fluids; default 0 = inviscid).
     pub viscosity: Option<f64>,
     /// Fluids: `"cells"` (ICE, the default) or `"particles"` (gas points,
@@ -1275,6 +1328,14 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
             return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
         }
     }
+    // `cv` is a solid key too (heat exchange).
+    if let Some(k) = m
+        .eos_parameter_keys()
+        .iter()
+        .find(|(given, k)| *given && *k != "cv")
+    {
+        return Err(err(p(k.1), "only for fluid materials (type = \"fluid\")"));
+    }
     if let Some(c) = m.cv {
         positive(&p("cv"), c)?;
     }
@@ -1354,17 +1415,57 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     let Some(eos) = m.eos else {
         return Err(err(
             p("eos"),
-            "missing; fluids need one of: ideal_gas, stiffened_gas",
+            format!("missing; fluids need one of: {}", EosKind::NAMES),
         ));
     };
-    match m.gamma {
-        Some(g) if g.is_finite() && g > 1.0 => {}
-        Some(g) => return Err(err(p("gamma"), format!("must be > 1 (got {g})"))),
-        None => return Err(err(p("gamma"), "missing; must be > 1")),
+    // The keys each EOS reads (required, optional); every other EOS key is
+    // rejected.
+    let (required, optional): (&[&str], &[&str]) = match eos {
+        EosKind::IdealGas => (&["gamma", "cv"], &[]),
+        EosKind::StiffenedGas => (&["gamma", "cv", "p_inf"], &[]),
+        EosKind::MieGruneisen => (
+            &["c0", "s", "gruneisen", "reference_density", "cv"],
+            &["reference_temperature", "reference_pressure"],
+        ),
+        EosKind::Jwl => (
+            &["a", "b", "r1", "r2", "omega", "reference_density", "cv"],
+            &["reference_temperature"],
+        ),
+    };
+    for (given, k) in m.eos_parameter_keys() {
+        if given && !required.contains(&k) && !optional.contains(&k) {
+            return Err(err(
+                p(k),
+                format!(
+                    "not read by eos = \"{}\" (it reads {})",
+                    eos.name(),
+                    required
+                        .iter()
+                        .chain(optional)
+                        .copied()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        if !given && required.contains(&k) {
+            return Err(err(
+                p(k),
+                format!(
+                    "missing; eos = \"{}\" needs {}",
+                    eos.name(),
+                    required.join(", ")
+                ),
+            ));
+        }
     }
-    match m.cv {
-        Some(c) => positive(&p("cv"), c)?,
-        None => return Err(err(p("cv"), "missing; must be > 0")),
+    if let Some(g) = m.gamma {
+        if !(g.is_finite() && g > 1.0) {
+            return Err(err(p("gamma"), format!("must be > 1 (got {g})")));
+        }
+    }
+    if let Some(c) = m.cv {
+        positive(&p("cv"), c)?;
     }
     match (eos, m.p_inf) {
         (EosKind::IdealGas, Some(_)) => {
@@ -1377,6 +1478,15 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
             return Err(err(p("p_inf"), format!("must be ≥ 0 (got {pi})")))
         }
         _ => {}
+    }
+    // The EOS's own range checks (Mie–Grüneisen, JWL), naming their key.
+    m.fluid_eos().map_err(|e| eos_error(p, e))?;
+    if m.is_gas_point() && m.pressure_ignores_temperature() {
+        return Err(err(
+            p("gruneisen"),
+            "must be > 0 for gas points (frame = \"particles\"): a point's pressure follows its \
+             energy",
+        ));
     }
     if let Some(mu) = m.viscosity {
         if !(mu.is_finite() && mu >= 0.0) {
@@ -1408,7 +1518,97 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     Ok(())
 }
 
+/// A scene error at the key an [`EosError`] names.
+fn eos_error(p: &dyn Fn(&str) -> String, e: EosError) -> SceneError {
+    match e {
+        EosError::Invalid {
+            field,
+            allowed,
+            got,
+        } => err(p(field), format!("must be {allowed} (got {got})")),
+        other => err(p("eos"), other.to_string()),
+    }
+}
+
 impl MaterialSpec {
+    /// The parameter keys of the fluid equations of state beyond `gamma`,
+    /// `cv` and `p_inf`, each with whether it is given.
+    fn eos_parameter_keys(&self) -> [(bool, &'static str); 14] {
+        [
+            (self.gamma.is_some(), "gamma"),
+            (self.cv.is_some(), "cv"),
+            (self.p_inf.is_some(), "p_inf"),
+            (self.c0.is_some(), "c0"),
+            (self.s.is_some(), "s"),
+            (self.gruneisen.is_some(), "gruneisen"),
+            (self.reference_density.is_some(), "reference_density"),
+            (
+                self.reference_temperature.is_some(),
+                "reference_temperature",
+            ),
+            (self.reference_pressure.is_some(), "reference_pressure"),
+            (self.a.is_some(), "a"),
+            (self.b.is_some(), "b"),
+            (self.r1.is_some(), "r1"),
+            (self.r2.is_some(), "r2"),
+            (self.omega.is_some(), "omega"),
+        ]
+    }
+
+    /// The equation of state of a fluid material from its keys (missing
+    /// keys read as NaN, so the EOS rejects them by name; no `eos` reads as
+    /// the ideal gas).
+    ///
+    /// # Errors
+    /// The [`EosError`] of the EOS constructor, naming the key.
+    pub fn fluid_eos(&self) -> Result<FluidEos, EosError> {
+        let get = |v: Option<f64>| v.unwrap_or(f64::NAN);
+        let t0 = self
+            .reference_temperature
+            .unwrap_or(DEFAULT_EOS_REFERENCE_TEMPERATURE);
+        Ok(match self.eos {
+            Some(EosKind::StiffenedGas) => {
+                StiffenedGas::new(get(self.gamma), get(self.p_inf), get(self.cv))?.into()
+            }
+            Some(EosKind::MieGruneisen) => MieGruneisen::new(
+                get(self.reference_density),
+                get(self.c0),
+                get(self.s),
+                get(self.gruneisen),
+                get(self.cv),
+                t0,
+                self.reference_pressure
+                    .unwrap_or(DEFAULT_EOS_REFERENCE_PRESSURE),
+            )?
+            .into(),
+            Some(EosKind::Jwl) => Jwl::new(
+                get(self.a),
+                get(self.b),
+                get(self.r1),
+                get(self.r2),
+                get(self.omega),
+                get(self.reference_density),
+                get(self.cv),
+                t0,
+            )?
+            .into(),
+            Some(EosKind::IdealGas) | None => IdealGas::new(get(self.gamma), get(self.cv))?.into(),
+        })
+    }
+
+    /// A Mie–Grüneisen fluid with `gruneisen = 0`: `p(ρ)` only, so neither
+    /// a temperature from `(ρ, p)` nor a gas point's energy from its
+    /// pressure exists.
+    fn pressure_ignores_temperature(&self) -> bool {
+        self.eos == Some(EosKind::MieGruneisen) && self.gruneisen == Some(0.0)
+    }
+
+    /// Lowest admissible pressure of a fluid material (exclusive;
+    /// [`FluidEos::min_pressure`]); 0 when its EOS is invalid.
+    fn min_fluid_pressure(&self) -> f64 {
+        self.fluid_eos().map_or(0.0, |e| e.min_pressure())
+    }
+
     /// Whether the material lives on particles: a solid, or a fluid with
     /// `frame = "particles"` (gas points, York Sec. 3.3).
     pub fn on_particles(&self) -> bool {
@@ -1577,6 +1777,13 @@ fn validate_membrane(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(),
                  thickness",
             ));
         }
+    }
+    if let Some(k) = m.eos_parameter_keys().iter().find(|(given, _)| *given) {
+        return Err(err(
+            p(k.1),
+            "not a membrane key; membranes take density, youngs_modulus, poisson_ratio, \
+             thickness",
+        ));
     }
     for (v, k) in [
         (m.density, "density"),
@@ -2017,6 +2224,16 @@ impl Scene {
                 ));
             }
             sum += st.volume_fraction;
+            if st.density.is_some() && m.pressure_ignores_temperature() {
+                return Err(err(
+                    q("density"),
+                    format!(
+                        "`{}` has eos = \"mie_gruneisen\" with gruneisen = 0: its pressure does \
+                         not depend on temperature, so give temperature instead",
+                        m.name
+                    ),
+                ));
+            }
             match (st.density, st.temperature) {
                 (Some(d), None) => positive(&q("density"), d)?,
                 (None, Some(t)) => positive(&q("temperature"), t)?,
@@ -2030,10 +2247,7 @@ impl Scene {
             if let Some(v) = &st.velocity {
                 vec_len(&q("velocity"), v, dim)?;
             }
-            let p_min = match m.eos {
-                Some(EosKind::StiffenedGas) => -m.p_inf.unwrap_or(0.0),
-                _ => 0.0,
-            };
+            let p_min = m.min_fluid_pressure();
             if pressure <= p_min {
                 return Err(err(
                     p("pressure"),
@@ -2194,10 +2408,7 @@ impl Scene {
                     "missing; gas objects need an initial pressure",
                 ));
             };
-            let min = match (m.eos, m.p_inf) {
-                (Some(EosKind::StiffenedGas), Some(pi)) => -pi,
-                _ => 0.0,
-            };
+            let min = m.min_fluid_pressure();
             if !(pr.is_finite() && pr > min) {
                 return Err(err(
                     p("pressure"),

@@ -3,6 +3,7 @@
 
 pub mod axisym_studies;
 pub mod coupled_studies;
+pub mod eos_studies;
 pub mod harness;
 pub mod ice_studies;
 pub mod impm_studies;
@@ -139,5 +140,10 @@ pub const STUDIES: &[Study] = &[
         "ice_low_mach",
         "low-Mach periodic vortex, explicit vs semi-implicit ICE at acoustic CFL 1/10/50 (and 10/20/50 with the convective predictor): order, Mach floor, work-precision, speed-up at equal error",
         ice_studies::ice_low_mach,
+    ),
+    (
+        "mie_gruneisen_shock",
+        "Mie-Gruneisen water and copper driven into a wall at u_p = 100/500/1000/3000 m/s, explicit ICE and (water) gas points: U_s vs c0 + s u_p, p1 vs p0 + rho0 U_s u_p, vs h",
+        eos_studies::mie_gruneisen_shock,
     ),
 ];
