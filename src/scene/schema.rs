@@ -553,11 +553,16 @@ impl FailureSpec {
                     _ => None,
                 };
                 let d5 = self.d5.unwrap_or(0.0);
+                let t_room = self
+                    .room_temperature
+                    .or(flow.map(|jc| jc.t_room))
+                    .unwrap_or(300.0);
                 let t_melt = match (self.melt_temperature, flow) {
                     (Some(t), _) => t,
                     (None, Some(jc)) => jc.t_melt,
-                    // Unused when d5 = 0: T* only scales D₅.
-                    (None, None) if d5 == 0.0 => f64::INFINITY,
+                    // Unused when d5 = 0 (T* only scales D₅): any value
+                    // above the room temperature.
+                    (None, None) if d5 == 0.0 => t_room + 1.0,
                     (None, None) => {
                         return Err((
                             "melt_temperature",
@@ -577,10 +582,7 @@ impl FailureSpec {
                         .reference_rate
                         .or(flow.map(|jc| jc.rate0))
                         .unwrap_or(1.0),
-                    t_room: self
-                        .room_temperature
-                        .or(flow.map(|jc| jc.t_room))
-                        .unwrap_or(300.0),
+                    t_room,
                     t_melt,
                 })
             }
