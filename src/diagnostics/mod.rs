@@ -8,6 +8,7 @@ pub mod lian_gas;
 pub mod membrane_fe;
 pub mod mms;
 pub mod riemann;
+pub mod taylor;
 pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;
