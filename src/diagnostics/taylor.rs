@@ -107,16 +107,14 @@ impl TaylorMeasured {
 }
 
 /// Runs the Taylor scene `base` (`cases/taylor_anvil.toml`) with a cell of
-/// R₀/`n` (`n` a positive multiple of 3), impact speed `speed` [m/s], to
-/// `end` [s].
+/// R₀/`n` (`n` rounded up to a multiple of 3), impact speed `speed` [m/s],
+/// to `end` [s].
 ///
 /// # Errors
 /// A scene that does not build, or a step that fails.
 pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasured> {
-    assert!(
-        n > 0 && n % 3 == 0,
-        "cells per radius must be a multiple of 3"
-    );
+    // Both R₀ and L₀ on cell faces: a multiple of 3 cells per radius.
+    let n = n.max(1).div_ceil(3) * 3;
     let mut scene = base.clone();
     scene.grid.cells = vec![3 * n, 7 * n];
     scene.grid.lower = vec![0.0, 0.0];
