@@ -14,11 +14,12 @@ fn base() -> mpmice::scene::Scene {
 
 fn show(m: &TaylorMeasured) {
     println!(
-        "h = R0/{:.0}, v = {} m/s: L/L0 {:.4}, D/D0 {:.4} (footprint {:.4}), K0 {:.3} J/rad, K \
+        "h = R0/{:.0}, v = {} m/s: gap {:.2e} m, L/L0 {:.4}, D/D0 {:.4} (footprint {:.4}), K0 {:.3} J/rad, K \
          {:.3}, W {:.3}, elastic {:.4}, plastic (heat) {:.3}; energy error {:.2e}, plastic \
          account {:.2e}; max eps {:.3}; {} particles, {} steps, {:.2} s",
         3.81e-3 / m.h,
         m.speed,
+        m.gap,
         m.length_ratio(),
         m.diameter_ratio(),
         m.footprint / 7.62e-3,

@@ -56,6 +56,9 @@ pub struct TaylorMeasured {
     pub speed: f64,
     /// Final length L [m].
     pub length: f64,
+    /// Lowest particle edge min (z − a_z) [m]: the gap between the rod and
+    /// the wall (≈ 0 while the rod sits on it).
+    pub gap: f64,
     /// Largest (mushroom) diameter [m].
     pub diameter: f64,
     /// Footprint diameter (initial bottom row) [m].
@@ -169,6 +172,7 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
         h,
         speed,
         length: top - bottom,
+        gap: bottom,
         diameter: 2.0 * rmax,
         footprint: 2.0 * rfoot,
         kinetic0,
