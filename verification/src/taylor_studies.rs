@@ -45,7 +45,7 @@ pub fn taylor_anvil(quick: bool) -> Result<StudyResult> {
                 "{speed} m/s, h = R0/{n}: L/L0 {:.4} (measured {l_ref}), D_f/D0 {:.4} (largest \
                  {:.4}; measured {d_ref}), energy error |K0 - K - W|/K0 {:.2e}, plastic \
                  account |W_p - (K0 - K - E_e)|/K0 {:.2e}, K/K0 {:.3e}, E_e/K0 {:.3e}, max eps \
-                 {:.3}; {} particles, {} steps, {:.2} s",
+                 {:.3}, gap to the wall {:.1e} m; {} particles, {} steps, {:.2} s",
                 m.length_ratio(),
                 m.footprint / 7.62e-3,
                 m.diameter_ratio(),
@@ -54,6 +54,7 @@ pub fn taylor_anvil(quick: bool) -> Result<StudyResult> {
                 m.kinetic / m.kinetic0,
                 m.elastic / m.kinetic0,
                 m.max_plastic_strain,
+                m.gap,
                 m.particles,
                 m.steps,
                 m.wall_s
@@ -80,6 +81,33 @@ pub fn taylor_anvil(quick: bool) -> Result<StudyResult> {
             "abs",
             dp,
         ));
+    }
+    // Sensitivity at R0/6, 190 m/s: is the gap to the measurement a
+    // discretisation error? Shape function, update scheme, particles per
+    // cell.
+    if !quick {
+        type Change = fn(&mut mpmice::scene::Scene);
+        let variants: [(&str, Change); 3] = [
+            ("quadratic B-spline", |s| {
+                s.mpm.shape = mpmice::shape::ShapeKind::QuadraticBspline
+            }),
+            ("USL", |s| {
+                s.mpm.update = Some(mpmice::mpm::UpdateScheme::Usl)
+            }),
+            ("3x3 particles per cell", |s| s.mpm.particles_per_cell = 3),
+        ];
+        for (name, change) in variants {
+            let mut sc = base.clone();
+            change(&mut sc);
+            let m = run(&sc, 6, 190.0, end).with_context(|| name.to_string())?;
+            notes.push(format!(
+                "sensitivity, 190 m/s, h = R0/6, {name}: L/L0 {:.4}, D_f/D0 {:.4}, gap to the \
+                 wall {:.1e} m",
+                m.length_ratio(),
+                m.footprint / 7.62e-3,
+                m.gap
+            ));
+        }
     }
     Ok(StudyResult {
         study: "taylor_anvil".into(),
