@@ -3,7 +3,7 @@
 //! in particles per step, so criterion's "elem/s" is particle-steps per second.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use mpmice::diagnostics::bench_cases::rotating_block;
+use mpmice::diagnostics::bench_cases::{rotating_block, rotating_block_of, BlockMaterial};
 use mpmice::shape::ShapeKind;
 
 fn bench(c: &mut Criterion) {
@@ -26,6 +26,29 @@ fn bench(c: &mut Criterion) {
                 pool.install(|| b.iter(|| run.step().expect("step")))
             });
         }
+    }
+    g.finish();
+    // The cost of the constitutive models on the same block (GIMP, one
+    // thread): hypo-elastic, + Johnson–Cook plasticity (every point flows),
+    // + Johnson–Cook failure, and hypo-elastic with tensile failure.
+    let mut g = c.benchmark_group("mpm_step_2d_100k_materials");
+    g.sample_size(10);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    for (material, name) in [
+        (BlockMaterial::NeoHookean, "neo_hookean"),
+        (BlockMaterial::HypoElastic, "hypo_elastic"),
+        (BlockMaterial::JohnsonCook, "johnson_cook"),
+        (BlockMaterial::JohnsonCookFailure, "johnson_cook_failure"),
+        (BlockMaterial::Tensile, "tensile_failure"),
+    ] {
+        let mut run = rotating_block_of(ShapeKind::Gimp, material);
+        g.throughput(Throughput::Elements(run.particles.len() as u64));
+        g.bench_function(BenchmarkId::new(name, 1), |b| {
+            pool.install(|| b.iter(|| run.step().expect("step")))
+        });
     }
     g.finish();
 }

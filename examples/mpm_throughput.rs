@@ -1,8 +1,10 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc]`
+//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile]`
 //! (`gas`: the same block as gas points, York Sec. 3.3; `jc`: hypo-elastic
-//! with Johnson–Cook plasticity).
+//! with Johnson–Cook plasticity; `hypo`: hypo-elastic, no plasticity;
+//! `jcf`: `jc` with Johnson–Cook failure; `tensile`: hypo-elastic with a
+//! spall strength).
 use mpmice::diagnostics::bench_cases::{rotating_block_of, BlockMaterial};
 use mpmice::shape::ShapeKind;
 
@@ -18,6 +20,9 @@ fn main() {
     let material = match args.get(3).map(String::as_str) {
         Some("gas") => BlockMaterial::GasPoint,
         Some("jc") => BlockMaterial::JohnsonCook,
+        Some("hypo") => BlockMaterial::HypoElastic,
+        Some("jcf") => BlockMaterial::JohnsonCookFailure,
+        Some("tensile") => BlockMaterial::Tensile,
         _ => BlockMaterial::NeoHookean,
     };
     let mut run = rotating_block_of(shape, material);
@@ -46,7 +51,10 @@ fn main() {
         ms(t.grid_s),
         ms(t.g2p_s)
     );
-    if material == BlockMaterial::JohnsonCook {
+    if matches!(
+        material,
+        BlockMaterial::JohnsonCook | BlockMaterial::JohnsonCookFailure
+    ) {
         println!("{yielded} of {np} points have yielded");
     }
 }

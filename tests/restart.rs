@@ -185,6 +185,18 @@ fn gas_points_restart_bit_identically() {
 }
 
 #[test]
+fn failing_solids_restart_bit_identically() {
+    // The spall bar (the centre fails at 66 us), checkpointed at 70 us
+    // (after: the damage and the failed points' stress travel in the
+    // checkpoint) and at 60 us (before: the damage array is there, zero).
+    let mut s = case("tensile_bar_spall.toml");
+    s.time.end = 1.4e-4;
+    assert_restart_is_bit_identical("spall bar, checkpoint after the spall", &s);
+    let s = case("tensile_bar_spall.toml");
+    assert_restart_is_bit_identical("spall bar, checkpoint before the spall", &s);
+}
+
+#[test]
 fn membranes_restart_bit_identically() {
     // York dog-bone (membrane + gas points) on the coarsest grid, briefly:
     // the membrane stress, stretch (volume) and strain energy (work) travel

@@ -179,6 +179,33 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "≥ 0",
         ),
         ("this is = not toml [".to_string(), "<toml>", "TOML"),
+        // Failure models (issue 18; more in tests/failure.rs).
+        (
+            edit(
+                "poisson_ratio = 0.3\n",
+                "poisson_ratio = 0.3\nfailure = { model = \"tensile\", spall_strength = -5e8 }\n",
+            ),
+            "materials[0].failure.spall_strength",
+            "> 0",
+        ),
+        (
+            edit(
+                "poisson_ratio = 0.3\n",
+                "poisson_ratio = 0.3\nplasticity = { flow = \"linear\", yield_stress = 3e8 }\n\
+                 failure = { model = \"johnson_cook\", d1 = -0.5, d2 = 0.5, d3 = -1.0 }\n",
+            ),
+            "materials[0].failure.d1",
+            "d1 + d2 > 0",
+        ),
+        (
+            edit(
+                "poisson_ratio = 0.3\n",
+                "poisson_ratio = 0.3\nfailure = { model = \"johnson_cook\", d1 = 0.5, d2 = 0.5, \
+                 d3 = -1.0 }\n",
+            ),
+            "materials[0].failure",
+            "plasticity",
+        ),
     ];
     assert_each_names_its_key(cases);
 }

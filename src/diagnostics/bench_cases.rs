@@ -23,6 +23,17 @@ pub enum BlockMaterial {
     /// case,
     /// the cost of the radial return with its Newton iteration.
     JohnsonCook,
+    /// Hypo-elastic (Jaumann) without plasticity: the baseline of the
+    /// plastic and failing blocks.
+    HypoElastic,
+    /// [`BlockMaterial::JohnsonCook`] with Johnson–Cook failure (Johnson &
+    /// Cook 1985 OFHC copper D₁..D₅): the damage update on every flowing
+    /// point (the block's strains stay far below failure).
+    JohnsonCookFailure,
+    /// Hypo-elastic with brittle tensile failure (a spall strength far
+    /// above the block's stresses): the largest principal stress of every
+    /// point each step.
+    Tensile,
 }
 
 /// A 2D neo-Hookean block (E = 1e6, ν = 0.3, ρ = 1000) of 2×2 particles per
@@ -58,25 +69,53 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
             let c = mat.wave_speed(1000.0);
             (mat, 1000.0, c)
         }
-        BlockMaterial::JohnsonCook => {
+        BlockMaterial::JohnsonCook
+        | BlockMaterial::HypoElastic
+        | BlockMaterial::JohnsonCookFailure
+        | BlockMaterial::Tensile => {
+            use crate::material::failure::{Failure, Fracturing, JohnsonCookFailure};
             use crate::material::plasticity::{FlowStress, JohnsonCook, J2};
-            let mat = SolidMaterial {
-                name: "block".into(),
-                density: 1000.0,
-                model: SolidModel::ElasticPlastic(J2 {
-                    flow: FlowStress::JohnsonCook(JohnsonCook {
-                        a: 0.0,
-                        b: 1e4,
-                        n: 0.26,
-                        c: 0.014,
-                        m: 1.03,
+            let j2 = J2 {
+                flow: FlowStress::JohnsonCook(JohnsonCook {
+                    a: 0.0,
+                    b: 1e4,
+                    n: 0.26,
+                    c: 0.014,
+                    m: 1.03,
+                    rate0: 1.0,
+                    t_room: 300.0,
+                    t_melt: 1800.0,
+                }),
+                taylor_quinney: 0.9,
+                specific_heat: 477.0,
+            };
+            let model = match material {
+                BlockMaterial::HypoElastic => SolidModel::LinearElastic,
+                BlockMaterial::JohnsonCookFailure => SolidModel::Fracturing(Fracturing {
+                    plasticity: Some(j2),
+                    failure: Failure::JohnsonCook(JohnsonCookFailure {
+                        d1: 0.54,
+                        d2: 4.89,
+                        d3: -3.03,
+                        d4: 0.014,
+                        d5: 1.12,
                         rate0: 1.0,
                         t_room: 300.0,
                         t_melt: 1800.0,
                     }),
-                    taylor_quinney: 0.9,
-                    specific_heat: 477.0,
                 }),
+                BlockMaterial::Tensile => SolidModel::Fracturing(Fracturing {
+                    plasticity: None,
+                    failure: Failure::Tensile {
+                        spall_strength: 1e9,
+                    },
+                }),
+                _ => SolidModel::ElasticPlastic(j2),
+            };
+            let mat = SolidMaterial {
+                name: "block".into(),
+                density: 1000.0,
+                model,
                 elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
             };
             let c = mat.wave_speed(1000.0);

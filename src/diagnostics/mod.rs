@@ -9,6 +9,7 @@ pub mod membrane_fe;
 pub mod mms;
 pub mod riemann;
 pub mod shock;
+pub mod taylor;
 pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;

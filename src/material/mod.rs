@@ -1,12 +1,14 @@
 //! Materials: solid constitutive models (`solid`), the equation-of-state
 //! interface (`equation_of_state`), fluid equations of state (`eos`,
-//! `solid_eos`, `mie_gruneisen`, `jwl`), J2 plasticity (`plasticity`), the gas on material points
+//! `solid_eos`, `mie_gruneisen`, `jwl`), J2 plasticity (`plasticity`), failure
+//! and damage (`failure`), the gas on material points
 //! (`gas_point`, York Sec. 3.3) and the membrane law (`membrane`, York
 //! Sec. 3.2).
 //! Imports no physics module.
 
 pub mod eos;
 pub mod equation_of_state;
+pub mod failure;
 pub mod gas_point;
 pub mod jwl;
 pub mod membrane;

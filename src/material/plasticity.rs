@@ -81,7 +81,12 @@ pub struct BadParameter {
     pub allowed: &'static str,
 }
 
-fn check(ok: bool, key: &'static str, allowed: &'static str) -> Result<(), BadParameter> {
+/// `Ok` when `ok`, else the named [`BadParameter`].
+pub(crate) fn check(
+    ok: bool,
+    key: &'static str,
+    allowed: &'static str,
+) -> Result<(), BadParameter> {
     if ok {
         Ok(())
     } else {
@@ -180,13 +185,16 @@ pub struct J2 {
     pub specific_heat: f64,
 }
 
-/// A point's plastic state (default: virgin, at 300 K).
+/// A point's plastic state (default: virgin, at 300 K, undamaged).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlasticState {
     /// Equivalent plastic strain ε̄.
     pub plastic_strain: f64,
     /// Temperature [K].
     pub temperature: f64,
+    /// Damage D ∈ [0, 1] of a failing material (1: failed; see
+    /// [`crate::material::failure`]); 0 elsewhere.
+    pub damage: f64,
 }
 
 impl Default for PlasticState {
@@ -194,6 +202,7 @@ impl Default for PlasticState {
         Self {
             plastic_strain: 0.0,
             temperature: 300.0,
+            damage: 0.0,
         }
     }
 }
@@ -409,6 +418,7 @@ mod tests {
         let mut st = PlasticState {
             plastic_strain: 0.0,
             temperature: 293.0,
+            damage: 0.0,
         };
         let mut strain = 0.0;
         for &(rate, steps) in legs {
@@ -568,6 +578,7 @@ mod tests {
         let mut st = PlasticState {
             plastic_strain: 0.0,
             temperature: 293.0,
+            damage: 0.0,
         };
         let steps = 1000;
         let dt = 1.0 / steps as f64;
@@ -613,6 +624,7 @@ mod tests {
             let mut st = PlasticState {
                 plastic_strain: 0.0,
                 temperature: 293.0,
+                damage: 0.0,
             };
             // γ to 0.2 in 4000 steps; the plastic rate is then ≈ γ̇/√3.
             let steps = 4000;

@@ -5,6 +5,7 @@
 
 use nalgebra::Matrix3;
 
+use super::failure::{Failure, Fracturing};
 use super::gas_point::{GasPoint, GasStep};
 use super::membrane::MembraneLaw;
 use super::plasticity::{PlasticState, J2};
@@ -72,6 +73,13 @@ pub enum SolidModel {
     /// [`PlasticState`].
     #[serde(skip)]
     ElasticPlastic(J2),
+    /// Hypo-elastic, optionally J2-plastic, with a failure model
+    /// ([`Fracturing`]: Johnson–Cook damage or a spall strength); set by
+    /// the scene for `model = "linear_elastic"` with a `failure` table. The
+    /// point's damage (1: failed) travels in [`PlasticState::damage`]; a
+    /// failed point keeps only a compressive pressure.
+    #[serde(skip)]
+    Fracturing(Fracturing),
     /// A membrane material point (York Sec. 3.2, [`MembraneLaw`]): its
     /// stress is updated by the explicit MPM step in the membrane's local
     /// frame (it needs the tangent from its neighbours); the particle's
@@ -112,6 +120,16 @@ impl SolidMaterial {
     pub fn plasticity(&self) -> Option<&J2> {
         match &self.model {
             SolidModel::ElasticPlastic(j2) => Some(j2),
+            SolidModel::Fracturing(f) => f.plasticity.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The failure model of this material, if it has one.
+    #[inline]
+    pub fn failure(&self) -> Option<&Failure> {
+        match &self.model {
+            SolidModel::Fracturing(f) => Some(&f.failure),
             _ => None,
         }
     }
@@ -211,6 +229,15 @@ impl SolidMaterial {
                 // hypo-elastic model.
                 *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
             }
+            SolidModel::Fracturing(fr) => {
+                let old = *stress;
+                fr.update(l, dt, lambda, mu, gas.rho_ref / j, stress, plastic);
+                let d = 0.5 * (l + l.transpose());
+                // Total stress power, as above: at failure the elastic
+                // energy the point stored becomes dissipated (the fracture
+                // energy) and stays in the work.
+                *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
+            }
             // The explicit step updates a membrane point in its local frame
             // (`mpm::explicit`, York Sec. 3.2); without a frame the stress
             // is kept.
@@ -237,7 +264,9 @@ impl SolidMaterial {
             // Plastic solids are explicit only (the scene rejects them in
             // implicit mode, and `spatial_tangent` gives none): the elastic
             // predictor stands in.
-            SolidModel::LinearElastic | SolidModel::ElasticPlastic(_) => {
+            SolidModel::LinearElastic
+            | SolidModel::ElasticPlastic(_)
+            | SolidModel::Fracturing(_) => {
                 let g = df - Matrix3::identity();
                 let d = 0.5 * (g + g.transpose());
                 let w = 0.5 * (g - g.transpose());
@@ -269,9 +298,10 @@ impl SolidMaterial {
         match self.model {
             SolidModel::LinearElastic => Some((lambda, mu)),
             SolidModel::NeoHookean => Some((lambda / j, (mu - lambda * j.ln()) / j)),
-            SolidModel::GasPoint(_) | SolidModel::ElasticPlastic(_) | SolidModel::Membrane(_) => {
-                None
-            }
+            SolidModel::GasPoint(_)
+            | SolidModel::ElasticPlastic(_)
+            | SolidModel::Fracturing(_)
+            | SolidModel::Membrane(_) => None,
         }
     }
 
@@ -283,6 +313,7 @@ impl SolidMaterial {
             SolidModel::LinearElastic
             | SolidModel::GasPoint(_)
             | SolidModel::ElasticPlastic(_)
+            | SolidModel::Fracturing(_)
             | SolidModel::Membrane(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;

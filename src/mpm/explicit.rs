@@ -1043,11 +1043,18 @@ fn g2p<
     } else {
         0.0
     };
-    // Plastic state travels only when some material is plastic.
+    // Plastic state travels only when some material is plastic, damage
+    // only when some material fails.
     let plastic = GRAD != GRAD_NONE && ctx.materials.iter().any(|m| m.plasticity().is_some());
+    let failing = GRAD != GRAD_NONE && ctx.materials.iter().any(|m| m.failure().is_some());
+    if failing {
+        // Sized once, at the first step of a run with failure.
+        particles.track_damage();
+    }
     {
         let mass = &particles.mass;
         let eps_p = SharedMut::new(&mut particles.plastic_strain);
+        let damage = SharedMut::new(&mut particles.damage);
         let temp = SharedMut::new(&mut particles.temperature);
         let x = SharedMut::new(&mut particles.x);
         let v = SharedMut::new(&mut particles.v);
@@ -1161,11 +1168,16 @@ fn g2p<
                         PlasticState {
                             plastic_strain: *eps_p.get(p),
                             temperature: *temp.get(p),
+                            damage: 0.0,
                         }
                     }
                 } else {
                     PlasticState::default()
                 };
+                if failing {
+                    // SAFETY: as above.
+                    state.damage = unsafe { *damage.get(p) };
+                }
                 material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
                 if plastic {
                     // SAFETY: as above.
@@ -1173,6 +1185,10 @@ fn g2p<
                         *eps_p.get(p) = state.plastic_strain;
                         *temp.get(p) = state.temperature;
                     }
+                }
+                if failing {
+                    // SAFETY: as above.
+                    unsafe { *damage.get(p) = state.damage };
                 }
             }
         });

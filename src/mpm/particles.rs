@@ -37,6 +37,11 @@ pub struct Particles<const D: usize> {
     pub temperature: Vec<f64>,
     /// Equivalent plastic strain ε̄ (plastic materials; 0 elsewhere).
     pub plastic_strain: Vec<f64>,
+    /// Damage D ∈ [0, 1] (1: failed; [`crate::material::failure`]): empty
+    /// unless a material has a failure model, then one per particle (the
+    /// explicit step sizes it at its first step; 0 for materials without
+    /// failure).
+    pub damage: Vec<f64>,
 }
 
 impl<const D: usize> Particles<D> {
@@ -77,6 +82,23 @@ impl<const D: usize> Particles<D> {
         self.material.push(material);
         self.temperature.push(Self::INITIAL_TEMPERATURE);
         self.plastic_strain.push(0.0);
+        if !self.damage.is_empty() {
+            self.damage.push(0.0);
+        }
+    }
+
+    /// Sizes [`Particles::damage`] to one entry per particle (new entries
+    /// undamaged); a no-op when it is sized already.
+    pub fn track_damage(&mut self) {
+        if self.damage.len() != self.len() {
+            self.damage.resize(self.len(), 0.0);
+        }
+    }
+
+    /// Whether particle `p` has failed (damage 1).
+    #[inline]
+    pub fn failed(&self, p: usize) -> bool {
+        self.damage.get(p).is_some_and(|&d| d >= 1.0)
     }
 
     /// The particles `p` with `keep(p)`, in order (a new set).
@@ -111,6 +133,9 @@ impl<const D: usize> Particles<D> {
         retain_by(&mut self.material, keep);
         retain_by(&mut self.temperature, keep);
         retain_by(&mut self.plastic_strain, keep);
+        if !self.damage.is_empty() {
+            retain_by(&mut self.damage, keep);
+        }
     }
 
     /// Appends copies of all of `other`'s particles.
@@ -135,6 +160,13 @@ impl<const D: usize> Particles<D> {
         self.material.push(other.material[p]);
         self.temperature.push(other.temperature[p]);
         self.plastic_strain.push(other.plastic_strain[p]);
+        if !other.damage.is_empty() {
+            // Keep `damage` empty or full: size it before the first copy.
+            self.damage.resize(self.len() - 1, 0.0);
+            self.damage.push(other.damage[p]);
+        } else if !self.damage.is_empty() {
+            self.damage.push(0.0);
+        }
     }
 
     /// Total mass.

@@ -15,6 +15,7 @@ use crate::ice::{
     InflowState, Limiter, MaterialInit,
 };
 use crate::material::eos::{EosError, EquationOfState, FluidEos};
+use crate::material::failure::Fracturing;
 use crate::material::{
     ArtificialViscosity, ElasticConstants, GasPoint, MembraneLaw, SolidMaterial, SolidModel,
 };
@@ -39,10 +40,16 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
             m.shear_modulus.unwrap_or_default(),
         ),
     };
-    // Validation has checked the plasticity table (and that it goes with
-    // the hypo-elastic model).
-    let model = match m.plasticity.as_ref().map(|pl| pl.j2()) {
-        Some(Ok(j2)) => SolidModel::ElasticPlastic(j2),
+    // Validation has checked the plasticity and failure tables (and that
+    // they go with the hypo-elastic model).
+    let j2 = m.plasticity.as_ref().and_then(|pl| pl.j2().ok());
+    let failure = m.failure.as_ref().and_then(|f| f.failure(j2.as_ref()).ok());
+    let model = match (j2, failure) {
+        (plasticity, Some(failure)) => SolidModel::Fracturing(Fracturing {
+            plasticity,
+            failure,
+        }),
+        (Some(j2), None) => SolidModel::ElasticPlastic(j2),
         _ => m.model.unwrap_or(SolidModel::NeoHookean),
     };
     SolidMaterial {

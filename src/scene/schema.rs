@@ -458,6 +458,146 @@ impl PlasticitySpec {
     }
 }
 
+/// The failure model of a solid (`materials[i].failure.model`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureKind {
+    /// Johnson–Cook ductile damage D = Σ Δε̄/ε_f (needs `plasticity`).
+    JohnsonCook,
+    /// Brittle: fails when the largest principal stress reaches
+    /// `spall_strength`.
+    Tensile,
+}
+
+/// Failure of a hypo-elastic(-plastic) solid (`materials[i].failure`;
+/// `model = "linear_elastic"`, explicit mode; see
+/// [`crate::material::failure`]). `johnson_cook` needs `d1`, `d2`, `d3`
+/// (`d4`, `d5` default 0; `reference_rate`, `room_temperature` and
+/// `melt_temperature` default to the Johnson–Cook flow stress's, else 1 /s,
+/// 300 K and, when `d5 ≠ 0`, required) and a `plasticity` table; `tensile`
+/// needs `spall_strength`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FailureSpec {
+    /// Failure model.
+    pub model: FailureKind,
+    /// Johnson–Cook D₁ (d1 + d2 > 0).
+    pub d1: Option<f64>,
+    /// Johnson–Cook D₂ ≥ 0.
+    pub d2: Option<f64>,
+    /// Johnson–Cook D₃.
+    pub d3: Option<f64>,
+    /// Johnson–Cook D₄ ≥ 0 (default 0).
+    pub d4: Option<f64>,
+    /// Johnson–Cook D₅ > −1 (default 0).
+    pub d5: Option<f64>,
+    /// Reference strain rate ε̇₀ > 0 [1/s] of ε̇*.
+    pub reference_rate: Option<f64>,
+    /// Room temperature [K] of T*.
+    pub room_temperature: Option<f64>,
+    /// Melting temperature [K] of T*.
+    pub melt_temperature: Option<f64>,
+    /// Spall strength σ_s > 0 [Pa] (tensile).
+    pub spall_strength: Option<f64>,
+}
+
+impl FailureSpec {
+    /// The failure model, given the material's plasticity (whose
+    /// Johnson–Cook constants supply the defaults), or the first key that
+    /// is missing, not read or out of range (path relative to the failure
+    /// table; an empty key names the table itself).
+    ///
+    /// # Errors
+    /// A missing key, a key the model does not read, or a parameter out of
+    /// range, named.
+    pub fn failure(
+        &self,
+        plasticity: Option<&crate::material::plasticity::J2>,
+    ) -> Result<crate::material::failure::Failure, (&'static str, String)> {
+        use crate::material::failure::{Failure, JohnsonCookFailure};
+        use crate::material::plasticity::FlowStress;
+        let name = match self.model {
+            FailureKind::JohnsonCook => "johnson_cook",
+            FailureKind::Tensile => "tensile",
+        };
+        let need = |v: Option<f64>, key: &'static str| {
+            v.ok_or((key, format!("missing; model = \"{name}\" needs it")))
+        };
+        let jc_keys = [
+            (self.d1.is_some(), "d1"),
+            (self.d2.is_some(), "d2"),
+            (self.d3.is_some(), "d3"),
+            (self.d4.is_some(), "d4"),
+            (self.d5.is_some(), "d5"),
+            (self.reference_rate.is_some(), "reference_rate"),
+            (self.room_temperature.is_some(), "room_temperature"),
+            (self.melt_temperature.is_some(), "melt_temperature"),
+        ];
+        let unused: &[(bool, &'static str)] = match self.model {
+            FailureKind::JohnsonCook => &[(self.spall_strength.is_some(), "spall_strength")],
+            FailureKind::Tensile => &jc_keys,
+        };
+        if let Some((_, k)) = unused.iter().find(|(given, _)| *given) {
+            return Err((k, format!("not read by model = \"{name}\"")));
+        }
+        let f = match self.model {
+            FailureKind::Tensile => Failure::Tensile {
+                spall_strength: need(self.spall_strength, "spall_strength")?,
+            },
+            FailureKind::JohnsonCook => {
+                let Some(j2) = plasticity else {
+                    return Err((
+                        "",
+                        "model = \"johnson_cook\" accumulates damage from the plastic strain: \
+                         the material needs a plasticity table"
+                            .to_string(),
+                    ));
+                };
+                let flow = match j2.flow {
+                    FlowStress::JohnsonCook(jc) => Some(jc),
+                    _ => None,
+                };
+                let d5 = self.d5.unwrap_or(0.0);
+                let t_room = self
+                    .room_temperature
+                    .or(flow.map(|jc| jc.t_room))
+                    .unwrap_or(300.0);
+                let t_melt = match (self.melt_temperature, flow) {
+                    (Some(t), _) => t,
+                    (None, Some(jc)) => jc.t_melt,
+                    // Unused when d5 = 0 (T* only scales D₅): any value
+                    // above the room temperature.
+                    (None, None) if d5 == 0.0 => t_room + 1.0,
+                    (None, None) => {
+                        return Err((
+                            "melt_temperature",
+                            "missing; d5 ≠ 0 needs it (or a johnson_cook flow stress to take \
+                             it from)"
+                                .to_string(),
+                        ))
+                    }
+                };
+                Failure::JohnsonCook(JohnsonCookFailure {
+                    d1: need(self.d1, "d1")?,
+                    d2: need(self.d2, "d2")?,
+                    d3: need(self.d3, "d3")?,
+                    d4: self.d4.unwrap_or(0.0),
+                    d5,
+                    rate0: self
+                        .reference_rate
+                        .or(flow.map(|jc| jc.rate0))
+                        .unwrap_or(1.0),
+                    t_room,
+                    t_melt,
+                })
+            }
+        };
+        f.validate()
+            .map_err(|b| (b.key, format!("must be {}", b.allowed)))?;
+        Ok(f)
+    }
+}
+
 /// Equation of state of a fluid material.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -571,6 +711,9 @@ pub struct MaterialSpec {
     /// J2 plasticity (solids with `model = "linear_elastic"`, explicit
     /// mode): see [`PlasticitySpec`].
     pub plasticity: Option<PlasticitySpec>,
+    /// Failure and damage (solids with `model = "linear_elastic"`,
+    /// explicit mode): see [`FailureSpec`].
+    pub failure: Option<FailureSpec>,
     /// Membranes: thickness h (> 0); the areal density is ρ h.
     pub thickness: Option<f64>,
 }
@@ -1363,6 +1506,27 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         pl.j2()
             .map_err(|(k, msg)| err(p(&format!("plasticity.{k}")), msg))?;
     }
+    if let Some(f) = &m.failure {
+        if m.model != Some(SolidModel::LinearElastic) {
+            return Err(err(
+                p("failure"),
+                "failure is built for the hypo-elastic path only; allowed with model = \
+                 \"linear_elastic\"",
+            ));
+        }
+        if m.rigid {
+            return Err(err(p("failure"), "a rigid solid does not fail"));
+        }
+        let j2 = m.plasticity.as_ref().and_then(|pl| pl.j2().ok());
+        f.failure(j2.as_ref()).map_err(|(k, msg)| {
+            let path = if k.is_empty() {
+                p("failure")
+            } else {
+                p(&format!("failure.{k}"))
+            };
+            err(path, msg)
+        })?;
+    }
     match (
         m.youngs_modulus,
         m.poisson_ratio,
@@ -1402,6 +1566,7 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.bulk_modulus.is_some(), "bulk_modulus"),
         (m.shear_modulus.is_some(), "shear_modulus"),
         (m.plasticity.is_some(), "plasticity"),
+        (m.failure.is_some(), "failure"),
     ] {
         if v {
             let extra = if k == "density" {
@@ -3005,6 +3170,13 @@ impl Scene {
                     format!("materials[{i}].plasticity"),
                     "J2 plasticity runs in explicit mode only (implicit MPM has no consistent \
                      tangent for it yet); allowed: time.mode = explicit, semi_implicit",
+                ));
+            }
+            if let Some(i) = self.materials.iter().position(|m| m.failure.is_some()) {
+                return Err(err(
+                    format!("materials[{i}].failure"),
+                    "failure runs in explicit mode only; allowed: time.mode = explicit, \
+                     semi_implicit",
                 ));
             }
         }

@@ -10,6 +10,7 @@ pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
 pub mod reaction_studies;
+pub mod taylor_studies;
 pub mod york_studies;
 
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
@@ -85,6 +86,11 @@ pub const STUDIES: &[Study] = &[
         "axisym_lame",
         "axisymmetric r-z explicit MPM: Lame thick cylinder and sphere under internal pressure, sigma_r, sigma_theta, u_r vs h",
         axisym_studies::axisym_lame,
+    ),
+    (
+        "taylor_anvil",
+        "Taylor anvil: Johnson-Cook copper rod on a rigid wall (axisymmetric MPM), final length and impact-face diameter vs the measured rods at 190/146/130 m/s, energy account, vs h",
+        taylor_studies::taylor_anvil,
     ),
     (
         "york_dogbone",

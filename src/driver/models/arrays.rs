@@ -96,6 +96,9 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     });
     put_scalars(ck, &n("temperature"), &p.temperature);
     put_scalars(ck, &n("plastic_strain"), &p.plastic_strain);
+    if !p.damage.is_empty() {
+        put_scalars(ck, &n("damage"), &p.damage);
+    }
 }
 
 /// Loads the particle arrays saved by [`save_particles`]; the material
@@ -128,6 +131,12 @@ pub fn load_particles<const D: usize>(
         material: material.into_iter().map(|m| m as u16).collect(),
         temperature: take_scalars(ck, &n("temperature"), len)?,
         plastic_strain: take_scalars(ck, &n("plastic_strain"), len)?,
+        // Present when the run had started to track damage.
+        damage: if ck.shape(&n("damage")).is_some() {
+            take_scalars(ck, &n("damage"), len)?
+        } else {
+            Vec::new()
+        },
     })
 }
 
@@ -199,6 +208,28 @@ pub fn plastic_fields<const D: usize>(
         "-",
         Values::Scalar(p.plastic_strain.clone()),
     )]
+}
+
+/// The failure snapshot fields `damage` (D ∈ [0, 1]) and `failed` (1 when
+/// D = 1, else 0); empty when no material has a failure model.
+pub fn failure_fields<const D: usize>(
+    p: &Particles<D>,
+    materials: &[SolidMaterial],
+) -> Vec<OutField> {
+    if materials.iter().all(|m| m.failure().is_none()) {
+        return Vec::new();
+    }
+    let damage: Vec<f64> = (0..p.len())
+        .map(|i| p.damage.get(i).copied().unwrap_or(0.0))
+        .collect();
+    let failed = damage
+        .iter()
+        .map(|&d| if d >= 1.0 { 1.0 } else { 0.0 })
+        .collect();
+    vec![
+        OutField::new("damage", "-", Values::Scalar(damage)),
+        OutField::new("failed", "-", Values::Scalar(failed)),
+    ]
 }
 
 /// The gas-point snapshot fields (York Sec. 3.3), one value per particle:
@@ -279,6 +310,15 @@ fn particle_violation<const D: usize>(
     let t = p.temperature[i];
     if !(t.is_finite() && t > 0.0) {
         return Some(("temperature", t, POS));
+    }
+    let ep = p.plastic_strain[i];
+    if !(ep.is_finite() && ep >= 0.0) {
+        return Some(("plastic_strain", ep, "finite and ≥ 0"));
+    }
+    if let Some(&d) = p.damage.get(i) {
+        if !(d.is_finite() && (0.0..=1.0).contains(&d)) {
+            return Some(("damage", d, "in [0, 1]"));
+        }
     }
     // A gas point needs a positive internal energy (York Eq. 23; its work
     // holds ρ_ref e).

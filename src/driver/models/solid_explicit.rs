@@ -5,8 +5,8 @@ use crate::driver::model::{
     Values, Violation,
 };
 use crate::driver::models::arrays::{
-    gas_point_fields, load_particles, name_particle_material, particle_conserved, particle_fields,
-    particle_watchdog, plastic_fields, save_particles,
+    failure_fields, gas_point_fields, load_particles, name_particle_material, particle_conserved,
+    particle_fields, particle_watchdog, plastic_fields, save_particles,
 };
 use crate::driver::outputs::pad3;
 use crate::error::Error;
@@ -156,6 +156,9 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         particles
             .fields
             .extend(plastic_fields(&r.particles, &r.materials));
+        particles
+            .fields
+            .extend(failure_fields(&r.particles, &r.materials));
         particles.fields.extend(membrane_fields(r));
         vec![particles, grid]
     }
