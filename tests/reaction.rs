@@ -91,6 +91,19 @@ fn constant_rate_burn_converts_exactly_k_a_t() {
     assert!(balance.abs() < 1e-2, "{balance:e}");
 }
 
+/// The semi-implicit pressure (`time.mode = "semi_implicit"`) runs the same
+/// burn: K A t to round-off, mass conserved.
+#[test]
+fn semi_implicit_burn_converts_k_a_t() {
+    let mut run = run_of(&[("mode = \"explicit\"", "mode = \"semi_implicit\"")]);
+    let (f0, s0) = masses(&run);
+    run.advance_to(1e-3).unwrap();
+    let (f1, s1) = masses(&run);
+    let burnt = run.reaction_totals().mass;
+    assert!((burnt - 1.8e-3).abs() < 1e-12 * 1.8e-3, "{burnt:e}");
+    assert!(((f1 + s1) - (f0 + s0)).abs() < 1e-14 * (f0 + s0));
+}
+
 /// With n = 0.8 the rate follows the cell pressure: the burnt mass lies
 /// between `K A Σ p_minⁿ Δt` and `K A Σ p_maxⁿ Δt` over the steps, with the
 /// pressure extremes of the tube at the end of each step (the pressure the
