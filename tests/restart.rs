@@ -167,6 +167,18 @@ fn coupled_restarts_bit_identically() {
 }
 
 #[test]
+fn reactions_restart_bit_identically() {
+    // A fast surface burn (cases/reaction_burn.toml with K = 2e5): the
+    // reaction totals, each reaction's step limit and the particles that
+    // burnt out (removed) travel in the checkpoint.
+    let mut s = case("reaction_burn.toml");
+    s.reactions[0].rate_constant = 2e5;
+    s.time.end = 6e-5;
+    s.output.interval = Some(2e-5);
+    assert_restart_is_bit_identical("surface burn", &s);
+}
+
+#[test]
 fn gas_points_restart_bit_identically() {
     // York Sod with gas material points (explicit MPM model): the gas
     // state (stress, internal energy in `work`, J) travels in the

@@ -179,9 +179,11 @@ impl<const D: usize> Model for Coupled<D> {
             let data = run
                 .reactions
                 .iter()
-                .flat_map(|r| [r.totals.mass, r.totals.energy, r.totals.heat])
+                .flat_map(|r| [r.totals.mass, r.totals.energy, r.totals.heat, r.dt_limit])
                 .collect();
-            ck.put_f64("reactions.totals", vec![run.reactions.len(), 3], data);
+            // With each reaction's step limit, which came from the rates of
+            // the last step (a dry run at the restored state would differ).
+            ck.put_f64("reactions.totals", vec![run.reactions.len(), 4], data);
         }
         ck.put_u64("model.steps", vec![1], vec![run.steps]);
     }
@@ -197,11 +199,12 @@ impl<const D: usize> Model for Coupled<D> {
         load_carried(ck, "workspace", run.ice_workspace_mut(), cells)?;
         if !run.reactions.is_empty() {
             let n = run.reactions.len();
-            let data = ck.take_f64("reactions.totals", Some(&[n, 3]))?;
-            for (r, t) in run.reactions.iter_mut().zip(data.chunks_exact(3)) {
+            let data = ck.take_f64("reactions.totals", Some(&[n, 4]))?;
+            for (r, t) in run.reactions.iter_mut().zip(data.chunks_exact(4)) {
                 r.totals.mass = t[0];
                 r.totals.energy = t[1];
                 r.totals.heat = t[2];
+                r.dt_limit = t[3];
             }
         }
         run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
