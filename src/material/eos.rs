@@ -68,7 +68,7 @@
 //!
 //! See [`StiffenedGas`] for why this fixes the stiffened-gas form.
 
-use super::equation_of_state::{check_gt, check_temperature};
+use super::equation_of_state::{check_gt, check_pressure, check_temperature};
 pub use super::equation_of_state::{EosError, EquationOfState};
 pub use super::jwl::Jwl;
 pub use super::mie_gruneisen::MieGruneisen;
@@ -142,25 +142,8 @@ impl EquationOfState for IdealGas {
 
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError> {
         let t = check_temperature(t)?;
-        if !p.is_finite() {
-            return Err(EosError::Invalid {
-                field: "pressure",
-                allowed: "finite",
-                got: p,
-            });
-        }
-        if p <= 0.0 {
-            return Err(EosError::PressureOutOfRange { p, p_min: 0.0 });
-        }
+        let p = check_pressure(p, 0.0)?;
         Ok(p / ((self.gamma - 1.0) * self.cv * t))
-    }
-
-    fn internal_energy(&self, t: f64) -> f64 {
-        self.cv * t
-    }
-
-    fn temperature(&self, e: f64) -> f64 {
-        e / self.cv
     }
 
     fn specific_heat_cv(&self) -> f64 {
@@ -274,7 +257,7 @@ impl StiffenedGas {
         let probe = Self::new(gamma, p_inf, 1.0)?;
         let rho0 = check_gt("rho0", "finite and > 0", rho0, 0.0)?;
         let t0 = check_temperature(t0)?;
-        probe.check_pressure(p0)?;
+        check_pressure(p0, -probe.p_inf)?;
         let cv = (p0 + gamma * p_inf) / ((gamma - 1.0) * rho0 * t0);
         Self::new(gamma, p_inf, cv)
     }
@@ -299,24 +282,6 @@ impl StiffenedGas {
     pub fn pressure_from_energy(&self, rho: f64, e: f64) -> f64 {
         (self.gamma - 1.0) * rho * e - self.gamma * self.p_inf
     }
-
-    /// Checks that `p` is finite and in the hyperbolic range `p > −p_∞`.
-    fn check_pressure(&self, p: f64) -> Result<f64, EosError> {
-        if !p.is_finite() {
-            return Err(EosError::Invalid {
-                field: "pressure",
-                allowed: "finite",
-                got: p,
-            });
-        }
-        if p <= -self.p_inf {
-            return Err(EosError::PressureOutOfRange {
-                p,
-                p_min: -self.p_inf,
-            });
-        }
-        Ok(p)
-    }
 }
 
 impl EquationOfState for StiffenedGas {
@@ -340,16 +305,8 @@ impl EquationOfState for StiffenedGas {
 
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError> {
         let t = check_temperature(t)?;
-        let p = self.check_pressure(p)?;
+        let p = check_pressure(p, -self.p_inf)?;
         Ok((p + self.gamma * self.p_inf) / ((self.gamma - 1.0) * self.cv * t))
-    }
-
-    fn internal_energy(&self, t: f64) -> f64 {
-        self.cv * t
-    }
-
-    fn temperature(&self, e: f64) -> f64 {
-        e / self.cv
     }
 
     fn specific_heat_cv(&self) -> f64 {
@@ -469,16 +426,6 @@ impl EquationOfState for FluidEos {
     #[inline]
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError> {
         dispatch!(self, eos => eos.density(p, t))
-    }
-
-    #[inline]
-    fn internal_energy(&self, t: f64) -> f64 {
-        dispatch!(self, eos => eos.internal_energy(t))
-    }
-
-    #[inline]
-    fn temperature(&self, e: f64) -> f64 {
-        dispatch!(self, eos => eos.temperature(e))
     }
 
     #[inline]

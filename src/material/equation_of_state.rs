@@ -55,6 +55,22 @@ pub(crate) fn check_gt(
     }
 }
 
+/// Validates a pressure argument: finite and `p > p_min` (the EOS's
+/// hyperbolic range).
+pub(crate) fn check_pressure(p: f64, p_min: f64) -> Result<f64, EosError> {
+    if !p.is_finite() {
+        return Err(EosError::Invalid {
+            field: "pressure",
+            allowed: "finite",
+            got: p,
+        });
+    }
+    if p <= p_min {
+        return Err(EosError::PressureOutOfRange { p, p_min });
+    }
+    Ok(p)
+}
+
 /// Validates a temperature argument: finite and `T > 0`.
 pub(crate) fn check_temperature(t: f64) -> Result<f64, EosError> {
     check_gt("temperature", "finite and > 0", t, 0.0)
@@ -102,11 +118,18 @@ pub trait EquationOfState: Send + Sync + fmt::Debug {
     /// density in the admissible range gives `p`.
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError>;
 
-    /// Caloric EOS `e(T) = c_v T` (Guilkey Eq. 10).
-    fn internal_energy(&self, t: f64) -> f64;
+    /// Caloric EOS `e(T) = c_v T` (Guilkey Eq. 10), the same for every EOS
+    /// here.
+    #[inline]
+    fn internal_energy(&self, t: f64) -> f64 {
+        self.specific_heat_cv() * t
+    }
 
     /// Inverse caloric EOS `T(e) = e / c_v`.
-    fn temperature(&self, e: f64) -> f64;
+    #[inline]
+    fn temperature(&self, e: f64) -> f64 {
+        e / self.specific_heat_cv()
+    }
 
     /// Constant specific heat at constant volume `c_v`.
     fn specific_heat_cv(&self) -> f64;

@@ -29,7 +29,9 @@
 //! Admissible parameters: finite `A`, `B`; `R₁, R₂, ω, ρ₀, c_v, T₀ > 0`,
 //! and a positive pressure at the reference state, `p(ρ₀, T₀) > 0`.
 
-use super::equation_of_state::{check_gt, check_temperature, EosError, EquationOfState};
+use super::equation_of_state::{
+    check_gt, check_pressure, check_temperature, EosError, EquationOfState,
+};
 
 /// The JWL detonation-products EOS with `e = c_v T` (module notes).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -150,16 +152,7 @@ impl EquationOfState for Jwl {
 
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError> {
         let t = check_temperature(t)?;
-        if !p.is_finite() {
-            return Err(EosError::Invalid {
-                field: "pressure",
-                allowed: "finite",
-                got: p,
-            });
-        }
-        if p <= 0.0 {
-            return Err(EosError::PressureOutOfRange { p, p_min: 0.0 });
-        }
+        let p = check_pressure(p, 0.0)?;
         let f = |rho: f64| self.pressure(rho, t) - p;
         let too_high = EosError::Invalid {
             field: "pressure",
@@ -215,14 +208,6 @@ impl EquationOfState for Jwl {
             }
         }
         Ok(rho)
-    }
-
-    fn internal_energy(&self, t: f64) -> f64 {
-        self.cv * t
-    }
-
-    fn temperature(&self, e: f64) -> f64 {
-        e / self.cv
     }
 
     fn specific_heat_cv(&self) -> f64 {

@@ -69,7 +69,9 @@
 //! * `K > Γ₀ ρ₀ c_v T₀`: the tension isotherm `(∂p/∂ρ)_T = K/ρ₀ + Γ₀ c_v
 //!   (T − T₀)` stays positive at every `T > 0`.
 
-use super::equation_of_state::{check_gt, check_temperature, EosError, EquationOfState};
+use super::equation_of_state::{
+    check_gt, check_pressure, check_temperature, EosError, EquationOfState,
+};
 
 /// Largest admissible Hugoniot slope `s` (see the module notes).
 pub const MAX_HUGONIOT_SLOPE: f64 = 4.0;
@@ -268,17 +270,7 @@ impl EquationOfState for MieGruneisen {
 
     fn density(&self, p: f64, t: f64) -> Result<f64, EosError> {
         let t = check_temperature(t)?;
-        if !p.is_finite() {
-            return Err(EosError::Invalid {
-                field: "pressure",
-                allowed: "finite",
-                got: p,
-            });
-        }
-        let p_min = self.min_pressure();
-        if p <= p_min {
-            return Err(EosError::PressureOutOfRange { p, p_min });
-        }
+        let p = check_pressure(p, self.min_pressure())?;
         let target = p - self.p0 - self.gamma0 * self.rho0 * self.cv * (t - self.t0);
         if target < 0.0 {
             // Tension branch: linear in ρ; its slope K/ρ₀ + Γ₀ c_v (T − T₀)
@@ -314,14 +306,6 @@ impl EquationOfState for MieGruneisen {
             }
         }
         Ok(self.rho0 / (1.0 - eta))
-    }
-
-    fn internal_energy(&self, t: f64) -> f64 {
-        self.cv * t
-    }
-
-    fn temperature(&self, e: f64) -> f64 {
-        e / self.cv
     }
 
     fn specific_heat_cv(&self) -> f64 {

@@ -194,16 +194,6 @@ impl EquationOfState for SolidEos {
     }
 
     #[inline]
-    fn internal_energy(&self, t: f64) -> f64 {
-        self.cv * t
-    }
-
-    #[inline]
-    fn temperature(&self, e: f64) -> f64 {
-        e / self.cv
-    }
-
-    #[inline]
     fn specific_heat_cv(&self) -> f64 {
         self.cv
     }

@@ -70,11 +70,10 @@ fn burning_area(n: usize, inside: impl Fn(Vector2<f64>) -> bool) -> f64 {
     out.mass / dt
 }
 
-/// `reaction_burn`: the area error of a disk and of squares turned by 0°,
-/// 15°, 30° and 45° (Youngs-normal weighting of the exposed faces, and
-/// without it for comparison is not offered: the unweighted staircase is
-/// `|n_x| + |n_y|`, up to √2 too large), and the coupled slab run's burnt
-/// mass against `K A t` at three resolutions.
+/// `reaction_burn`: the burning-area error of a disk and of squares turned
+/// by 0°, 15°, 30° and 45° (exposed faces weighted by the Youngs normal),
+/// and the coupled slab run's burnt mass against `K A t` at three
+/// resolutions.
 pub fn reaction_burn(quick: bool) -> Result<StudyResult> {
     let ns: &[usize] = if quick {
         &[20, 40]
