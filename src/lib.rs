@@ -17,6 +17,7 @@ pub mod ice;
 pub mod material;
 pub mod membrane;
 pub mod mpm;
+pub mod multiphase;
 pub mod output;
 pub mod scene;
 pub mod shape;

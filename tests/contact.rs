@@ -186,7 +186,7 @@ impl<const D: usize> Scene<D> {
         );
         self.grid.mirror_ghosts(&mut self.gs.velocity_new);
         self.grid.mirror_ghosts(&mut self.gs.accel);
-        mpm.g2p(&mut self.particles, &self.gs, &mut self.scratch)
+        mpm.g2p(&mut self.particles, &self.gs, &mut self.scratch, &[])
             .expect("g2p");
         self.contact.correct_points(self.dt, &mut self.v);
         for (x, v) in self.x.iter_mut().zip(&self.v) {

@@ -156,7 +156,7 @@ impl MembraneContactStep {
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
         s.grid.mirror_ghosts(&mut s.grid_state.accel);
         // Step 5: G2P.
-        mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch)?;
+        mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch, &[])?;
         // Step 6: the membranes move and update their stresses.
         for (mesh, name) in meshes.iter_mut().zip(names) {
             mesh.update_positions(dt);

@@ -881,7 +881,7 @@ impl<const D: usize> CoupledRun<D> {
                 f.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
                 f.particles.v.par_iter_mut().for_each(|u| *u = v);
             } else {
-                phases.g2p(&mut f.particles, &f.gs, &mut f.scratch)?;
+                phases.g2p(&mut f.particles, &f.gs, &mut f.scratch, &[])?;
             }
         }
         // Step 12: fluid advection and the commit of the cell state.

@@ -63,7 +63,12 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         .iter()
         .any(|m| m.kind == MaterialKind::Solid);
     let fluid = scene.materials.iter().any(|m| m.in_cells());
-    if solid && fluid {
+    if scene.multiphase.is_some() {
+        let mut m = models::Multiphase {
+            run: crate::scene::build_multiphase_run::<D>(scene)?,
+        };
+        run_model(&mut m, scene, opts, threads)
+    } else if solid && fluid {
         let mut m = models::Coupled {
             run: crate::scene::build_coupled_run::<D>(scene)?,
         };

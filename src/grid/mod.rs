@@ -198,34 +198,109 @@ impl<const D: usize> Grid<D> {
     /// cancel). Odd components are all of them on a `Fixed` face (no-slip) and
     /// the normal one on a `Symmetry` face. Applied to nodal mass, momentum and
     /// force, this gives every shape function, however wide, the consistent
-    /// boundary treatment; ghosts are cleared afterwards.
+    /// boundary treatment; ghosts are cleared afterwards. Along a `Periodic`
+    /// axis the ghosts beyond one face are the nodes inside the other: ghost
+    /// `−k` adds onto node `n − k`, ghost `n + k` onto node `k`, and the two
+    /// boundary nodes `0` and `n`, one node of the periodic grid, both get
+    /// their sum. Axis by axis, so corners fold once per axis.
     pub fn fold_ghosts<T: Reflect<D>>(&self, q: &mut [T]) {
-        self.for_each_mirror_pair(|ghost, mirror, axis, bc| {
-            if ghost == mirror {
-                let r = q[ghost].reflect(axis, bc);
-                q[ghost] = q[ghost].add(&r);
-            } else {
-                let r = q[ghost].reflect(axis, bc);
-                q[mirror] = q[mirror].add(&r);
-                q[ghost] = T::zero();
+        for axis in 0..D {
+            if self.periodic(axis) {
+                self.for_each_periodic_pair(axis, |ghost, inner| {
+                    q[inner] = q[inner].add(&q[ghost]);
+                    q[ghost] = T::zero();
+                });
+                self.for_each_boundary_pair(axis, |lo, hi| {
+                    let s = q[lo].add(&q[hi]);
+                    q[lo] = s;
+                    q[hi] = s;
+                });
+                continue;
             }
-        });
+            self.for_each_mirror_pair(axis, |ghost, mirror, axis, bc| {
+                if ghost == mirror {
+                    let r = q[ghost].reflect(axis, bc);
+                    q[ghost] = q[ghost].add(&r);
+                } else {
+                    let r = q[ghost].reflect(axis, bc);
+                    q[mirror] = q[mirror].add(&r);
+                    q[ghost] = T::zero();
+                }
+            });
+        }
     }
 
     /// Sets every ghost node beyond a `Fixed` or `Symmetry` face to the
     /// reflection of its mirror node inside (the counterpart of
-    /// [`Self::fold_ghosts`] for grid velocities and accelerations).
+    /// [`Self::fold_ghosts`] for grid velocities and accelerations); along a
+    /// `Periodic` axis, to the value of the node it stands for inside.
     pub fn mirror_ghosts<T: Reflect<D>>(&self, q: &mut [T]) {
-        self.for_each_mirror_pair(|ghost, mirror, axis, bc| {
-            if ghost != mirror {
-                q[ghost] = q[mirror].reflect(axis, bc);
+        for axis in 0..D {
+            if self.periodic(axis) {
+                self.for_each_periodic_pair(axis, |ghost, inner| q[ghost] = q[inner]);
+                continue;
             }
-        });
+            self.for_each_mirror_pair(axis, |ghost, mirror, axis, bc| {
+                if ghost != mirror {
+                    q[ghost] = q[mirror].reflect(axis, bc);
+                }
+            });
+        }
+    }
+
+    /// Whether `axis` is periodic (the scene sets both faces alike).
+    #[inline]
+    pub fn periodic(&self, axis: usize) -> bool {
+        self.bc[axis][0] == Boundary::Periodic
+    }
+
+    /// Whether any axis is periodic.
+    pub fn any_periodic(&self) -> bool {
+        (0..D).any(|d| self.periodic(d))
+    }
+
+    /// Brings a position back into the domain along the periodic axes
+    /// (`lower ≤ x < upper`); other axes are left alone.
+    #[inline]
+    pub fn wrap(&self, x: &mut SVector<f64, D>) {
+        for d in 0..D {
+            if self.periodic(d) {
+                let len = self.upper[d] - self.lower[d];
+                let mut r = (x[d] - self.lower[d]).rem_euclid(len);
+                if r >= len {
+                    r = 0.0;
+                }
+                x[d] = self.lower[d] + r;
+            }
+        }
+    }
+
+    /// Calls `f(ghost, inner)` for every ghost node of a periodic axis and
+    /// the node inside that it stands for (ghost `−k` ↔ `n − k`, ghost
+    /// `n + k` ↔ `k`; ghosts of the other axes included).
+    fn for_each_periodic_pair(&self, axis: usize, mut f: impl FnMut(usize, usize)) {
+        let strides = self.strides();
+        let n = self.cells[axis] as isize;
+        for k in 1..=GHOST as isize {
+            for (ghost, inner) in [(-k, n - k), (n + k, k)] {
+                let shift = (inner - ghost) * strides[axis] as isize;
+                self.for_each_node_in_layer(axis, ghost, |g| f(g, (g as isize + shift) as usize));
+            }
+        }
+    }
+
+    /// Calls `f(lower, upper)` for every pair of nodes on the two boundary
+    /// layers of `axis` that face each other.
+    fn for_each_boundary_pair(&self, axis: usize, mut f: impl FnMut(usize, usize)) {
+        let strides = self.strides();
+        let shift = self.cells[axis] * strides[axis];
+        self.for_each_node_in_layer(axis, 0, |lo| f(lo, lo + shift));
     }
 
     /// Calls `f(ghost, mirror, axis, bc)` for every ghost layer of each
-    /// non-free face and then every node of the boundary layers (with
-    /// `ghost == mirror`), axis by axis so that corners fold twice.
+    /// non-free, non-periodic face of `axis` and then every node of its
+    /// boundary layers (with `ghost == mirror`); the callers go axis by axis
+    /// so that corners fold twice.
     ///
     /// Within an axis the ghosts of both faces go first, outermost in, and
     /// the boundary layers last. Where the domain is thick, no ghost of one
@@ -240,9 +315,9 @@ impl<const D: usize> Grid<D> {
     /// on a one-cell strip with quadratic B-splines then drifted (ρ up to
     /// 1.017 and |v| 0.79 by t = 0.1, `examples/york_sod_probe`, `CASE=rest
     /// SHAPE=q`).
-    fn for_each_mirror_pair(&self, mut f: impl FnMut(usize, usize, usize, Boundary)) {
+    fn for_each_mirror_pair(&self, axis: usize, mut f: impl FnMut(usize, usize, usize, Boundary)) {
         let strides = self.strides();
-        for axis in 0..D {
+        {
             let n = self.cells[axis] as isize;
             for k in (0..=GHOST as isize).rev() {
                 // k = GHOST … 1: ghost layers; k = 0: boundary layers.
@@ -337,5 +412,37 @@ mod tests {
         g.mirror_ghosts(&mut w);
         assert_eq!(w[g.node_index([-2, 3])], SVector::from([-1.0, 2.0]));
         assert_eq!(w[g.node_index([3, -1])], SVector::from([-1.0, -2.0]));
+    }
+
+    #[test]
+    fn periodic_folding_wraps_ghosts_and_joins_the_boundary_nodes() {
+        let g = Grid::<2>::new(
+            SVector::from([0.0, 0.0]),
+            SVector::from([1.0, 1.0]),
+            [4, 4],
+            [[Boundary::Periodic; 2], [Boundary::Fixed, Boundary::Fixed]],
+        );
+        let mut m = vec![0.0; g.num_nodes()];
+        // Ghost x = -1 stands for x = 3; ghost x = 6 for x = 2; x = 4 is x = 0.
+        m[g.node_index([-1, 2])] = 1.0;
+        m[g.node_index([6, 2])] = 2.0;
+        m[g.node_index([4, 2])] = 4.0;
+        m[g.node_index([0, 2])] = 8.0;
+        g.fold_ghosts(&mut m);
+        assert_eq!(m[g.node_index([3, 2])], 1.0);
+        assert_eq!(m[g.node_index([2, 2])], 2.0);
+        assert_eq!(m[g.node_index([0, 2])], 12.0);
+        assert_eq!(m[g.node_index([4, 2])], 12.0);
+        assert_eq!(m[g.node_index([-1, 2])], 0.0);
+        let mut v: Vec<f64> = (0..g.num_nodes()).map(|i| i as f64).collect();
+        g.mirror_ghosts(&mut v);
+        assert_eq!(v[g.node_index([-2, 1])], v[g.node_index([2, 1])]);
+        assert_eq!(v[g.node_index([5, 1])], v[g.node_index([1, 1])]);
+        let mut x = SVector::from([-0.25, 0.5]);
+        g.wrap(&mut x);
+        assert_eq!(x, SVector::from([0.75, 0.5]));
+        let mut x = SVector::from([1.0, 0.5]);
+        g.wrap(&mut x);
+        assert_eq!(x, SVector::from([0.0, 0.5]));
     }
 }

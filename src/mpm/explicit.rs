@@ -216,6 +216,7 @@ pub fn explicit_step<const D: usize>(
         step,
         pressure: None,
         tangent,
+        vol_rate: &[],
     };
     // The geometry is hoisted out of every loop: each pass is compiled once
     // for plane strain (no hoop terms, no extra work) and once for r–z.
@@ -257,6 +258,10 @@ struct Ctx<'a, const D: usize> {
     pressure: Option<(&'a [f64], f64)>,
     /// Unit tangents of the membrane points (York Sec. 3.2), or empty.
     tangent: &'a [SVector<f64, D>],
+    /// Multiphase (Zhang Eqs. 1–2): a volumetric strain rate per particle
+    /// added to the trace of its velocity gradient, spread evenly over the
+    /// D in-plane diagonal entries; empty for none.
+    vol_rate: &'a [f64],
 }
 
 impl<const D: usize> Ctx<'_, D> {
@@ -410,6 +415,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             step: self.step,
             pressure,
             tangent: &[],
+            vol_rate: &[],
         }
     }
 
@@ -465,10 +471,25 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &StepScratch<D>,
         node: &mut [SVector<f64, D>],
     ) {
+        self.weighted_gradient(particles, &particles.mass, scratch, node);
+    }
+
+    /// `Σ_p w_p ∇S_ip` on the nodes for particle weights `w` (the mass:
+    /// [`Self::mass_gradient`]; the volume: `−∫ θ ∇S_i`, the nodal
+    /// volume-fraction gradient of Zhang's pressure term). Unfolded, with
+    /// this step's bins and domains (call [`Self::p2g`] first).
+    pub fn weighted_gradient(
+        &self,
+        particles: &Particles<D>,
+        weights: &[f64],
+        scratch: &StepScratch<D>,
+        node: &mut [SVector<f64, D>],
+    ) {
         fn run<const D: usize, const S: usize, K: Stencil<S>>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &Particles<D>,
+            weights: &[f64],
             scratch: &StepScratch<D>,
             node: &mut [SVector<f64, D>],
         ) {
@@ -478,7 +499,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             let out = SharedMut::new(node);
             scratch.bins.for_each_colored(|p| {
                 let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
-                let mp = particles.mass[p];
+                let mp = weights[p];
                 pw.for_each(|m, _, g| {
                     // SAFETY: slab colouring gives concurrent tasks disjoint
                     // nodes.
@@ -487,7 +508,15 @@ impl<const D: usize> CoupledMpm<'_, D> {
             });
         }
         let ctx = self.ctx(None);
-        with_kernel!(self.params.shape, run, &ctx, particles, scratch, node)
+        with_kernel!(
+            self.params.shape,
+            run,
+            &ctx,
+            particles,
+            weights,
+            scratch,
+            node
+        )
     }
 
     /// Steps 7–9 on the nodes: (USF) the stress update from the P2G
@@ -564,7 +593,10 @@ impl<const D: usize> CoupledMpm<'_, D> {
     /// Step 13: particle velocity (FLIP, Guilkey Eq. 26) and position
     /// (Eq. 27) from the grid, after the caller has added the exchange's
     /// velocity change to `gs.velocity_new` and `gs.accel`; (USL) the stress
-    /// update from the final grid velocity.
+    /// update from the final grid velocity. `vol_rate` (USL only; empty for
+    /// none) adds a volumetric strain rate to each particle's velocity
+    /// gradient (Zhang Eqs. 1–2, [`crate::mpm`] users outside multiphase
+    /// pass `&[]`).
     ///
     /// # Errors
     /// An inverted particle.
@@ -573,6 +605,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         particles: &mut Particles<D>,
         gs: &GridState<D>,
         scratch: &mut StepScratch<D>,
+        vol_rate: &[f64],
     ) -> Result<()> {
         fn run<const D: usize, const S: usize, K: Stencil<S>>(
             kernel: K,
@@ -595,7 +628,8 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
             Ok(())
         }
-        let ctx = self.ctx(None);
+        let mut ctx = self.ctx(None);
+        ctx.vol_rate = vol_rate;
         with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
     }
 }
@@ -1099,6 +1133,14 @@ fn g2p<
                 _ => {}
             }
             if GRAD != GRAD_NONE {
+                if let Some(r) = ctx.vol_rate.get(p) {
+                    // Zhang Eq. 1: the phase's volume change α ∇·ū + B
+                    // replaces ∇·ū; the deviatoric part (Eq. 3) is kept.
+                    let share = r / D as f64;
+                    for a in 0..D {
+                        l[(a, a)] += share;
+                    }
+                }
                 let mut l3 = Matrix3::<f64>::zeros();
                 for i in 0..D {
                     for j in 0..D {
@@ -1203,4 +1245,226 @@ fn g2p<
         ));
     }
     Ok(())
+}
+
+impl<const D: usize> CoupledMpm<'_, D> {
+    /// `q_i = Σ_p S_ip values_p` on the nodes, folded at walls like the mass
+    /// (the nodal volume Σ S v_p of Zhang Eq. 13 with `values` = volumes),
+    /// with this step's bins and domains (call [`Self::p2g`] first).
+    pub fn p2g_sum(
+        &self,
+        particles: &Particles<D>,
+        values: &[f64],
+        scratch: &StepScratch<D>,
+        node: &mut [f64],
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            values: &[f64],
+            scratch: &StepScratch<D>,
+            node: &mut [f64],
+        ) {
+            let grid = ctx.grid;
+            let strides = grid.strides();
+            node.par_iter_mut().for_each(|q| *q = 0.0);
+            {
+                let out = SharedMut::new(node);
+                scratch.bins.for_each_colored(|p| {
+                    let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
+                    let q = values[p];
+                    pw.for_each(|m, w, _| {
+                        // SAFETY: slab colouring gives concurrent tasks
+                        // disjoint nodes.
+                        unsafe { *out.get(base + offset(m, &strides)) += w * q };
+                    });
+                });
+            }
+            grid.fold_ghosts(node);
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(
+            self.params.shape,
+            run,
+            &ctx,
+            particles,
+            values,
+            scratch,
+            node
+        )
+    }
+
+    /// A per-particle reduction over its stencil: for every particle `p`,
+    /// `visit(&mut acc, node, S_ip, ∇S_ip)` over its stencil nodes from
+    /// `A::default()`, then `out[p] = finish(p, acc)`. With this step's
+    /// domains at the particles' current positions (call [`Self::p2g`]
+    /// first and this before the particles move). Nodal fields read by
+    /// `visit` need their ghosts mirrored.
+    pub fn gather<A, V, F>(
+        &self,
+        particles: &Particles<D>,
+        scratch: &StepScratch<D>,
+        out: &mut [f64],
+        visit: V,
+        finish: F,
+    ) where
+        A: Default,
+        V: Fn(&mut A, usize, f64, &SVector<f64, D>) + Sync,
+        F: Fn(usize, A) -> f64 + Sync,
+    {
+        #[allow(clippy::too_many_arguments)]
+        fn run<const D: usize, const S: usize, K: Stencil<S>, A, V, F>(
+            kernel: K,
+            grid: &Grid<D>,
+            particles: &Particles<D>,
+            scratch: &StepScratch<D>,
+            out: &mut [f64],
+            visit: &V,
+            finish: &F,
+        ) where
+            A: Default,
+            V: Fn(&mut A, usize, f64, &SVector<f64, D>) + Sync,
+            F: Fn(usize, A) -> f64 + Sync,
+        {
+            let strides = grid.strides();
+            out.par_iter_mut()
+                .enumerate()
+                .with_min_len(512)
+                .for_each(|(p, o)| {
+                    let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
+                    let mut acc = A::default();
+                    pw.for_each(|m, w, g| visit(&mut acc, base + offset(m, &strides), w, &g));
+                    *o = finish(p, acc);
+                });
+        }
+        let (g, v, f) = (self.grid, &visit, &finish);
+        match self.params.shape {
+            ShapeKind::Linear => {
+                run::<D, 2, _, A, V, F>(LinearHat, g, particles, scratch, out, v, f)
+            }
+            ShapeKind::Gimp => run::<D, 3, _, A, V, F>(Gimp, g, particles, scratch, out, v, f),
+            ShapeKind::QuadraticBspline => {
+                run::<D, 3, _, A, V, F>(QuadraticBspline, g, particles, scratch, out, v, f)
+            }
+            ShapeKind::CubicBspline => {
+                run::<D, 4, _, A, V, F>(CubicBspline, g, particles, scratch, out, v, f)
+            }
+        }
+    }
+}
+
+/// Modified update-stress-last (Sulsky's MUSL) in three calls, for models
+/// that work between them (the multiphase closure reads the remapped
+/// velocities of every phase before any stress update): after
+/// [`CoupledMpm::solve`] (and any exchange on `velocity_new`/`accel`),
+/// [`CoupledMpm::musl_velocity`], [`CoupledMpm::musl_remap`], then
+/// [`CoupledMpm::musl_stress`].
+impl<const D: usize> CoupledMpm<'_, D> {
+    /// FLIP particle velocity (Guilkey Eq. 26, Zhang Eq. 10); the
+    /// displacement `Δt Σ S vᴸ` (Eq. 11) is stored for
+    /// [`Self::musl_stress`].
+    ///
+    /// # Errors
+    /// None in practice (no stress update here).
+    pub fn musl_velocity(
+        &self,
+        particles: &mut Particles<D>,
+        gs: &GridState<D>,
+        scratch: &mut StepScratch<D>,
+    ) -> Result<()> {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &mut Particles<D>,
+            gs: &GridState<D>,
+            scratch: &mut StepScratch<D>,
+        ) -> Result<()> {
+            let start = Instant::now();
+            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, false>(ctx, kernel, lp, particles, gs, dx)?;
+            scratch.times.g2p_s += start.elapsed().as_secs_f64();
+            Ok(())
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+    }
+
+    /// Maps the updated particle momenta back to the nodes at the step's
+    /// positions and sets `gs.velocity = p/m` (Zhang Eq. 12 at the old
+    /// positions) on every node with mass, however small: `p/m` is a
+    /// weighted mean of particle velocities, bounded, so no mass floor is
+    /// needed (a zero below the floor would give the stress update a
+    /// spurious gradient where a support edge passes a node). Ghosts
+    /// mirrored.
+    pub fn musl_remap(
+        &self,
+        particles: &Particles<D>,
+        gs: &mut GridState<D>,
+        scratch: &mut StepScratch<D>,
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            gs: &mut GridState<D>,
+            scratch: &mut StepScratch<D>,
+        ) {
+            let start = Instant::now();
+            gs.momentum
+                .par_iter_mut()
+                .for_each(|m| *m = SVector::zeros());
+            p2g::<D, S, K, false, true, false, false>(
+                ctx,
+                kernel,
+                &scratch.bins,
+                &scratch.lp,
+                particles,
+                gs,
+            );
+            gs.velocity
+                .par_iter_mut()
+                .zip(gs.mass.par_iter().zip(gs.momentum.par_iter()))
+                .for_each(|(v, (&m, p))| {
+                    *v = if m > 0.0 { p / m } else { SVector::zeros() };
+                });
+            ctx.grid.mirror_ghosts(&mut gs.velocity);
+            scratch.times.p2g_s += start.elapsed().as_secs_f64();
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+    }
+
+    /// The stress update from the gradient of the remapped velocity, with
+    /// `vol_rate` added to each particle's volumetric rate (empty: none),
+    /// then the stored displacement.
+    ///
+    /// # Errors
+    /// An inverted particle.
+    pub fn musl_stress(
+        &self,
+        particles: &mut Particles<D>,
+        gs: &GridState<D>,
+        scratch: &mut StepScratch<D>,
+        vol_rate: &[f64],
+    ) -> Result<()> {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &mut Particles<D>,
+            gs: &GridState<D>,
+            scratch: &mut StepScratch<D>,
+        ) -> Result<()> {
+            let start = Instant::now();
+            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, false>(
+                ctx, kernel, lp, particles, gs, dx,
+            )?;
+            scratch.times.g2p_s += start.elapsed().as_secs_f64();
+            Ok(())
+        }
+        let mut ctx = self.ctx(None);
+        ctx.vol_rate = vol_rate;
+        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+    }
 }

@@ -151,7 +151,7 @@ fn membrane_curve(g: &Geometry, spacing: f64, axis: bool) -> (Vec<[f64; 2]>, boo
 
 /// The particle materials of a scene in scene order (solids and gas points),
 /// as indexed by `Particles::material`.
-fn particle_materials<const D: usize>(
+pub(super) fn particle_materials<const D: usize>(
     scene: &Scene,
     grid: &Grid<D>,
 ) -> Result<Vec<SolidMaterial>, SceneError> {
@@ -228,6 +228,12 @@ fn fill_objects<const D: usize>(
             _ => materials[mat_index].density,
         };
         let (gas_work, gas_stress) = match (gas, obj.pressure) {
+            // A hypo-elastic solid of a multiphase scene under a hydrostatic
+            // pressure p: σ = −p I, stored energy p²/(2K) per unit volume.
+            (None, Some(p)) => (
+                p * p / (2.0 * materials[mat_index].elastic.bulk()),
+                -p * nalgebra::Matrix3::identity(),
+            ),
             (Some(g), Some(p)) => {
                 let e = g.energy_of(rho, p);
                 if !(e.is_finite() && e > 0.0) {
@@ -326,7 +332,12 @@ fn fill_objects<const D: usize>(
                     x[d] =
                         grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
                 }
-                if obj.geometry.contains(&x) {
+                if obj.geometry.contains(&x)
+                    && !obj
+                        .except
+                        .iter()
+                        .any(|&e| scene.objects[e].geometry.contains(&x))
+                {
                     let vol = if grid.axisymmetric { vol * x[0] } else { vol };
                     particles.push(
                         SVector::from(x),
@@ -336,7 +347,7 @@ fn fill_objects<const D: usize>(
                         half,
                         mat_index as u16,
                     );
-                    if gas.is_some() {
+                    if gas.is_some() || obj.pressure.is_some() {
                         let p = particles.len() - 1;
                         particles.work[p] = gas_work;
                         particles.stress[p] = gas_stress;

@@ -7,6 +7,7 @@
 
 mod build;
 mod membrane_elements;
+mod multiphase;
 mod schema;
 
 pub use build::{
@@ -14,6 +15,7 @@ pub use build::{
     grid_of,
 };
 pub use membrane_elements::*;
+pub use multiphase::*;
 pub use schema::*;
 
 use crate::error::SceneError;

@@ -65,6 +65,10 @@ pub struct Scene {
     /// (Sec. 5); scenes with both.
     #[serde(default)]
     pub contact: Option<ContactSpec>,
+    /// Zhang's multiphase model: every material on points is a phase with
+    /// its own velocity field (the table's presence selects the model).
+    #[serde(default)]
+    pub multiphase: Option<super::multiphase::MultiphaseSpec>,
 }
 
 /// How membrane elements and MPM bodies touch on the grid (Lian Sec. 5);
@@ -1076,6 +1080,10 @@ pub struct ObjectSpec {
     pub fixed_ends: bool,
     /// Membranes: initial tangential stress s₀ (a taut membrane).
     pub prestress: Option<f64>,
+    /// Indices of other objects whose regions this one leaves empty (e.g.
+    /// the air around a block: `except = [0]`).
+    #[serde(default)]
+    pub except: Vec<usize>,
 }
 
 /// Output file formats.
@@ -2096,6 +2104,58 @@ impl Scene {
         Ok(())
     }
 
+    /// Keys of objects that depend on their material: `density` and
+    /// `pressure` belong to gas points, except that a hypo-elastic solid of
+    /// a multiphase scene may start under a hydrostatic `pressure`; `except`
+    /// names other objects.
+    fn validate_object_keys(&self) -> Result<(), SceneError> {
+        for (i, o) in self.objects.iter().enumerate() {
+            let p = |k: &str| format!("objects[{i}].{k}");
+            for (k, &e) in o.except.iter().enumerate() {
+                if e >= self.objects.len() || e == i {
+                    return Err(err(
+                        format!("objects[{i}].except[{k}]"),
+                        format!(
+                            "must be the index of another object: 0 … {} except {i} (got {e})",
+                            self.objects.len().saturating_sub(1)
+                        ),
+                    ));
+                }
+            }
+            let Some(m) = self.materials.iter().find(|m| m.name == o.material) else {
+                continue;
+            };
+            if m.is_gas_point() || m.kind == MaterialKind::Membrane || !m.on_particles() {
+                // Gas objects are checked with the gas points; a cell fluid
+                // in an object is rejected with the objects.
+                continue;
+            }
+            if o.density.is_some() {
+                return Err(err(
+                    p("density"),
+                    "only for objects of gas points (fluids with frame = \"particles\"); a \
+                     solid's density is its material's",
+                ));
+            }
+            if let Some(pr) = o.pressure {
+                let prestress_ok = self.multiphase.is_some()
+                    && m.kind == MaterialKind::Solid
+                    && m.model == Some(SolidModel::LinearElastic);
+                if !prestress_ok {
+                    return Err(err(
+                        p("pressure"),
+                        "only for objects of gas points, and (as a hydrostatic initial stress) \
+                         of linear_elastic solids in a [multiphase] scene",
+                    ));
+                }
+                if !pr.is_finite() {
+                    return Err(err(p("pressure"), format!("must be finite (got {pr})")));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn validate_solvers(&self) -> Result<(), SceneError> {
         let ps = &self.fluid.pressure;
         let lt = ps.linear_tolerance;
@@ -2552,15 +2612,7 @@ impl Scene {
                 continue;
             };
             if !m.is_gas_point() {
-                for (v, k) in [(o.density, "density"), (o.pressure, "pressure")] {
-                    if v.is_some() {
-                        return Err(err(
-                            p(k),
-                            "only for objects of gas points (fluids with frame = \"particles\"); \
-                             a solid's density is its material's",
-                        ));
-                    }
-                }
+                // Checked for every scene in `validate_objects`.
                 continue;
             }
             let Some(rho) = o.density else {
@@ -3098,6 +3150,10 @@ impl Scene {
             }
         }
         self.validate_membranes()?;
+        if let Some(mp) = &self.multiphase {
+            mp.validate(self)?;
+        }
+        self.validate_object_keys()?;
         let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);
         let has_fluid = self.materials.iter().any(|m| m.in_cells());
         let has_gas = self.materials.iter().any(|m| m.is_gas_point());
@@ -3192,7 +3248,7 @@ impl Scene {
                     "periodic must be set on both faces of an axis",
                 ));
             }
-            if periodic[0] && has_solid {
+            if periodic[0] && has_solid && self.multiphase.is_none() {
                 return Err(err(
                     format!("grid.boundary.{}", faces[0].1),
                     "periodic faces are available for fluid-only scenes; allowed for solids: \

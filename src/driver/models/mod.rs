@@ -6,6 +6,7 @@ pub mod coupled;
 pub mod fluid;
 pub mod membrane_contact;
 pub mod membrane_fe;
+pub mod multiphase;
 pub mod solid_explicit;
 pub mod solid_implicit;
 
@@ -13,5 +14,6 @@ pub use coupled::Coupled;
 pub use fluid::Fluid;
 pub use membrane_contact::MembraneContact;
 pub use membrane_fe::MembraneFe;
+pub use multiphase::Multiphase;
 pub use solid_explicit::{scene_name, ExplicitSolid};
 pub use solid_implicit::ImplicitSolid;

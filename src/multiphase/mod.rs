@@ -1,0 +1,597 @@
+//! Zhang's multi-velocity, multi-pressure multiphase MPM (Zhang, Zou, Ma,
+//! VanderHeyden, Giguere, LA-UR-07-5202, Secs. 2–3; the CartaBlanca
+//! method): every material — solids and the gas alike — is a phase with its
+//! own material points, its own velocity field on the grid, its own volume
+//! fraction and its own stress.
+//!
+//! One explicit step (update-stress-last):
+//!
+//! 1. Per phase: mass and momentum to the nodes (Eq. 9), velocity `ū_il`.
+//! 2. Per phase: nodal volume fraction `θ_il = Σ_p v_p S_l / V_l` (Eq. 13);
+//!    the gas pressure on the nodes `p_g,l = Σ v p S_l / Σ v S_l` over the
+//!    gas points (zero where there is no gas); `Σ_j θ_j κ_j` on the nodes.
+//! 3. Per phase, the momentum equation (Eq. 4 in the MPM form Eq. 8): the
+//!    nodal force `−Σ_p v_p (σ_p + p_g,l I)·∇S_l(x_p) + m g`, i.e. Eq. 8's
+//!    `−θ_i ∇p_g V_l` and the gas pressure of the stress difference
+//!    combined at the node: `∫ S_l [−θ_i ∇p_g + ∇·(θ_i p_g I)] = ∫ S_l p_g
+//!    ∇θ_i ≈ −p_g,l ∫ θ_i ∇S_l`. A uniform pressure in gas and solids then
+//!    gives no force at all, and the forces of all phases sum to zero
+//!    wherever the phases tile the space (momentum is conserved).
+//! 4. The phase interaction `f_i = Σ_j K_ij (ū_j − ū_i)` (Eq. 5) on every
+//!    node, pointwise implicit (the exchange solver of
+//!    [`crate::ice::exchange`], conservative and stable for any K).
+//! 5. Per phase, at its points: the volume rate `α_i ∇·ū_i + B_i` (Eqs.
+//!    1–2) with the chosen volume-fraction constraint ([`closure`]), which
+//!    replaces `∇·ū_i` in the point's velocity gradient (the deviatoric
+//!    part, Eq. 3, is kept); the stress update; FLIP velocity and position
+//!    (Eqs. 10–11).
+//!
+//! Eq. 12 (the nodal velocity from the moved points) is the next step's 1.
+
+pub mod closure;
+
+use nalgebra::SVector;
+
+use crate::error::{Error, FailureSite, Result};
+use crate::grid::Grid;
+use crate::ice::exchange::exchange_momentum;
+use crate::material::{PointState, SolidMaterial};
+use crate::mpm::explicit::gas_sound_speed_max;
+use crate::mpm::{BodyForce, CoupledMpm, ExplicitParams, GridState, Particles, StepScratch};
+use crate::stepper::{Energies, TimeControl};
+use rayon::prelude::*;
+
+pub use closure::{Constraint, MAX_PHASES};
+
+/// Model settings (scene table `[multiphase]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiphaseParams {
+    /// How the volume-fraction constraint sets the volume rates.
+    pub constraint: Constraint,
+    /// Drag coefficients K_ij [kg/(m³ s)] (Eq. 5), row-major M × M over the
+    /// phases, symmetric with a zero diagonal.
+    pub drag: Vec<f64>,
+    /// α_i of Eq. 1 per phase, in [0, 1].
+    pub alpha: Vec<f64>,
+}
+
+/// One phase: the points of one material and its grid fields.
+#[derive(Debug, Clone)]
+pub struct Phase<const D: usize> {
+    /// Index of the phase's material in [`MultiphaseRun::materials`].
+    pub material: usize,
+    /// Its material points (`material` field = the index above).
+    pub particles: Particles<D>,
+    /// Nodal mass, momentum, velocities and force.
+    pub gs: GridState<D>,
+    /// Nodal volume fraction θ_il (Eq. 13), ghosts mirrored.
+    pub theta: Vec<f64>,
+    scratch: StepScratch<D>,
+    grad: Vec<SVector<f64, D>>,
+    /// Per point: v_p κ_p, then v_p p_p, then the extra volume rate.
+    point: Vec<f64>,
+    /// Per point, `max(1, κ_p / Σθκ)` at the last step's start: the square
+    /// of the factor by which the closure raises the point's sound speed.
+    pub stiffening: Vec<f64>,
+}
+
+impl<const D: usize> Phase<D> {
+    /// A phase of `particles` (all of material `material`) on a grid of
+    /// `nodes` nodes.
+    pub fn new(material: usize, particles: Particles<D>, nodes: usize) -> Self {
+        Self {
+            material,
+            particles,
+            gs: GridState::new(nodes),
+            theta: vec![0.0; nodes],
+            scratch: StepScratch::default(),
+            grad: vec![SVector::zeros(); nodes],
+            point: Vec::new(),
+            stiffening: Vec::new(),
+        }
+    }
+}
+
+/// A multiphase run: grid, materials, phases and buffers.
+pub struct MultiphaseRun<const D: usize> {
+    /// Background grid.
+    pub grid: Grid<D>,
+    /// Every material of the scene on points, indexed by `Phase::material`.
+    pub materials: Vec<SolidMaterial>,
+    /// One phase per material.
+    pub phases: Vec<Phase<D>>,
+    /// Which phase is the gas (its pressure is `p_g`), if any.
+    pub gas: Option<usize>,
+    /// Shape function, update scheme (USL), mass floor.
+    pub params: ExplicitParams,
+    /// Model settings.
+    pub model: MultiphaseParams,
+    /// Body force per unit mass.
+    pub body: Option<Box<dyn BodyForce<D> + Send + Sync>>,
+    /// Uniform gravity used for the potential energy (zero if none).
+    pub gravity: SVector<f64, D>,
+    /// Time step control.
+    pub time: TimeControl,
+    /// Current time.
+    pub t: f64,
+    /// Completed steps.
+    pub steps: u64,
+    /// Nodal gas pressure p_g,l, ghosts mirrored.
+    pub gas_pressure: Vec<f64>,
+    /// Nodal Σ_j θ_j κ_j, ghosts mirrored.
+    compressibility: Vec<f64>,
+    node_tmp: Vec<f64>,
+    mix_num: Vec<f64>,
+    mix_vol: Vec<f64>,
+    gas_num: Vec<f64>,
+    force: Vec<SVector<f64, D>>,
+}
+
+/// Compressibility κ = 1/(ρ c²) of a point: a gas point's adiabatic one from
+/// its EOS, a solid's 1/K (bulk modulus).
+fn compressibility<const D: usize>(m: &SolidMaterial, p: &Particles<D>, i: usize) -> f64 {
+    match m.gas() {
+        Some(g) => {
+            let rho = p.mass[i] / p.vol[i];
+            let e = p.work[i] * p.vol0[i] / p.mass[i];
+            let c = g.sound_speed(rho, e);
+            1.0 / (rho * c * c)
+        }
+        None => 1.0 / m.elastic.bulk(),
+    }
+}
+
+impl<const D: usize> MultiphaseRun<D> {
+    /// A run at t = 0; `phases[k].material` indexes `materials`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        grid: Grid<D>,
+        materials: Vec<SolidMaterial>,
+        phases: Vec<Phase<D>>,
+        gas: Option<usize>,
+        params: ExplicitParams,
+        model: MultiphaseParams,
+        time: TimeControl,
+    ) -> Self {
+        let n = grid.num_nodes();
+        Self {
+            grid,
+            materials,
+            phases,
+            gas,
+            params,
+            model,
+            body: None,
+            gravity: SVector::zeros(),
+            time,
+            t: 0.0,
+            steps: 0,
+            gas_pressure: vec![0.0; n],
+            compressibility: vec![0.0; n],
+            node_tmp: vec![0.0; n],
+            mix_num: vec![0.0; n],
+            mix_vol: vec![0.0; n],
+            gas_num: vec![0.0; n],
+            force: vec![SVector::zeros(); n],
+        }
+    }
+
+    /// The stable explicit step: the smallest over the points of every
+    /// phase of `h / (c + |v|)` (a gas point's own limit,
+    /// [`SolidMaterial::dt_limit`]), with `c` raised by the closure's
+    /// stiffening `√s_p`.
+    pub fn stable_dt(&self) -> f64 {
+        let hmin = self.grid.h.min();
+        let mut dt = f64::INFINITY;
+        for ph in &self.phases {
+            let p = &ph.particles;
+            let c_max = gas_sound_speed_max(&self.materials, p);
+            let m = &self.materials[ph.material];
+            let limit = (0..p.len())
+                .into_par_iter()
+                .map(|i| {
+                    let state = PointState {
+                        mass: p.mass[i],
+                        vol: p.vol[i],
+                        vol0: p.vol0[i],
+                        work: p.work[i],
+                        stress: &p.stress[i],
+                        speed: p.v[i].norm(),
+                    };
+                    let s = ph.stiffening.get(i).copied().unwrap_or(1.0);
+                    m.dt_limit(hmin, &state, c_max) / s.sqrt()
+                })
+                .reduce(|| f64::INFINITY, f64::min);
+            dt = dt.min(limit);
+        }
+        self.time.cfl * dt
+    }
+
+    /// Kinetic, stored (strain and gas internal) and potential energies of
+    /// all phases.
+    pub fn energies(&self) -> Energies {
+        let mut e = Energies::default();
+        for ph in &self.phases {
+            e.kinetic += ph.particles.kinetic_energy();
+            e.strain += ph.particles.strain_energy(&self.materials);
+            e.potential += ph.particles.potential_energy(&self.gravity);
+        }
+        e
+    }
+
+    fn fail(&self, what: String) -> Error {
+        Error::Numerical {
+            site: FailureSite {
+                step: self.steps,
+                time: self.t,
+                particle: None,
+                cell: None,
+            },
+            what,
+        }
+    }
+
+    /// Advances every phase by one explicit step of `dt`.
+    ///
+    /// # Errors
+    /// A particle off the grid or inverted (naming the point and its
+    /// phase), or a non-finite gas pressure (naming the node).
+    pub fn step(&mut self, dt: f64) -> Result<()> {
+        self.nodes(dt)?;
+        self.advance(dt)
+    }
+
+    /// Steps 1–2 at the current positions: the nodal fields of every phase,
+    /// the gas pressure, and each point's stiffening (see
+    /// [`Phase::stiffening`]). Also called once when the run is built, so
+    /// that the first [`Self::stable_dt`] knows it.
+    ///
+    /// # Errors
+    /// A particle off the grid, or a non-finite gas pressure.
+    pub fn nodes(&mut self, dt: f64) -> Result<()> {
+        let Self {
+            grid,
+            materials,
+            phases,
+            gas,
+            params,
+            body,
+            t,
+            steps,
+            gas_pressure,
+            compressibility: comp,
+            node_tmp,
+            mix_num,
+            mix_vol,
+            gas_num,
+            ..
+        } = self;
+        let mpm = CoupledMpm {
+            grid,
+            materials,
+            params,
+            body: body.as_deref().map(|b| b as &dyn BodyForce<D>),
+            t: *t,
+            dt,
+            step: *steps,
+        };
+        let name = |ph: &Phase<D>, e: Error| name_phase(e, &materials[ph.material].name);
+        let inv_v = 1.0 / grid.cell_volume();
+        // 1–2: mass, momentum, volume fractions, compressibility, and the
+        // pressure sums Σ S v p of the gas and of all phases.
+        comp.iter_mut().for_each(|c| *c = 0.0);
+        mix_num.iter_mut().for_each(|c| *c = 0.0);
+        mix_vol.iter_mut().for_each(|c| *c = 0.0);
+        for (k, ph) in phases.iter_mut().enumerate() {
+            mpm.p2g(&ph.particles, &mut ph.gs, &mut ph.scratch)
+                .map_err(|e| name(ph, e))?;
+            mpm.p2g_sum(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.theta);
+            ph.theta.iter_mut().for_each(|q| *q *= inv_v);
+            grid.mirror_ghosts(&mut ph.theta);
+            mix_vol.iter_mut().zip(&ph.theta).for_each(|(a, b)| *a += b);
+            let m = &materials[ph.material];
+            let p = &ph.particles;
+            ph.point.clear();
+            ph.point
+                .extend((0..p.len()).map(|i| p.vol[i] * compressibility(m, p, i)));
+            mpm.p2g_sum(p, &ph.point, &ph.scratch, node_tmp);
+            comp.iter_mut()
+                .zip(node_tmp.iter())
+                .for_each(|(c, q)| *c += q * inv_v);
+            ph.point.clear();
+            ph.point
+                .extend((0..p.len()).map(|i| -p.vol[i] * p.stress[i].trace() / 3.0));
+            mpm.p2g_sum(p, &ph.point, &ph.scratch, node_tmp);
+            mix_num
+                .iter_mut()
+                .zip(node_tmp.iter())
+                .for_each(|(a, b)| *a += b);
+            if *gas == Some(k) {
+                gas_num.copy_from_slice(node_tmp);
+            }
+        }
+        grid.mirror_ghosts(comp);
+        // The gas pressure on a node: a weighted mean of the gas points'
+        // pressures wherever the gas has any volume there, however little
+        // (a floor left the gas force −Σ v σ·∇S unbalanced on a node the gas
+        // barely reaches: accelerations of 4e9 m/s² in the block test).
+        // Where there is no gas, p_g only completes the stress difference
+        // σ + p_g I, whose p_g cancels in the continuous equations (−θ∇p_g
+        // + ∇·(θ p_g I) = p_g ∇θ, zero where θ is uniform); it takes the
+        // mean pressure of the phases there, so that at a solid's boundary
+        // not met by gas points (where the phases' sampled θ leave a gap)
+        // a uniform pressure still exerts no force.
+        let theta_gas = gas.map(|g| &phases[g].theta);
+        for l in 0..gas_pressure.len() {
+            let th = theta_gas.map_or(0.0, |t| t[l]);
+            gas_pressure[l] = if th > 0.0 {
+                gas_num[l] * inv_v / th
+            } else if mix_vol[l] > 0.0 {
+                mix_num[l] * inv_v / mix_vol[l]
+            } else {
+                0.0
+            };
+            if !gas_pressure[l].is_finite() {
+                return Err(Error::Numerical {
+                    site: FailureSite {
+                        step: *steps,
+                        time: *t,
+                        particle: None,
+                        cell: Some(l),
+                    },
+                    what: format!(
+                        "gas pressure not finite on node {:?} (phase pressures of {})",
+                        grid.node_coords(l),
+                        materials
+                            .iter()
+                            .map(|m| format!("`{}`", m.name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                });
+            }
+        }
+        grid.mirror_ghosts(gas_pressure);
+        // The closure gives a point the volume rate κ_p X / Σθκ: where the
+        // gas is a small part of the mixture at a gas point, its pressure
+        // responds as if its bulk modulus were K / θ_g, and the explicit
+        // step must resolve that wave (c √(κ_p / Σθκ)); without it the
+        // block test at rest grew round-off by 40× per 0.02 s at CFL 0.4.
+        for ph in phases.iter_mut() {
+            let m = &materials[ph.material];
+            let mut s = std::mem::take(&mut ph.stiffening);
+            s.resize(ph.particles.len(), 1.0);
+            let p = &ph.particles;
+            let comp = &*comp;
+            mpm.gather(
+                p,
+                &ph.scratch,
+                &mut s,
+                |c: &mut f64, l, w, _| *c += w * comp[l],
+                |i, c| {
+                    if c > 0.0 {
+                        (compressibility(m, p, i) / c).max(1.0)
+                    } else {
+                        1.0
+                    }
+                },
+            );
+            ph.stiffening = s;
+        }
+        Ok(())
+    }
+
+    /// Steps 3–5 after [`Self::nodes`].
+    fn advance(&mut self, dt: f64) -> Result<()> {
+        let Self {
+            grid,
+            materials,
+            phases,
+            params,
+            model,
+            body,
+            t,
+            steps,
+            gas_pressure,
+            compressibility: comp,
+            force,
+            ..
+        } = self;
+        let mpm = CoupledMpm {
+            grid,
+            materials,
+            params,
+            body: body.as_deref().map(|b| b as &dyn BodyForce<D>),
+            t: *t,
+            dt,
+            step: *steps,
+        };
+        let name = |ph: &Phase<D>, e: Error| name_phase(e, &materials[ph.material].name);
+        // 3: the momentum equation per phase (Eq. 8).
+        for ph in phases.iter_mut() {
+            mpm.weighted_gradient(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.grad);
+            force
+                .iter_mut()
+                .zip(ph.grad.iter().zip(gas_pressure.iter()))
+                .for_each(|(f, (g, &pg))| *f = -g * pg);
+            grid.fold_ghosts(force);
+            mpm.solve(&mut ph.particles, &mut ph.gs, &mut ph.scratch, None, force)
+                .map_err(|e| name(ph, e))?;
+        }
+        // 4: the phase interaction (Eq. 5), pointwise implicit.
+        exchange(
+            phases,
+            &model.drag,
+            dt,
+            grid.cell_volume(),
+            params.mass_floor,
+        );
+        // FLIP velocities (Eq. 10), then the nodal velocities remapped from
+        // them (MUSL): the closure and the stress read those.
+        for ph in phases.iter_mut() {
+            grid.mirror_ghosts(&mut ph.gs.velocity_new);
+            grid.mirror_ghosts(&mut ph.gs.accel);
+            mpm.musl_velocity(&mut ph.particles, &ph.gs, &mut ph.scratch)
+                .map_err(|e| name(ph, e))?;
+            mpm.musl_remap(&ph.particles, &mut ph.gs, &mut ph.scratch);
+            grid.mirror_ghosts(&mut ph.gs.mass);
+        }
+        // 5: volume rates (Eqs. 1–2 with the constraint), stress, G2P.
+        let n = phases.len();
+        for i in 0..n {
+            let mut rate = std::mem::take(&mut phases[i].point);
+            rate.resize(phases[i].particles.len(), 0.0);
+            {
+                let ph = &phases[i];
+                let alpha = &model.alpha;
+                let own = &ph.gs.velocity;
+                let (comp, phases_ref) = (&*comp, &*phases);
+                let m = &materials[ph.material];
+                let p = &ph.particles;
+                let constraint = model.constraint;
+                mpm.gather(
+                    p,
+                    &ph.scratch,
+                    &mut rate,
+                    |s: &mut closure::Stencil<D>, l, w, g| {
+                        for (j, q) in phases_ref.iter().enumerate() {
+                            let mj = q.gs.mass[l];
+                            if mj <= 0.0 {
+                                continue;
+                            }
+                            let u = q.gs.velocity[l];
+                            s.mass[j] += w * mj;
+                            s.momentum[j] += u * (w * mj);
+                            s.grad_theta[j] += g * q.theta[l];
+                            s.div_theta_u[j] += q.theta[l] * u.dot(g);
+                            s.theta_sum += w * q.theta[l];
+                        }
+                        s.compressibility += w * comp[l];
+                        s.div_own += own[l].dot(g);
+                    },
+                    |pi, s| {
+                        let x = closure::mismatch(&s, &alpha[..n], constraint, dt);
+                        let kappa = compressibility(m, p, pi);
+                        closure::extra_rate(&s, alpha[i], kappa, x)
+                    },
+                );
+            }
+            let ph = &mut phases[i];
+            let r = mpm.musl_stress(&mut ph.particles, &ph.gs, &mut ph.scratch, &rate);
+            ph.point = rate;
+            r.map_err(|e| name(ph, e))?;
+            if grid.any_periodic() {
+                ph.particles.x.iter_mut().for_each(|x| grid.wrap(x));
+            }
+        }
+        *t += dt;
+        *steps += 1;
+        Ok(())
+    }
+
+    /// Wall time per phase of the MPM step, summed over the phases.
+    pub fn phase_times(&self) -> crate::mpm::PhaseTimes {
+        let mut t = crate::mpm::PhaseTimes::default();
+        for ph in &self.phases {
+            let s = ph.scratch.times;
+            t.bin_s += s.bin_s;
+            t.p2g_s += s.p2g_s;
+            t.grid_s += s.grid_s;
+            t.g2p_s += s.g2p_s;
+        }
+        t
+    }
+
+    /// All phases' points in one set (outputs), phase after phase.
+    pub fn all_particles(&self) -> Particles<D> {
+        let mut all = Particles::<D>::default();
+        for ph in &self.phases {
+            all.append(&ph.particles);
+        }
+        all
+    }
+
+    /// Phase of the run whose material is named `name`.
+    pub fn phase_of(&self, name: &str) -> Option<usize> {
+        self.phases
+            .iter()
+            .position(|ph| self.materials[ph.material].name == name)
+    }
+
+    /// A failure naming `what` at the current step (for callers that check
+    /// the state between steps).
+    pub fn failure(&self, what: impl Into<String>) -> Error {
+        self.fail(what.into())
+    }
+}
+
+/// Adds the phase's material name to a numerical failure.
+fn name_phase(e: Error, name: &str) -> Error {
+    match e {
+        Error::Numerical { site, what } => Error::Numerical {
+            site,
+            what: format!(
+                "{what} (material `{name}`; the particle index counts its phase's points)"
+            ),
+        },
+        e => e,
+    }
+}
+
+/// Eq. 5 on every node: `m_i du_i = Δt V Σ_j K_ij (u_j − u_i)`, implicit in
+/// the new velocities, among the phases with mass on the node; the change
+/// goes into `velocity_new` and the acceleration.
+fn exchange<const D: usize>(
+    phases: &mut [Phase<D>],
+    drag: &[f64],
+    dt: f64,
+    cell_volume: f64,
+    floor: f64,
+) {
+    let n = phases.len();
+    if n < 2 || drag.iter().all(|&k| k == 0.0) {
+        return;
+    }
+    let nodes = phases[0].gs.mass.len();
+    let mut k = [0.0; MAX_PHASES * MAX_PHASES];
+    let mut idx = [0usize; MAX_PHASES];
+    let ones = [1.0; MAX_PHASES];
+    let mut sp = [0.0; MAX_PHASES];
+    let mut w = [0.0; MAX_PHASES];
+    let mut vel = [SVector::<f64, D>::zeros(); MAX_PHASES];
+    for l in 0..nodes {
+        let mut c = 0;
+        for (j, ph) in phases.iter().enumerate() {
+            let m = ph.gs.mass[l];
+            if m > floor {
+                idx[c] = j;
+                w[c] = m;
+                sp[c] = cell_volume / m;
+                vel[c] = ph.gs.velocity_new[l];
+                c += 1;
+            }
+        }
+        if c < 2 {
+            continue;
+        }
+        for r in 0..c {
+            for s in 0..c {
+                k[r * c + s] = drag[idx[r] * n + idx[s]];
+            }
+        }
+        exchange_momentum(
+            &k[..c * c],
+            dt,
+            &ones[..c],
+            &sp[..c],
+            &w[..c],
+            &mut vel[..c],
+        );
+        for r in 0..c {
+            let gs = &mut phases[idx[r]].gs;
+            let dv = vel[r] - gs.velocity_new[l];
+            gs.velocity_new[l] = vel[r];
+            gs.accel[l] += dv / dt;
+        }
+    }
+}
