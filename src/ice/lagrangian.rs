@@ -11,7 +11,8 @@ use super::exchange::{exchange_heat, exchange_momentum_fixed};
 use super::par::{try_rows, Out};
 use super::params::{EnergyForm, Frame, IceParams};
 use super::sources::{
-    cell_sources, conservative_energy, dissipation_share, eulerian_theta_kappa, LagrangianCell, LagrangianInputs,
+    cell_sources, conservative_energy, dissipation_share, eulerian_theta_kappa, LagrangianCell,
+    LagrangianInputs,
 };
 use super::specific_volume::{lagrangian_volume, CellShare, MaterialShare};
 use super::state::IceState;
