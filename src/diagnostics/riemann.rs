@@ -1684,11 +1684,12 @@ mod tests {
     #[test]
     fn water_air_reference_values() {
         // Saurel & Abgrall's water–air tube (water 1000 kg/m^3 at 1e9 Pa,
-        // air 50 kg/m^3 at 1e5 Pa). The values are from an independent
-        // bisection of the same pressure function (400 halvings, a separate
-        // script, /tmp in the session that wrote this; see the commit):
-        // p* = 1.4190477213e7 Pa, u* = 482.61041213 m/s, water star density
-        // 804.44463228, air star density 288.16806263.
+        // air 50 kg/m^3 at 1e5 Pa). No published star state was found to
+        // check against; these values come from an independent computation
+        // (plain bisection, 400 halvings, of Toro's pressure functions with
+        // p -> p + p_inf, written separately in Python while developing
+        // this): p* = 1.4190477213e7 Pa, u* = 482.61041213 m/s, water star
+        // density 804.44463228, air star density 288.16806263.
         let s = ExactRiemann::solve_stiffened(
             st(1000.0, 0.0, 1.0e9),
             st(50.0, 0.0, 1.0e5),
