@@ -4,6 +4,7 @@ pub mod axisymmetric;
 pub mod bench_cases;
 pub mod coupled;
 pub mod impm;
+pub mod interface_tube;
 pub mod lian_gas;
 pub mod membrane_fe;
 pub mod mms;

@@ -1,7 +1,20 @@
 //! Exact solution of the Riemann problem for the 1D Euler equations with
 //! calorically perfect gases (Toro, "Riemann Solvers and Numerical Methods
 //! for Fluid Dynamics", ch. 4), used as the reference for shock-tube
-//! verification of the ICE fluid solver.
+//! verification of the ICE fluid solver, and its generalisation to
+//! stiffened gases (a liquid against a gas, e.g. water | air,
+//! [`ExactRiemann::solve_stiffened`]).
+//!
+//! # Stiffened gases
+//!
+//! Each side may be a stiffened gas `p = (γ − 1) ρ e − γ p_∞` (ideal gas:
+//! `p_∞ = 0`; [`crate::material::eos::StiffenedGas`]). In the shifted
+//! pressure `p̄ = p + p_∞` its shock adiabat, isentrope `p̄ ρ^(−γ) =
+//! const` and sound speed `c² = γ p̄/ρ` are those of an ideal gas, so every
+//! formula below holds per side with `p → p + p_∞` (the velocity jump
+//! `p − p_K` across a shock is unchanged by the shift); the star pressure
+//! is then sought on `p > max(−p_∞,L, −p_∞,R)`. With `p_∞ = 0` on both
+//! sides the computation is the ideal-gas one operation for operation.
 //!
 //! The left and right gases may have different ratios of specific heats
 //! `γ_L`, `γ_R` (e.g. air | helium): the two states only have to agree in
@@ -102,6 +115,23 @@ pub enum RiemannError {
         /// The rejected value.
         got: f64,
     },
+    /// `p_∞` of one side is not finite and `≥ 0`.
+    #[error("invalid {side} p_inf: must be finite and >= 0, got {got}")]
+    InvalidPInf {
+        /// The side whose `p_∞` is invalid.
+        side: Side,
+        /// The rejected value.
+        got: f64,
+    },
+    /// Stiffened-gas data whose rarefactions cannot meet above the lowest
+    /// admissible pressure (cavitation, not modelled).
+    #[error("the data cavitate: f(p) = {residual} >= 0 at the lowest admissible pressure {p_min}")]
+    Cavitation {
+        /// The lowest admissible pressure `max(−p_∞,L, −p_∞,R)`.
+        p_min: f64,
+        /// The pressure function there.
+        residual: f64,
+    },
     /// Both initial states are vacuum; there is nothing to solve.
     #[error("both Riemann states are vacuum")]
     BothVacuum,
@@ -135,19 +165,27 @@ struct Gas {
     u: f64,
     p: f64,
     gamma: f64,
-    /// Sound speed `c = √(γ p/ρ)`.
+    /// Stiffening pressure `p_∞` (0: ideal gas).
+    p_inf: f64,
+    /// Sound speed `c = √(γ (p + p_∞)/ρ)`.
     c: f64,
 }
 
 impl Gas {
-    fn new(state: PrimitiveState, gamma: f64) -> Self {
+    fn new(state: PrimitiveState, law: GasLaw) -> Self {
         Self {
             rho: state.rho,
             u: state.u,
             p: state.p,
-            gamma,
-            c: (gamma * state.p / state.rho).sqrt(),
+            gamma: law.gamma,
+            p_inf: law.p_inf,
+            c: (law.gamma * (state.p + law.p_inf) / state.rho).sqrt(),
         }
+    }
+
+    /// Shifted pressure `p̄ = p + p_∞` of the initial state.
+    fn pbar(&self) -> f64 {
+        self.p + self.p_inf
     }
 
     fn state(&self) -> PrimitiveState {
@@ -164,20 +202,21 @@ impl Gas {
         2.0 * self.c / (self.gamma - 1.0)
     }
 
-    /// `f_K(p)` and `f_K'(p)` (Toro §4.2).
+    /// `f_K(p)` and `f_K'(p)` (Toro §4.2, with `p → p + p_∞`).
     fn pressure_function(&self, p: f64) -> (f64, f64) {
         let g = self.gamma;
+        let pb = p + self.p_inf;
         if p > self.p {
             // Shock branch.
             let a = 2.0 / ((g + 1.0) * self.rho);
-            let b = (g - 1.0) / (g + 1.0) * self.p;
-            let q = (a / (p + b)).sqrt();
+            let b = (g - 1.0) / (g + 1.0) * self.pbar();
+            let q = (a / (pb + b)).sqrt();
             let f = (p - self.p) * q;
-            let df = q * (1.0 - 0.5 * (p - self.p) / (b + p));
+            let df = q * (1.0 - 0.5 * (p - self.p) / (b + pb));
             (f, df)
         } else {
             // Rarefaction branch (isentrope).
-            let ratio = p / self.p;
+            let ratio = pb / self.pbar();
             let f = self.escape_speed() * (ratio.powf((g - 1.0) / (2.0 * g)) - 1.0);
             let df = ratio.powf(-(g + 1.0) / (2.0 * g)) / (self.rho * self.c);
             (f, df)
@@ -191,7 +230,7 @@ impl Gas {
     /// `ρ*_K = ρ_K (p*/p_K)^(1/γ)`.
     fn star_density(&self, p_star: f64) -> f64 {
         let g = self.gamma;
-        let ratio = p_star / self.p;
+        let ratio = (p_star + self.p_inf) / self.pbar();
         if p_star > self.p {
             let gm = (g - 1.0) / (g + 1.0);
             self.rho * (ratio + gm) / (gm * ratio + 1.0)
@@ -204,7 +243,8 @@ impl Gas {
     /// `S = u − c √((γ + 1)/(2γ) p*/p + (γ − 1)/(2γ))`.
     fn shock_speed(&self, p_star: f64) -> f64 {
         let g = self.gamma;
-        self.u - self.c * ((g + 1.0) / (2.0 * g) * p_star / self.p + (g - 1.0) / (2.0 * g)).sqrt()
+        let ratio = (p_star + self.p_inf) / self.pbar();
+        self.u - self.c * ((g + 1.0) / (2.0 * g) * ratio + (g - 1.0) / (2.0 * g)).sqrt()
     }
 
     /// Head speed `u − c` of a left-facing rarefaction.
@@ -216,7 +256,7 @@ impl Gas {
     /// `c* = c (p*/p)^((γ−1)/(2γ))`.
     fn tail_speed(&self, p_star: f64, u_star: f64) -> f64 {
         let g = self.gamma;
-        u_star - self.c * (p_star / self.p).powf((g - 1.0) / (2.0 * g))
+        u_star - self.c * ((p_star + self.p_inf) / self.pbar()).powf((g - 1.0) / (2.0 * g))
     }
 
     /// State inside a left-facing rarefaction fan at `ξ = x/t` (Toro §4.4):
@@ -231,7 +271,7 @@ impl Gas {
         PrimitiveState {
             rho: self.rho * a.powf(2.0 / (g - 1.0)),
             u: 2.0 / (g + 1.0) * (self.c + 0.5 * (g - 1.0) * self.u + xi),
-            p: self.p * a.powf(2.0 * g / (g - 1.0)),
+            p: self.pbar() * a.powf(2.0 * g / (g - 1.0)) - self.p_inf,
         }
     }
 
@@ -307,9 +347,41 @@ enum Pattern {
 pub struct ExactRiemann {
     left: PrimitiveState,
     right: PrimitiveState,
-    gamma_l: f64,
-    gamma_r: f64,
+    law_l: GasLaw,
+    law_r: GasLaw,
     pattern: Pattern,
+}
+
+/// The gas law of one side: a stiffened gas `p = (γ − 1) ρ e − γ p_∞`
+/// (`p_∞ = 0`: an ideal gas).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GasLaw {
+    /// Ratio of specific heats (Grüneisen exponent) `γ > 1`.
+    pub gamma: f64,
+    /// Stiffening pressure `p_∞ ≥ 0`.
+    pub p_inf: f64,
+}
+
+impl GasLaw {
+    /// An ideal gas, `p_∞ = 0`.
+    pub fn ideal(gamma: f64) -> Self {
+        Self { gamma, p_inf: 0.0 }
+    }
+
+    /// A stiffened gas.
+    pub fn stiffened(gamma: f64, p_inf: f64) -> Self {
+        Self { gamma, p_inf }
+    }
+
+    /// Specific internal energy `e = (p + γ p_∞)/((γ − 1) ρ)`.
+    pub fn internal_energy(&self, rho: f64, p: f64) -> f64 {
+        (p + self.gamma * self.p_inf) / ((self.gamma - 1.0) * rho)
+    }
+
+    /// Sound speed `c = √(γ (p + p_∞)/ρ)`.
+    pub fn sound_speed(&self, rho: f64, p: f64) -> f64 {
+        (self.gamma * (p + self.p_inf) / rho).sqrt()
+    }
 }
 
 /// Relative convergence tolerance of the `p*` iteration.
@@ -332,7 +404,8 @@ impl ExactRiemann {
     }
 
     /// Solves the Riemann problem with `γ_L` for the left gas and `γ_R` for
-    /// the right gas.
+    /// the right gas (ideal gases; [`ExactRiemann::solve_stiffened`] with
+    /// `p_∞ = 0`).
     ///
     /// A state is vacuum when `ρ = 0` and `p = 0`; otherwise `ρ > 0` and
     /// `p > 0` are required. Non-vacuum data with
@@ -360,24 +433,86 @@ impl ExactRiemann {
         gamma_l: f64,
         gamma_r: f64,
     ) -> Result<Self, RiemannError> {
-        for (side, g) in [(Side::Left, gamma_l), (Side::Right, gamma_r)] {
-            if !(g.is_finite() && g > 1.0) {
-                return Err(RiemannError::InvalidGamma { side, got: g });
+        Self::solve_stiffened(left, right, GasLaw::ideal(gamma_l), GasLaw::ideal(gamma_r))
+    }
+
+    /// Solves the Riemann problem of two stiffened gases (module docs),
+    /// e.g. water (`γ = 4.4`, `p_∞ = 6e8 Pa`) against air (`γ = 1.4`,
+    /// `p_∞ = 0`). With both `p_∞ = 0` this is
+    /// [`ExactRiemann::solve_with_gammas`], vacuum cases included.
+    ///
+    /// With some `p_∞ > 0` a state needs `ρ > 0` and `p > −p_∞` (no vacuum
+    /// state), and the data must not cavitate: the pressure function must
+    /// change sign on `p > max(−p_∞,L, −p_∞,R)`.
+    ///
+    /// # Errors
+    ///
+    /// As [`ExactRiemann::solve_with_gammas`]; [`RiemannError::InvalidPInf`]
+    /// for a negative or non-finite `p_∞`; [`RiemannError::Cavitation`] when
+    /// the two rarefactions would pull the pressure below the lowest
+    /// admissible value (a vacuum or cavity, not modelled with `p_∞ > 0`).
+    pub fn solve_stiffened(
+        left: PrimitiveState,
+        right: PrimitiveState,
+        law_l: GasLaw,
+        law_r: GasLaw,
+    ) -> Result<Self, RiemannError> {
+        for (side, law) in [(Side::Left, law_l), (Side::Right, law_r)] {
+            if !(law.gamma.is_finite() && law.gamma > 1.0) {
+                return Err(RiemannError::InvalidGamma {
+                    side,
+                    got: law.gamma,
+                });
             }
+            if !(law.p_inf.is_finite() && law.p_inf >= 0.0) {
+                return Err(RiemannError::InvalidPInf {
+                    side,
+                    got: law.p_inf,
+                });
+            }
+        }
+        if law_l.p_inf > 0.0 || law_r.p_inf > 0.0 {
+            validate_stiffened_state(Side::Left, left, law_l.p_inf)?;
+            validate_stiffened_state(Side::Right, right, law_r.p_inf)?;
+            let gl = Gas::new(left, law_l);
+            let gr = Gas::new(right, law_r);
+            let floor = -law_l.p_inf.min(law_r.p_inf);
+            let (f_floor, _) = pressure_sum(&gl, &gr, floor);
+            if f_floor >= 0.0 {
+                return Err(RiemannError::Cavitation {
+                    p_min: floor,
+                    residual: f_floor,
+                });
+            }
+            let p_star = solve_star_pressure(&gl, &gr, floor)?;
+            let (fl, _) = gl.pressure_function(p_star);
+            let (fr, _) = gr.pressure_function(p_star);
+            return Ok(Self {
+                left,
+                right,
+                law_l,
+                law_r,
+                pattern: Pattern::Star {
+                    left: gl,
+                    right: gr,
+                    p_star,
+                    u_star: 0.5 * (gl.u + gr.u) + 0.5 * (fr - fl),
+                },
+            });
         }
         let left_vac = validate_state(Side::Left, left)?;
         let right_vac = validate_state(Side::Right, right)?;
         let pattern = match (left_vac, right_vac) {
             (true, true) => return Err(RiemannError::BothVacuum),
             (false, true) => Pattern::RightVacuum {
-                left: Gas::new(left, gamma_l),
+                left: Gas::new(left, law_l),
             },
             (true, false) => Pattern::LeftVacuum {
-                right: Gas::new(right, gamma_r),
+                right: Gas::new(right, law_r),
             },
             (false, false) => {
-                let gl = Gas::new(left, gamma_l);
-                let gr = Gas::new(right, gamma_r);
+                let gl = Gas::new(left, law_l);
+                let gr = Gas::new(right, law_r);
                 let du = gr.u - gl.u;
                 // Pressure-positivity condition (Toro §4.3.1 / §4.6).
                 if gl.escape_speed() + gr.escape_speed() <= du {
@@ -386,7 +521,7 @@ impl ExactRiemann {
                         right: gr,
                     }
                 } else {
-                    let p_star = solve_star_pressure(&gl, &gr)?;
+                    let p_star = solve_star_pressure(&gl, &gr, 0.0)?;
                     let (fl, _) = gl.pressure_function(p_star);
                     let (fr, _) = gr.pressure_function(p_star);
                     // Toro §4.2: u* = ½(u_L + u_R) + ½(f_R(p*) − f_L(p*)).
@@ -403,8 +538,8 @@ impl ExactRiemann {
         Ok(Self {
             left,
             right,
-            gamma_l,
-            gamma_r,
+            law_l,
+            law_r,
             pattern,
         })
     }
@@ -421,7 +556,12 @@ impl ExactRiemann {
 
     /// `(γ_L, γ_R)`.
     pub fn gammas(&self) -> (f64, f64) {
-        (self.gamma_l, self.gamma_r)
+        (self.law_l.gamma, self.law_r.gamma)
+    }
+
+    /// The gas laws `(left, right)`.
+    pub fn laws(&self) -> (GasLaw, GasLaw) {
+        (self.law_l, self.law_r)
     }
 
     /// `true` when the solution contains a vacuum region (vacuum initial
@@ -714,6 +854,37 @@ fn validate_state(side: Side, s: PrimitiveState) -> Result<bool, RiemannError> {
     }
 }
 
+/// Checks one stiffened-gas initial state: `u` finite, `ρ > 0`, `p > −p_∞`.
+fn validate_stiffened_state(side: Side, s: PrimitiveState, p_inf: f64) -> Result<(), RiemannError> {
+    let bad = |field: &'static str, allowed: &'static str, got: f64| RiemannError::InvalidState {
+        side,
+        field,
+        allowed,
+        got,
+    };
+    if !s.u.is_finite() {
+        return Err(bad("u", "finite", s.u));
+    }
+    if !(s.rho.is_finite() && s.rho > 0.0) {
+        return Err(bad(
+            "rho",
+            "finite and > 0 (a stiffened gas has no vacuum state)",
+            s.rho,
+        ));
+    }
+    if !(s.p.is_finite() && s.p > -p_inf) {
+        return Err(bad("p", "finite and > -p_inf", s.p));
+    }
+    Ok(())
+}
+
+/// `f(p) = f_L(p) + f_R(p) + (u_R − u_L)` and `f'(p)`.
+fn pressure_sum(l: &Gas, r: &Gas, p: f64) -> (f64, f64) {
+    let (fl, dfl) = l.pressure_function(p);
+    let (fr, dfr) = r.pressure_function(p);
+    (fl + fr + (r.u - l.u), dfl + dfr)
+}
+
 /// Initial guess for `p*` (Toro §4.3.2, adaptive choice of §9.5.1).
 ///
 /// ```text
@@ -750,25 +921,26 @@ fn initial_guess(l: &Gas, r: &Gas) -> f64 {
     }
 }
 
-/// Root of `f(p) = f_L(p) + f_R(p) + Δu` by bracketed Newton iteration.
+/// Root of `f(p) = f_L(p) + f_R(p) + Δu` by bracketed Newton iteration
+/// on `p > floor` (`0` for ideal gases, `max(−p_∞,L, −p_∞,R)` for
+/// stiffened ones; module docs). The relative tolerances are on
+/// `p − floor` (for ideal gases, `p`).
 ///
-/// Requires `Δu < Δu_crit`, so that `f(0) < 0`.
-fn solve_star_pressure(l: &Gas, r: &Gas) -> Result<f64, RiemannError> {
-    let du = r.u - l.u;
-    let f = |p: f64| {
-        let (fl, dfl) = l.pressure_function(p);
-        let (fr, dfr) = r.pressure_function(p);
-        (fl + fr + du, dfl + dfr)
-    };
+/// Requires `f(floor) < 0` (ideal gases: `Δu < Δu_crit`).
+fn solve_star_pressure(l: &Gas, r: &Gas, floor: f64) -> Result<f64, RiemannError> {
+    let f = |p: f64| pressure_sum(l, r, p);
 
     // Upper bracket: f grows like √p, so doubling terminates.
     let mut hi = l.p.max(r.p);
+    if hi <= floor {
+        hi = floor + l.pbar().max(r.pbar());
+    }
     let mut iterations = 0;
     while f(hi).0 <= 0.0 {
         if f(hi).0 == 0.0 {
             return Ok(hi);
         }
-        hi *= 2.0;
+        hi = floor + 2.0 * (hi - floor);
         iterations += 1;
         if iterations > 2100 || !hi.is_finite() {
             return Err(RiemannError::NoConvergence {
@@ -778,10 +950,16 @@ fn solve_star_pressure(l: &Gas, r: &Gas) -> Result<f64, RiemannError> {
             });
         }
     }
-    // f(0) = Δu − Δu_crit < 0: the root lies in (0, hi].
-    let mut lo = 0.0;
+    // f(floor) < 0 (ideal gases: f(0) = Δu − Δu_crit): the root lies in
+    // (floor, hi].
+    let mut lo = floor;
 
-    let guess = initial_guess(l, r);
+    let guess = if floor == 0.0 {
+        initial_guess(l, r)
+    } else {
+        // Stiffened: the acoustic (PVRS) guess; the bracket does the rest.
+        0.5 * (l.p + r.p) - 0.125 * (r.u - l.u) * (l.rho + r.rho) * (l.c + r.c)
+    };
     let mut p = if guess > lo && guess < hi {
         guess
     } else {
@@ -805,7 +983,7 @@ fn solve_star_pressure(l: &Gas, r: &Gas) -> Result<f64, RiemannError> {
         } else {
             0.5 * (lo + hi)
         };
-        if (next - p).abs() <= P_TOL * next || hi - lo <= P_TOL * hi {
+        if (next - p).abs() <= P_TOL * (next - floor) || hi - lo <= P_TOL * (hi - floor) {
             return Ok(next);
         }
         p = next;
@@ -1326,5 +1504,243 @@ mod tests {
         let s = ExactRiemann::solve(st(1.0, -0.5 * du, 0.4), st(1.0, 0.5 * du, 0.4), G).unwrap();
         assert!(!s.has_vacuum());
         assert!(s.star_pressure() > 0.0 && s.star_pressure() < 1e-30);
+    }
+
+    /// Water (stiffened gas) and air (ideal gas) of the water–air shock
+    /// tube.
+    fn water() -> GasLaw {
+        GasLaw::stiffened(4.4, 6.0e8)
+    }
+
+    fn air() -> GasLaw {
+        GasLaw::ideal(1.4)
+    }
+
+    #[test]
+    fn stiffened_with_zero_p_inf_is_the_ideal_gas_solver() {
+        // Toro's tests 1-5 (Table 4.1) and a two-gamma case.
+        let cases = [
+            (st(1.0, 0.0, 1.0), st(0.125, 0.0, 0.1), 1.4, 1.4),
+            (st(1.0, -2.0, 0.4), st(1.0, 2.0, 0.4), 1.4, 1.4),
+            (st(1.0, 0.0, 1000.0), st(1.0, 0.0, 0.01), 1.4, 1.4),
+            (st(1.0, 0.0, 0.01), st(1.0, 0.0, 100.0), 1.4, 1.4),
+            (
+                st(5.99924, 19.5975, 460.894),
+                st(5.99242, -6.19633, 46.0950),
+                1.4,
+                1.4,
+            ),
+            (st(1.0, 0.0, 1.0), st(0.125, 0.0, 0.1), 1.4, 1.6667),
+        ];
+        for (l, r, gl, gr) in cases {
+            let a = ExactRiemann::solve_with_gammas(l, r, gl, gr).unwrap();
+            let b =
+                ExactRiemann::solve_stiffened(l, r, GasLaw::ideal(gl), GasLaw::ideal(gr)).unwrap();
+            assert_eq!(a.star_pressure(), b.star_pressure());
+            assert_eq!(a.star_velocity(), b.star_velocity());
+            for k in 0..=200 {
+                let xi = -30.0 + 0.3 * k as f64;
+                assert_eq!(a.sample(xi), b.sample(xi), "xi = {xi}");
+            }
+        }
+    }
+
+    /// A tiny `p_∞` perturbs the ideal-gas solution by `O(p_∞/p)`: the
+    /// stiffened branch (taken for any `p_∞ > 0`) is continuous in `p_∞`.
+    #[test]
+    fn stiffened_branch_tends_to_the_ideal_gas_solution() {
+        let (l, r) = (st(1.0, 0.0, 1.0), st(0.125, 0.0, 0.1));
+        let a = ExactRiemann::solve(l, r, G).unwrap();
+        for eps in [1e-6, 1e-9, 1e-12] {
+            let law = GasLaw::stiffened(G, eps);
+            let b = ExactRiemann::solve_stiffened(l, r, law, law).unwrap();
+            assert_relative_eq!(
+                a.star_pressure(),
+                b.star_pressure(),
+                max_relative = 20.0 * eps
+            );
+            assert_relative_eq!(
+                a.star_velocity(),
+                b.star_velocity(),
+                max_relative = 20.0 * eps
+            );
+        }
+    }
+
+    /// Rankine–Hugoniot relations across a shock of speed `s` from state
+    /// `a` to `b` (mass, momentum, energy fluxes in the shock frame), each
+    /// relative to its flux scale.
+    fn rankine_hugoniot_residuals(
+        law: GasLaw,
+        a: PrimitiveState,
+        b: PrimitiveState,
+        s: f64,
+    ) -> [f64; 3] {
+        let (wa, wb) = (a.u - s, b.u - s);
+        let mass = (a.rho * wa - b.rho * wb) / (a.rho * wa).abs();
+        let mom_a = a.rho * wa * wa + a.p;
+        let mom = (mom_a - (b.rho * wb * wb + b.p)) / (a.rho * wa * wa + a.p.abs() + law.p_inf);
+        // Total enthalpy e + p/ρ + w²/2 is conserved along the mass flux.
+        let ha = law.internal_energy(a.rho, a.p) + a.p / a.rho + 0.5 * wa * wa;
+        let hb = law.internal_energy(b.rho, b.p) + b.p / b.rho + 0.5 * wb * wb;
+        let energy = (ha - hb) / ha.abs();
+        [mass, mom, energy]
+    }
+
+    /// The left star state of a left rarefaction lies on the data's
+    /// isentrope and generalised Riemann invariant; returns both residuals.
+    fn rarefaction_residuals(law: GasLaw, a: PrimitiveState, b: PrimitiveState) -> [f64; 2] {
+        let g = law.gamma;
+        let ka = (a.p + law.p_inf) / a.rho.powf(g);
+        let kb = (b.p + law.p_inf) / b.rho.powf(g);
+        let ja = a.u + 2.0 * law.sound_speed(a.rho, a.p) / (g - 1.0);
+        let jb = b.u + 2.0 * law.sound_speed(b.rho, b.p) / (g - 1.0);
+        [(ka - kb) / ka, (ja - jb) / ja.abs()]
+    }
+
+    #[test]
+    fn water_air_star_state_satisfies_both_wave_relations() {
+        // Water at 1e6 .. 1e9 Pa against air at 1e5 Pa (ratios 10 .. 1e4),
+        // air at 50 and 1.2 kg/m^3: left rarefaction in water, right shock
+        // in air.
+        for p_l in [1.0e6, 1.0e7, 1.0e9] {
+            for rho_r in [50.0, 1.2] {
+                let (l, r) = (st(1000.0, 0.0, p_l), st(rho_r, 0.0, 1.0e5));
+                let s = ExactRiemann::solve_stiffened(l, r, water(), air()).unwrap();
+                let (p, u) = (s.star_pressure(), s.star_velocity());
+                assert!(p > r.p && p < l.p && u > 0.0, "p* = {p}, u* = {u}");
+                let (rho_l, rho_r_star) = s.star_densities().unwrap();
+                let star_l = st(rho_l, u, p);
+                let star_r = st(rho_r_star, u, p);
+                for res in rarefaction_residuals(water(), l, star_l) {
+                    assert!(res.abs() < 1e-13, "p_l = {p_l}: {res:e}");
+                }
+                // The right shock speed from the mass balance, then all
+                // three relations.
+                let shock = (rho_r_star * u - r.rho * r.u) / (rho_r_star - r.rho);
+                for res in rankine_hugoniot_residuals(air(), r, star_r, shock) {
+                    assert!(res.abs() < 1e-13, "p_l = {p_l}: {res:e}");
+                }
+                // The sampled solution agrees: the shock sits at that speed.
+                assert_eq!(s.sample(shock * (1.0 - 1e-9)).rho, rho_r_star);
+                assert_eq!(s.sample(shock * (1.0 + 1e-9)).rho, r.rho);
+            }
+        }
+    }
+
+    #[test]
+    fn shock_into_water_satisfies_rankine_hugoniot() {
+        // Air at 1e9 Pa driving a shock into water at rest at 1e5 Pa (and the
+        // mirror image): right shock in a stiffened gas.
+        let (l, r) = (st(500.0, 0.0, 1.0e9), st(1000.0, 0.0, 1.0e5));
+        let s = ExactRiemann::solve_stiffened(l, r, air(), water()).unwrap();
+        let (p, u) = (s.star_pressure(), s.star_velocity());
+        let (rho_l, rho_r) = s.star_densities().unwrap();
+        assert!(p > r.p && p < l.p && rho_r > r.rho && u > 0.0);
+        let shock = (rho_r * u - r.rho * r.u) / (rho_r - r.rho);
+        for res in rankine_hugoniot_residuals(water(), r, st(rho_r, u, p), shock) {
+            assert!(res.abs() < 1e-13, "{res:e}");
+        }
+        for res in rarefaction_residuals(air(), l, st(rho_l, u, p)) {
+            assert!(res.abs() < 1e-13, "{res:e}");
+        }
+        // Mirror: water left, air right, velocities flipped.
+        let m = ExactRiemann::solve_stiffened(r, l, water(), air()).unwrap();
+        assert_relative_eq!(m.star_pressure(), p, max_relative = 1e-14);
+        assert_relative_eq!(m.star_velocity(), -u, max_relative = 1e-14);
+    }
+
+    #[test]
+    fn water_air_fan_is_continuous_and_on_the_isentrope() {
+        let (l, r) = (st(1000.0, 0.0, 1.0e9), st(50.0, 0.0, 1.0e5));
+        let s = ExactRiemann::solve_stiffened(l, r, water(), air()).unwrap();
+        let law = water();
+        let c = law.sound_speed(l.rho, l.p);
+        let (rho_star, _) = s.star_densities().unwrap();
+        let c_star = law.sound_speed(rho_star, s.star_pressure());
+        let (head, tail) = (-c, s.star_velocity() - c_star);
+        let eps = 1e-9;
+        for (xi, want) in [
+            (head, l),
+            (tail, st(rho_star, s.star_velocity(), s.star_pressure())),
+        ] {
+            for side in [xi * (1.0 - eps), xi * (1.0 + eps)] {
+                let q = s.sample(side);
+                assert_relative_eq!(q.rho, want.rho, max_relative = 1e-7);
+                assert_relative_eq!(q.p + law.p_inf, want.p + law.p_inf, max_relative = 1e-7);
+            }
+        }
+        for k in 1..20 {
+            let xi = head + (tail - head) * k as f64 / 20.0;
+            let q = s.sample(xi);
+            for res in rarefaction_residuals(law, l, q) {
+                assert!(res.abs() < 1e-13, "{res:e}");
+            }
+            // Inside the fan the characteristic u − c passes through ξ.
+            assert_relative_eq!(q.u - law.sound_speed(q.rho, q.p), xi, max_relative = 1e-12);
+        }
+    }
+
+    #[test]
+    fn water_air_reference_values() {
+        // Saurel & Abgrall's water–air tube (water 1000 kg/m^3 at 1e9 Pa,
+        // air 50 kg/m^3 at 1e5 Pa). No published star state was found to
+        // check against; these values come from an independent computation
+        // (plain bisection, 400 halvings, of Toro's pressure functions with
+        // p -> p + p_inf, written separately in Python while developing
+        // this): p* = 1.4190477213e7 Pa, u* = 482.61041213 m/s, water star
+        // density 804.44463228, air star density 288.16806263.
+        let s = ExactRiemann::solve_stiffened(
+            st(1000.0, 0.0, 1.0e9),
+            st(50.0, 0.0, 1.0e5),
+            water(),
+            air(),
+        )
+        .unwrap();
+        assert_relative_eq!(s.star_pressure(), 1.419_047_721_3e7, max_relative = 1e-10);
+        assert_relative_eq!(s.star_velocity(), 482.610_412_13, max_relative = 1e-10);
+        let (rl, rr) = s.star_densities().unwrap();
+        assert_relative_eq!(rl, 804.444_632_28, max_relative = 1e-10);
+        assert_relative_eq!(rr, 288.168_062_63, max_relative = 1e-10);
+    }
+
+    #[test]
+    fn stiffened_input_errors() {
+        let (l, r) = (st(1000.0, 0.0, 1.0e9), st(50.0, 0.0, 1.0e5));
+        let e = ExactRiemann::solve_stiffened(l, r, GasLaw::stiffened(4.4, -1.0), air());
+        assert!(matches!(
+            e,
+            Err(RiemannError::InvalidPInf {
+                side: Side::Left,
+                ..
+            })
+        ));
+        let e = ExactRiemann::solve_stiffened(st(0.0, 0.0, 0.0), r, water(), air());
+        assert!(matches!(
+            e,
+            Err(RiemannError::InvalidState { field: "rho", .. })
+        ));
+        let e = ExactRiemann::solve_stiffened(st(1000.0, 0.0, -7.0e8), r, water(), air());
+        assert!(matches!(
+            e,
+            Err(RiemannError::InvalidState { field: "p", .. })
+        ));
+        // Water in tension (above −p_∞) is admissible against water.
+        let s = ExactRiemann::solve_stiffened(
+            st(1000.0, 0.0, -1.0e8),
+            st(1000.0, 0.0, 1.0e5),
+            water(),
+            water(),
+        )
+        .unwrap();
+        assert!(s.star_pressure() > -1.0e8 && s.star_pressure() < 1.0e5);
+        // Water pulled apart at 2 km/s against air: the fans cannot meet.
+        let e = ExactRiemann::solve_stiffened(
+            st(1000.0, -2000.0, 1.0e5),
+            st(1.2, 2000.0, 1.0e5),
+            water(),
+            air(),
+        );
+        assert!(matches!(e, Err(RiemannError::Cavitation { .. })), "{e:?}");
     }
 }

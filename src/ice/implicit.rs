@@ -10,7 +10,7 @@
 //! ```
 //!
 //! (`u*_pre` from Guilkey Eq. 28 before the face exchange, `v_r,f` its face
-//! specific volume `2 v_L v_R/(v_L + v_R)`, `Δt_f = face_dt_factor Δt`, `E`
+//! specific volume ([`super::faces::face_specific_volume`]), `Δt_f = face_dt_factor Δt`, `E`
 //! the pointwise-implicit face momentum exchange), and the pressure
 //! equation is Guilkey Eq. 29 multiplied by `V`,
 //!
@@ -44,7 +44,7 @@ use solvers::{KrylovOptions, SolverError};
 use super::boundary::{fill_scalar, zero_wall_faces};
 use super::equilibration::min_pressure_all;
 use super::exchange::exchange_momentum;
-use super::faces::face_exchange;
+use super::faces::{face_exchange, face_specific_volume};
 use super::par::{max_rows, par_face_rows, Out};
 use super::params::{cell_shock_sensor, IceParams};
 use super::pressure_system::{ImplicitWorkspace, PressureSystem};
@@ -93,12 +93,6 @@ pub(super) fn save_pre_exchange<const D: usize>(
         }
     }
     Ok(())
-}
-
-/// Harmonic face specific volume of Guilkey Eq. 28.
-#[inline]
-fn v_face(vl: f64, vr: f64) -> f64 {
-    2.0 * vl * vr / (vl + vr)
 }
 
 /// The semi-implicit pressure (replaces Guilkey Eq. 29's explicit `Δp`):
@@ -363,7 +357,7 @@ fn assemble_matrix<const D: usize>(
             for m in 0..nm {
                 let mc = &cells[m];
                 theta[m] = 0.5 * (mc.vol_frac[l] + mc.vol_frac[f]);
-                v[m] = v_face(mc.sp_vol[l], mc.sp_vol[f]);
+                v[m] = face_specific_volume(mc.mass[l], mc.sp_vol[l], mc.mass[f], mc.sp_vol[f]);
                 w[m] = theta[m] / v[m];
                 vv[m][0] = v[m];
             }
@@ -411,11 +405,12 @@ fn correct_face_velocities<const D: usize>(
             let inv_h = 1.0 / layout.h[d];
             let pre = &iw.ustar_pre[r][d];
             let dp = &iw.dp;
-            let sv = &mc.sp_vol;
+            let (sv, ms) = (&mc.sp_vol, &mc.mass);
             let out = Out::new(&mut ws.ustar[r][d]);
             par_face_rows(layout, d, |row| {
                 for f in row {
-                    let u = pre[f] - fdt * v_face(sv[f - s], sv[f]) * (dp[f] - dp[f - s]) * inv_h;
+                    let vf = face_specific_volume(ms[f - s], sv[f - s], ms[f], sv[f]);
+                    let u = pre[f] - fdt * vf * (dp[f] - dp[f - s]) * inv_h;
                     // SAFETY: each face is written by one task only.
                     unsafe { out.set(f, u) };
                 }

@@ -11,7 +11,8 @@ use super::exchange::{exchange_heat, exchange_momentum_fixed};
 use super::par::{try_rows, Out};
 use super::params::{EnergyForm, Frame, IceParams};
 use super::sources::{
-    cell_sources, conservative_energy, eulerian_theta_kappa, LagrangianCell, LagrangianInputs,
+    cell_sources, conservative_energy, dissipation_share, eulerian_theta_kappa, LagrangianCell,
+    LagrangianInputs,
 };
 use super::specific_volume::{lagrangian_volume, CellShare, MaterialShare};
 use super::state::IceState;
@@ -78,7 +79,7 @@ pub fn stage_lagrangian<const D: usize>(
                 conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
             }
             if let Some(ex) = k_on {
-                momentum_exchange(&inp, &ex.momentum, cons, c, stk_e, &mut cell);
+                momentum_exchange(&inp, &ex.momentum, cons, c, &mut cell);
             }
             let sum_tb = heat_exchange(&inp, h_on.map(|ex| &ex.heat[..]), &mut cell);
             store_cell(&inp, &out, c, h_on.map(|_| sum_tb), &cell)?;
@@ -210,7 +211,7 @@ fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
 /// The pointwise-implicit momentum exchange of cell `c` (Guilkey Eq. 38,
 /// rigid materials held at their velocity); with `cons`, the kinetic
 /// energy it dissipates (plus the work of a rigid material) becomes heat
-/// of the Eulerian materials, shared by `f_θ = θ κ/stk_e`.
+/// of the Eulerian materials, shared by mass ([`dissipation_share`]).
 // Called once per cell from one place: the body of the loop it came
 // from before the stage split, kept inlined there.
 #[inline(always)]
@@ -218,8 +219,7 @@ fn momentum_exchange<const D: usize>(
     inp: &LagrangianInputs<'_, D>,
     k: &[f64],
     cons: bool,
-    c: usize,
-    stk_e: f64,
+    _c: usize,
     cell: &mut LagrangianCell<D>,
 ) {
     let nm = inp.nm;
@@ -260,12 +260,14 @@ fn momentum_exchange<const D: usize>(
                 work = u[s].dot(&gained);
             }
         }
+        // Shared by mass (`dissipation_share`), like the dissipation
+        // of the total-energy form.
+        let heat = ke0 - ke1 + work;
         for r in 0..nm {
             if inp.lagr[r] {
                 continue;
             }
-            let f_theta = theta[r] * inp.kappa[r][c] / stk_e;
-            t[r] += f_theta * (ke0 - ke1 + work) / (mass[r] * inp.cv[r]);
+            t[r] += dissipation_share(inp, mass, r) * heat / (mass[r] * inp.cv[r]);
         }
     }
 }

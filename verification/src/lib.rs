@@ -152,4 +152,9 @@ pub const STUDIES: &[Study] = &[
         "Mie-Gruneisen water and copper driven into a wall at u_p = 100/500/1000/3000 m/s, explicit ICE and (water) gas points: U_s vs c0 + s u_p, p1 vs p0 + rho0 U_s u_p, vs h",
         eos_studies::mie_gruneisen_shock,
     ),
+    (
+        "water_air_shock_tube",
+        "water | air shock tube at pressure ratios 10, 100, 1e4: L1(rho) and interface position vs the exact stiffened-gas Riemann solution",
+        eos_studies::water_air_shock_tube,
+    ),
 ];
