@@ -14,3 +14,4 @@ pub mod taylor;
 pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;
+pub mod zhang_block;

@@ -9,6 +9,7 @@ pub mod ice_studies;
 pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
+pub mod multiphase_studies;
 pub mod reaction_studies;
 pub mod taylor_studies;
 pub mod york_studies;
@@ -22,6 +23,11 @@ pub type Study = (
 
 /// Every study the binary knows.
 pub const STUDIES: &[Study] = &[
+    (
+        "zhang_block",
+        "Zhang Sec. 3 block-in-air: a disk/sphere moving with the air, weak (Eq. 18) vs strong (Eq. 7) constraint, 2D axis/diagonal and 3D",
+        multiphase_studies::zhang_block,
+    ),
     (
         "reaction_burn",
         "Guilkey 5 surface burn: burning area of a disk and turned squares vs h; slab burnt mass vs K A t",
