@@ -6,7 +6,9 @@
 //! cross-references and names the offending key with its allowed range.
 
 mod build;
+mod ignored;
 mod membrane_elements;
+mod names;
 mod schema;
 
 pub use build::{
@@ -19,23 +21,105 @@ pub use schema::*;
 use crate::error::SceneError;
 
 /// Parses and validates a scene from TOML text.
+///
+/// A TOML syntax error names its line and column and quotes the offending
+/// text; a value of the wrong type or range names its key path (and its
+/// line where the parser knows it).
 pub fn parse(text: &str) -> Result<Scene, SceneError> {
-    let de = toml::Deserializer::parse(text)
-        .map_err(|e| SceneError::new("<toml>", format!("not valid TOML: {}", e.message())))?;
+    let de = toml::Deserializer::parse(text).map_err(|e| {
+        SceneError::new(
+            "<toml>",
+            format!(
+                "not valid TOML: {} ({})",
+                e.message(),
+                location(text, e.span())
+            ),
+        )
+    })?;
     let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
+        let message = match inner.span() {
+            Some(span) => format!("{} ({})", inner.message(), location(text, Some(span))),
+            None => inner.message().to_string(),
+        };
         SceneError::new(
             if path == "." {
                 "<root>".to_string()
             } else {
                 path
             },
-            inner.message().to_string(),
+            message,
         )
     })?;
     scene.validate()?;
+    // The text parsed above, so it parses as a table too.
+    if let Ok(raw) = toml::from_str::<toml::Table>(text) {
+        scene.reject_ignored(&raw)?;
+    }
     Ok(scene)
+}
+
+/// `line L, column C: `text`` of a byte span of `text`. Without a span (a
+/// few syntax errors carry none) it is the first line after the longest
+/// prefix of whole lines that still parses: where the text stops being
+/// TOML.
+fn location(text: &str, span: Option<std::ops::Range<usize>>) -> String {
+    let start = span
+        .as_ref()
+        .map(|s| s.start)
+        .unwrap_or_else(|| first_bad_line(text));
+    let start = floor_char_boundary(text, start.min(text.len()));
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[..start].matches('\n').count() + 1;
+    let column = text[line_start..start].chars().count() + 1;
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    // The span's own text where it has some, else the rest of the line,
+    // else the whole line (an error at its end).
+    let end = span.map_or(start, |s| floor_char_boundary(text, s.end.min(line_end)));
+    let quoted = [&text[start..end.max(start)], &text[start..line_end]]
+        .into_iter()
+        .find(|s| !s.trim().is_empty())
+        .unwrap_or(&text[line_start..line_end])
+        .trim_end_matches('\r');
+    let quoted: String = quoted.chars().take(60).collect();
+    if quoted.trim().is_empty() {
+        format!("line {line}, column {column}: end of input")
+    } else {
+        format!("line {line}, column {column}: `{quoted}`")
+    }
+}
+
+/// The byte offset of the first line after the longest prefix of whole
+/// lines that parses as TOML (the start of the text if none does).
+fn first_bad_line(text: &str) -> usize {
+    let mut good = 0;
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        offset += line.len();
+        if toml::Deserializer::parse(&text[..offset]).is_ok() {
+            good = offset;
+        }
+    }
+    // Skip blank and comment lines after it: the error is on the next
+    // line with content.
+    let mut at = good;
+    for line in text[good..].split_inclusive('\n') {
+        let t = line.trim();
+        if !(t.is_empty() || t.starts_with('#')) {
+            break;
+        }
+        at += line.len();
+    }
+    at.min(text.len())
+}
+
+/// The largest char boundary of `text` at or before `i`.
+fn floor_char_boundary(text: &str, mut i: usize) -> usize {
+    while i > 0 && !text.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
 }
 
 /// Reads, parses and validates a scene file.
