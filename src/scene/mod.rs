@@ -91,16 +91,43 @@ fn location(text: &str, span: Option<std::ops::Range<usize>>) -> String {
 }
 
 /// The byte offset of the first line after the longest prefix of whole
-/// lines that parses as TOML (the start of the text if none does).
+/// lines that parses as TOML (the start of the text if none does). Up to
+/// [`LINEAR_SEARCH_LINES`] lines every prefix is tried; a longer text is
+/// bisected (a few dozen parses), so that a large file cannot make the
+/// error slow.
 fn first_bad_line(text: &str) -> usize {
-    let mut good = 0;
-    let mut offset = 0;
-    for line in text.split_inclusive('\n') {
-        offset += line.len();
-        if toml::Deserializer::parse(&text[..offset]).is_ok() {
-            good = offset;
+    let ends: Vec<usize> = text
+        .split_inclusive('\n')
+        .scan(0, |at, line| {
+            *at += line.len();
+            Some(*at)
+        })
+        .collect();
+    let parses = |end: usize| toml::Deserializer::parse(&text[..end]).is_ok();
+    let good = if ends.len() <= LINEAR_SEARCH_LINES {
+        ends.iter()
+            .copied()
+            .filter(|&e| parses(e))
+            .max()
+            .unwrap_or(0)
+    } else {
+        // The largest k whose prefix parses, assuming prefixes stop
+        // parsing at the error and stay broken after it.
+        let (mut lo, mut hi) = (0, ends.len());
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if parses(ends[mid - 1]) {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
         }
-    }
+        if lo == 0 {
+            0
+        } else {
+            ends[lo - 1]
+        }
+    };
     // Skip blank and comment lines after it: the error is on the next
     // line with content.
     let mut at = good;
@@ -113,6 +140,9 @@ fn first_bad_line(text: &str) -> usize {
     }
     at.min(text.len())
 }
+
+/// Texts of up to this many lines are searched prefix by prefix.
+const LINEAR_SEARCH_LINES: usize = 2000;
 
 /// The largest char boundary of `text` at or before `i`.
 fn floor_char_boundary(text: &str, mut i: usize) -> usize {
@@ -127,4 +157,52 @@ pub fn load(path: &std::path::Path) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::new("<file>", format!("cannot read {}: {e}", path.display())))?;
     parse(&text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{first_bad_line, location};
+
+    /// A text of `n` lines `kI = I` with line `bad` (1-based) broken.
+    fn lines(n: usize, bad: usize) -> String {
+        (1..=n)
+            .map(|i| {
+                if i == bad {
+                    format!("k{i} = [{i}\n")
+                } else {
+                    format!("k{i} = {i}\n")
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_first_bad_line_is_found_by_prefix_and_by_bisection() {
+        for (n, bad) in [(10, 1), (10, 7), (10, 10), (5000, 3000), (5000, 1)] {
+            let text = lines(n, bad);
+            let at = first_bad_line(&text);
+            let line = text[..at].matches('\n').count() + 1;
+            assert_eq!(line, bad, "{n} lines");
+            let loc = location(&text, None);
+            assert!(
+                loc.starts_with(&format!("line {bad}, column 1: `k{bad} = [{bad}`")),
+                "{loc}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_span_gives_line_column_and_text() {
+        let text = "a = 1\nbé = [1, 2\n";
+        // The span of `[1, 2` on line 2 (after a two-byte character).
+        let start = text.find('[').unwrap();
+        assert_eq!(
+            location(text, Some(start..start + 5)),
+            "line 2, column 6: `[1, 2`"
+        );
+        assert_eq!(
+            location(text, Some(text.len()..text.len())),
+            "line 3, column 1: end of input"
+        );
+    }
 }
