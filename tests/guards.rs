@@ -207,6 +207,29 @@ fn a_scene_larger_than_the_memory_is_refused_before_allocating() {
     );
 }
 
+/// A membrane mesh of 16384² elements is refused before it is built
+/// (parsing no longer builds meshes above a million elements), naming the
+/// mesh key.
+#[test]
+fn a_membrane_mesh_larger_than_the_memory_is_refused_before_building() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let text = edit(
+        &case_text("lian_membrane_vibration.toml"),
+        "cells = [32, 32]",
+        "cells = [16384, 16384]",
+    );
+    let start = std::time::Instant::now();
+    let s = mpmice::scene::parse(&text).expect("valid");
+    let e = check_scene(&s, &opts(tmp.path())).expect_err("refused");
+    println!("{e}");
+    assert!(
+        matches!(&e, Error::Scene(se) if se.path == "membrane_elements[0].mesh"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("2.684e8 membrane elements"), "{e}");
+    assert!(start.elapsed().as_secs_f64() < 5.0, "refused before building");
+}
+
 /// E = 1e308 makes Δt ≈ 1e-155 s: check and run stop before the first
 /// step naming the particle, the material by scene name and index, and the
 /// key that bounds the projection.

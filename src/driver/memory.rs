@@ -28,6 +28,11 @@ pub struct MemoryEstimate {
     /// Bytes of the cell-centred fluid state, its step workspace and the
     /// pressure solver (semi-implicit).
     pub cell_bytes: f64,
+    /// Membrane finite elements of each mesh (`membrane_elements[i]`).
+    pub mesh_elements: Vec<f64>,
+    /// Bytes of the membrane element meshes (nodes, elements, their
+    /// frames and forces).
+    pub element_bytes: f64,
     /// Bytes the run keeps besides: the last good state (a copy of the
     /// particle and cell state), the snapshot fields and, in implicit mode,
     /// the Newton matrix and its factor.
@@ -37,16 +42,32 @@ pub struct MemoryEstimate {
 impl MemoryEstimate {
     /// Total bytes.
     pub fn total(&self) -> f64 {
-        self.grid_bytes + self.particle_bytes + self.cell_bytes + self.run_bytes
+        self.grid_bytes
+            + self.particle_bytes
+            + self.cell_bytes
+            + self.element_bytes
+            + self.run_bytes
     }
 
     /// The estimate of `scene` (validated; a scene of membrane elements
     /// only has no grid and counts nothing here).
     pub fn of(scene: &Scene) -> Self {
+        // A quad element and its node: coordinates, velocities, forces,
+        // frames, stresses and the snapshot and last good copies.
+        let mesh_elements: Vec<f64> = scene
+            .membrane_elements
+            .iter()
+            .map(|m| m.elements())
+            .collect();
+        let element_bytes = mesh_elements.iter().fold(0.0, |a, n| a + n * F64 * 120.0);
         let g = &scene.grid;
         let dim = g.dim;
         if dim == 0 || g.cells.len() != dim {
-            return Self::default();
+            return Self {
+                mesh_elements,
+                element_bytes,
+                ..Self::default()
+            };
         }
         let dimf = dim as f64;
         let cells: f64 = g.cells.iter().map(|&n| n as f64).product();
@@ -113,6 +134,8 @@ impl MemoryEstimate {
             grid_bytes,
             particle_bytes,
             cell_bytes,
+            mesh_elements,
+            element_bytes,
             run_bytes,
         }
     }
@@ -129,14 +152,16 @@ impl MemoryEstimate {
     /// One line: the total and its parts, e.g. for `check`.
     pub fn describe(&self) -> String {
         format!(
-            "{} ({:.3e} cells: grid {}, fluid cells {}; {:.3e} particles: {}; last good \
-             state, snapshot and solver: {})",
+            "{} ({:.3e} cells: grid {}, fluid cells {}; {:.3e} particles: {}; {:.3e} \
+             membrane elements: {}; last good state, snapshot and solver: {})",
             bytes(self.total()),
             self.cells,
             bytes(self.grid_bytes),
             bytes(self.cell_bytes),
             self.particles,
             bytes(self.particle_bytes),
+            self.mesh_elements.iter().fold(0.0, |a, b| a + b),
+            bytes(self.element_bytes),
             bytes(self.run_bytes)
         )
     }
@@ -239,7 +264,8 @@ pub const MEMORY_SHARE: f64 = 0.6;
 /// and the estimate.
 ///
 /// # Errors
-/// A [`SceneError`] at `grid.cells`, naming the largest object.
+/// A [`SceneError`] at `grid.cells` (naming the largest object) or at
+/// the largest `membrane_elements[i].mesh`.
 pub fn check_memory(est: &MemoryEstimate, limit: Option<u64>) -> Result<(), SceneError> {
     let Some(limit) = limit.or_else(available_memory) else {
         return Ok(());
@@ -251,9 +277,20 @@ pub fn check_memory(est: &MemoryEstimate, limit: Option<u64>) -> Result<(), Scen
         .largest_object()
         .map_or(String::new(), |o| format!("; the largest object is {o}"));
     // The cell count drives the grid, the fluid cells and, through the
-    // particles per cell, the particles.
+    // particles per cell, the particles; else the largest mesh.
+    let key = match est
+        .mesh_elements
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+    {
+        Some((i, _)) if est.element_bytes > 0.5 * est.total() => {
+            format!("membrane_elements[{i}].mesh")
+        }
+        _ => "grid.cells".to_string(),
+    };
     Err(SceneError::new(
-        "grid.cells",
+        key,
         format!(
             "the scene needs about {} but {} is available (a scene may take {:.0}% of \
              it){largest}: reduce grid.cells or \
