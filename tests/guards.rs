@@ -227,7 +227,10 @@ fn a_membrane_mesh_larger_than_the_memory_is_refused_before_building() {
         "{e}"
     );
     assert!(e.to_string().contains("2.684e8 membrane elements"), "{e}");
-    assert!(start.elapsed().as_secs_f64() < 5.0, "refused before building");
+    assert!(
+        start.elapsed().as_secs_f64() < 5.0,
+        "refused before building"
+    );
 }
 
 /// E = 1e308 makes Δt ≈ 1e-155 s: check and run stop before the first
@@ -389,6 +392,16 @@ fn a_collapsing_time_step_stops_the_run_naming_the_cause() {
     ] {
         assert!(msg.contains(part), "`{part}` missing: {msg}");
     }
+    // One warning, at the first 100-fold drop: Δt_k < Δt_0/100 first at
+    // k = 7, the 8th step.
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(tmp.path().join("summary.json")).expect("summary"),
+    )
+    .expect("json");
+    let warnings = summary["warnings"].as_array().expect("warnings");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    let w = warnings[0].as_str().unwrap();
+    assert!(w.contains("100-fold") && w.contains("at step 8,"), "{w}");
     // The default fraction is a scene key; a smaller one lets it go on.
     let mut s2 = small_disks();
     s2.time.min_dt_fraction = 1e-9;

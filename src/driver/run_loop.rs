@@ -486,6 +486,7 @@ pub fn run_model<M: Model>(
         &run.written,
         opts.restart.as_deref(),
         stopped.as_ref(),
+        &run.warnings,
     );
     write_summary(&run.dir, &summary)?;
     match stopped {
@@ -505,8 +506,8 @@ struct Run {
     ls: LoopState,
     last_good: Option<Checkpoint>,
     written: Vec<PathBuf>,
-    /// Whether the Δt-drop warning was given.
-    warned: bool,
+    /// Warnings given (the Δt drop, once).
+    warnings: Vec<String>,
 }
 
 impl Run {
@@ -541,7 +542,7 @@ impl Run {
             ls,
             last_good,
             written: Vec::new(),
-            warned: false,
+            warnings: Vec::new(),
         })
     }
 
@@ -582,19 +583,20 @@ impl Run {
                     ),
                 });
             }
-            if drop < 0.01 && !self.warned {
-                self.warned = true;
+            if drop < 0.01 && self.warnings.is_empty() {
                 let by = model
                     .dt_limiter()
                     .map_or(String::new(), |l| format!(", set by {l}"));
-                eprintln!(
-                    "warning: Δt dropped 100-fold to {:.3e} s (largest {reference:.3e} s) at \
+                let warning = format!(
+                    "Δt dropped 100-fold to {:.3e} s (largest {reference:.3e} s) at \
                      step {}, t = {:.6e}{}",
                     st.dt,
                     model.steps(),
                     model.time(),
                     scene.label_materials(&by)
                 );
+                eprintln!("warning: {warning}");
+                self.warnings.push(warning);
             }
         }
         let ls = &mut self.ls;
@@ -795,6 +797,7 @@ fn summarise<M: Model>(
     written: &[PathBuf],
     restart: Option<&Path>,
     error: Option<&Error>,
+    warnings: &[String],
 ) -> Summary {
     let end = model.conserved();
     let desc = model.describe();
@@ -873,5 +876,6 @@ fn summarise<M: Model>(
         checkpoints: written.iter().map(|p| p.display().to_string()).collect(),
         restarted_from: restart.map(|p| p.display().to_string()),
         error: error.map(|e| e.to_string()),
+        warnings: warnings.to_vec(),
     }
 }
