@@ -1605,10 +1605,10 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.rigid, "rigid"),
     ] {
         if v {
-            let extra = if k == "density" {
-                " (fluid densities are set per region in [[regions]])"
-            } else {
-                ""
+            let extra = match k {
+                "density" => " (fluid densities are set per region in [[regions]])",
+                "rigid" => " (a rigid solid moving through the fluid of a coupled scene)",
+                _ => "",
             };
             return Err(err(p(k), format!("only for solid materials{extra}")));
         }
