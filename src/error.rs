@@ -75,6 +75,18 @@ pub enum Error {
         /// The site, material, field and value.
         what: String,
     },
+    /// The run would not finish: its time step collapsed, or the first one
+    /// projects an absurd number of steps; names what sets it.
+    #[error("no progress at step {step}, t = {time:.6e}: {what}")]
+    Progress {
+        /// Completed steps when it was found.
+        step: u64,
+        /// Simulation time when it was found.
+        time: f64,
+        /// The cause: Δt, the limit and the particle or cell (and
+        /// material) that sets it.
+        what: String,
+    },
     /// The run was stopped by an interrupt (Ctrl-C) at the end of a step.
     #[error("interrupted after step {step}, t = {time:.6e}")]
     Interrupted {

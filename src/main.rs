@@ -38,11 +38,20 @@ enum Command {
         /// run of the same scene; the outputs continue in the output folder.
         #[arg(long, value_name = "DIR")]
         restart: Option<PathBuf>,
+        /// Run a scene whose memory estimate exceeds the available memory.
+        #[arg(long)]
+        ignore_memory_limit: bool,
     },
-    /// Validate a scene without running it.
+    /// Validate a scene without running it: everything `run` checks before
+    /// its first step (building the particles and cells included), and the
+    /// memory estimate.
     Check {
         /// Scene file (TOML).
         scene: PathBuf,
+        /// Accept a scene whose memory estimate exceeds the available
+        /// memory (it is then built to check it).
+        #[arg(long)]
+        ignore_memory_limit: bool,
     },
 }
 
@@ -58,10 +67,25 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, each cause once: a cause whose text the
+/// message already holds (an I/O error quoted by its wrapper) is not
+/// repeated.
+fn message(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+    }
+    msg
 }
 
 /// A flag set by the first Ctrl-C (SIGINT): the run stops cleanly at the end
@@ -80,27 +104,51 @@ fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Check { scene } => {
+        Command::Check {
+            scene,
+            ignore_memory_limit,
+        } => {
             let s = mpmice::scene::load(&scene)?;
+            let opts = mpmice::driver::RunOptions {
+                ignore_memory_limit,
+                ..Default::default()
+            };
+            let report = mpmice::driver::check_scene(&s, &opts)?;
+            let mut out = std::io::stdout();
             if !s.membrane_elements.is_empty() {
                 writeln!(
-                    std::io::stdout(),
+                    out,
                     "{}: ok (3D, {} membrane element meshes, mode {})",
                     scene.display(),
                     s.membrane_elements.len(),
                     s.time.mode.name()
                 )?;
-                return Ok(());
+            } else {
+                writeln!(
+                    out,
+                    "{}: ok ({}D, {} cells, {} materials, {} objects, {} particles, mode {})",
+                    scene.display(),
+                    s.grid.dim,
+                    s.grid.cells.iter().product::<usize>(),
+                    s.materials.len(),
+                    s.objects.len(),
+                    report.counts.particles,
+                    s.time.mode.name()
+                )?;
             }
+            let available = mpmice::driver::memory::available_memory()
+                .map_or("unknown".to_string(), |b| {
+                    mpmice::driver::memory::bytes(b as f64)
+                });
             writeln!(
-                std::io::stdout(),
-                "{}: ok ({}D, {} cells, {} materials, {} objects, mode {})",
-                scene.display(),
-                s.grid.dim,
-                s.grid.cells.iter().product::<usize>(),
-                s.materials.len(),
-                s.objects.len(),
-                s.time.mode.name()
+                out,
+                "memory: about {} ({available} available)",
+                report.memory.describe()
+            )?;
+            writeln!(
+                out,
+                "first Δt {:.3e} s, about {:.3e} steps to time.end",
+                report.preflight.dt, report.preflight.projected_steps
             )?;
             Ok(())
         }
@@ -110,8 +158,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             threads,
             quiet,
             restart,
+            ignore_memory_limit,
         } => {
             let s = mpmice::scene::load(&scene)?;
+            if !quiet {
+                eprintln!(
+                    "memory: about {}",
+                    mpmice::driver::MemoryEstimate::of(&s).describe()
+                );
+            }
             let out_dir = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().unwrap_or_default())
             });
@@ -121,6 +176,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 progress: !quiet,
                 restart,
                 interrupt: Some(interrupt_flag()?),
+                ignore_memory_limit,
+                ..Default::default()
             };
             let sum = mpmice::driver::run_scene(&s, &opts)?;
             let rate = if sum.n_elements > 0 {

@@ -36,16 +36,41 @@ fn edit(from: &str, to: &str) -> String {
 }
 
 /// Every `(scene text, key path, word)` must be rejected naming that key
-/// path with the word in its message; all mismatches are reported at once.
+/// path with the word in its message — by `check` as by `run`, through the
+/// library (parsing, then everything `run` checks before its first step)
+/// and through both verbs of the binary; all mismatches are reported at
+/// once.
 fn assert_each_names_its_key(cases: &[(String, &str, &str)]) {
     let mut wrong = Vec::new();
-    for (text, path, word) in cases {
-        match mpmice::scene::parse(text) {
-            Ok(_) => wrong.push(format!("accepted, expected `{path}`")),
-            Err(e) if e.path != *path || !e.message.contains(word) => {
-                wrong.push(format!("expected `{path}` with `{word}`, got: {e}"))
+    let tmp = tempfile::tempdir().expect("tmp");
+    for (k, (text, path, word)) in cases.iter().enumerate() {
+        let verdict = mpmice::scene::parse(text).map_err(mpmice::error::Error::Scene);
+        let verdict = verdict.and_then(|s| {
+            mpmice::driver::check_scene(&s, &mpmice::driver::RunOptions::default()).map(|_| ())
+        });
+        match verdict {
+            Ok(()) => wrong.push(format!("accepted, expected `{path}`")),
+            Err(mpmice::error::Error::Scene(e)) if e.path == *path && e.message.contains(word) => {}
+            Err(e) => wrong.push(format!("expected `{path}` with `{word}`, got: {e}")),
+        }
+        let file = tmp.path().join(format!("case{k}.toml"));
+        std::fs::write(&file, text).expect("write");
+        for verb in ["check", "run"] {
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_mpmice"));
+            cmd.arg(verb).arg(&file);
+            if verb == "run" {
+                cmd.arg("--quiet")
+                    .arg("--out")
+                    .arg(tmp.path().join(format!("out{k}")));
             }
-            Err(_) => {}
+            let out = cmd.output().expect("spawn");
+            let err = String::from_utf8_lossy(&out.stderr);
+            if out.status.success()
+                || !err.contains(&format!("`{path}`"))
+                || err.contains("panicked")
+            {
+                wrong.push(format!("{verb} of `{path}` case: {err}"));
+            }
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
@@ -308,7 +333,9 @@ fn periodic_pcg_multigrid_is_accepted() {
                 "cells = [{cells}]\nboundary = {{ x_lower = \"periodic\", x_upper = \"periodic\" }}\n\n\
                  [fluid.pressure]\nsolver = \"pcg_multigrid\""
             ),
-        );
+        )
+        // The pressure solve runs in semi-implicit mode only.
+        .replacen("end = 0.1", "end = 0.1\nmode = \"semi_implicit\"", 1);
         if let Err(e) = mpmice::scene::parse(&s) {
             panic!("{cells} cells: {e}");
         }
@@ -1186,4 +1213,73 @@ fn bad_mie_gruneisen_and_jwl_input_names_its_key() {
         ),
     ];
     assert_each_names_its_key(cases);
+}
+
+/// Settings the scene's mode ignores are rejected, naming the key and the
+/// mode (or materials) that would read them.
+#[test]
+fn settings_the_mode_ignores_are_rejected() {
+    const AIR: &str = "[[materials]]\nname = \"air\"";
+    let fluid_table = "[fluid]\nexchange = { momentum = 1e15 }\n";
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            fluid_edit(
+                AIR,
+                &format!("[coupling]\nmomentum_exchange = 1e15\n\n{AIR}"),
+            ),
+            "coupling",
+            "coupled scenes",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[coupling]\nmomentum_exchange = 1e15\n\n[[materials]]",
+            ),
+            "coupling",
+            "coupled scenes",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[implicit]\nmax_newton_iterations = 5\n\n[[materials]]",
+            ),
+            "implicit",
+            "time.mode = \"explicit\"",
+        ),
+        (
+            fluid_edit(
+                AIR,
+                &format!("[fluid.pressure]\nsolver = \"direct\"\n\n{AIR}"),
+            ),
+            "fluid.pressure",
+            "semi_implicit",
+        ),
+        (
+            fluid_edit(
+                fluid_table,
+                "[fluid]\nexchange = { momentum = 1e15 }\npressure = { solver = \"direct\" }\n",
+            ),
+            "fluid.pressure",
+            "time.mode = \"explicit\"",
+        ),
+        (
+            fluid_edit("cv = 717.5\n", "cv = 717.5\nrigid = true\n"),
+            "materials[0].rigid",
+            "only for solid materials",
+        ),
+        (
+            edit(
+                "[[materials]]",
+                "[fluid]\nvariant = \"literal\"\n\n[[materials]]",
+            ),
+            "fluid",
+            "fluid materials in the cells",
+        ),
+        (
+            fluid_edit(AIR, &format!("[mpm]\nparticles_per_cell = 3\n\n{AIR}")),
+            "mpm",
+            "particles",
+        ),
+    ];
+    assert_each_names_its_key(&cases);
 }

@@ -8,14 +8,18 @@
 //! progress and the summary. A new system implements [`Model`] (see
 //! [`model`]) and is run by the same loop.
 
+pub mod limiter;
+pub mod memory;
 pub mod model;
 pub mod models;
 pub mod outputs;
 pub mod run_loop;
 pub mod summary;
 
+pub use limiter::DtLimiter;
+pub use memory::MemoryEstimate;
 pub use model::{DtRequest, Model, StepStats};
-pub use run_loop::{run_model, scene_hash, RunOptions, MAX_RETRIES};
+pub use run_loop::{preflight, run_model, scene_hash, Preflight, RunOptions, MAX_RETRIES};
 pub use summary::{IterationStats, Summary};
 
 use crate::error::{Error, Result};
@@ -24,38 +28,126 @@ use crate::scene::{MaterialKind, Mode, Scene};
 /// Builds the scene's model and runs it with outputs in `opts.out_dir`
 /// (continuing from `opts.restart` if given).
 ///
+/// It goes through the same checks as [`check_scene`] before the first
+/// step: the memory estimate, building the model, and the run loop's
+/// [`preflight`].
+///
 /// # Errors
-/// As [`run_model`]; a scene that cannot be built names its key.
+/// As [`run_model`]; a scene that cannot be built names its key; one that
+/// needs more memory than `opts.memory_limit` (default: what the machine
+/// has) is refused before allocating unless `opts.ignore_memory_limit`.
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
+    guard_memory(scene, opts)?;
+    let (pool, threads) = pool(opts)?;
+    pool.install(|| with_model(scene, RunIt { opts, threads }))
+        .map_err(|e| run_loop::label_error(e, scene))
+}
+
+/// What `check` reports of a scene that would run.
+#[derive(Debug, Clone)]
+pub struct CheckReport {
+    /// The model's kind, e.g. `explicit_solid_2d`.
+    pub model: String,
+    /// Its sizes.
+    pub counts: model::Counts,
+    /// The memory estimate.
+    pub memory: MemoryEstimate,
+    /// The first step's Δt and the projected number of steps.
+    pub preflight: Preflight,
+}
+
+/// Checks a scene the way [`run_scene`] does before its first step —
+/// memory estimate, building the model (particles, cells, equilibration)
+/// and the run loop's [`preflight`] — without writing anything: a scene
+/// `check` accepts is not rejected by `run` before it steps.
+///
+/// # Errors
+/// As [`run_scene`] before its first step.
+pub fn check_scene(scene: &Scene, opts: &RunOptions) -> Result<CheckReport> {
+    let memory = guard_memory(scene, opts)?;
+    let (pool, _) = pool(opts)?;
+    pool.install(|| with_model(scene, CheckIt { memory }))
+        .map_err(|e| run_loop::label_error(e, scene))
+}
+
+/// The memory estimate of `scene`, refused above the limit.
+fn guard_memory(scene: &Scene, opts: &RunOptions) -> Result<MemoryEstimate> {
+    let est = MemoryEstimate::of(scene);
+    if !opts.ignore_memory_limit {
+        memory::check_memory(&est, opts.memory_limit)?;
+    }
+    Ok(est)
+}
+
+fn pool(opts: &RunOptions) -> Result<(rayon::ThreadPool, usize)> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
         .build()
         .map_err(|e| Error::io(&opts.out_dir, std::io::Error::other(e.to_string())))?;
     let threads = pool.current_num_threads();
-    if !scene.membrane_elements.is_empty() {
-        return pool.install(|| {
-            let fe = models::MembraneFe::from_scene(scene)?;
-            if scene.grid.dim == 0 {
-                let mut m = fe;
-                return run_model(&mut m, scene, opts, threads);
-            }
-            // Lian Sec. 5–6: MPM bodies and membranes in grid contact.
-            let solid = models::ExplicitSolid {
-                run: crate::scene::build_solid_run::<3>(scene)?,
-            };
-            let law = scene.contact.clone().unwrap_or_default().law();
-            let mut m = models::MembraneContact::new(solid, fe, law);
-            run_model(&mut m, scene, opts, threads)
-        });
-    }
-    pool.install(|| match scene.grid.dim {
-        1 => run_dim::<1>(scene, opts, threads),
-        2 => run_dim::<2>(scene, opts, threads),
-        _ => run_dim::<3>(scene, opts, threads),
-    })
+    Ok((pool, threads))
 }
 
-fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> Result<Summary> {
+/// What to do with the scene's model once it is built: run it, or only
+/// check it. One building path serves both verbs.
+trait WithModel {
+    type Out;
+    fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<Self::Out>;
+}
+
+struct RunIt<'a> {
+    opts: &'a RunOptions,
+    threads: usize,
+}
+
+impl WithModel for RunIt<'_> {
+    type Out = Summary;
+    fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<Summary> {
+        run_model(model, scene, self.opts, self.threads)
+    }
+}
+
+struct CheckIt {
+    memory: MemoryEstimate,
+}
+
+impl WithModel for CheckIt {
+    type Out = CheckReport;
+    fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<CheckReport> {
+        let preflight = preflight(model, scene)?;
+        Ok(CheckReport {
+            model: model.kind(),
+            counts: model.counts(),
+            memory: self.memory,
+            preflight,
+        })
+    }
+}
+
+/// Builds the scene's model and hands it to `w`.
+fn with_model<W: WithModel>(scene: &Scene, w: W) -> Result<W::Out> {
+    if !scene.membrane_elements.is_empty() {
+        let fe = models::MembraneFe::from_scene(scene)?;
+        if scene.grid.dim == 0 {
+            let mut m = fe;
+            return w.with(&mut m, scene);
+        }
+        // Lian Sec. 5–6: MPM bodies and membranes in grid contact.
+        let solid = models::ExplicitSolid {
+            run: crate::scene::build_solid_run::<3>(scene)?,
+        };
+        let law = scene.contact.clone().unwrap_or_default().law();
+        let mut m = models::MembraneContact::new(solid, fe, law);
+        return w.with(&mut m, scene);
+    }
+    match scene.grid.dim {
+        1 => with_dim::<1, W>(scene, w),
+        2 => with_dim::<2, W>(scene, w),
+        _ => with_dim::<3, W>(scene, w),
+    }
+}
+
+fn with_dim<const D: usize, W: WithModel>(scene: &Scene, w: W) -> Result<W::Out> {
     // Gas points (fluids with frame = "particles") run with the solids in
     // the explicit MPM model (York Eq. 17: one nodal velocity field).
     let solid = scene
@@ -67,28 +159,28 @@ fn run_dim<const D: usize>(scene: &Scene, opts: &RunOptions, threads: usize) -> 
         let mut m = models::Multiphase {
             run: crate::scene::build_multiphase_run::<D>(scene)?,
         };
-        run_model(&mut m, scene, opts, threads)
+        w.with(&mut m, scene)
     } else if solid && fluid {
         let mut m = models::Coupled {
             run: crate::scene::build_coupled_run::<D>(scene)?,
         };
-        run_model(&mut m, scene, opts, threads)
+        w.with(&mut m, scene)
     } else if fluid {
         let (mut state, params) = crate::scene::build_fluid_run::<D>(scene)?;
         crate::ice::equilibrate(&mut state, &params)?;
         let ws = crate::ice::IceWorkspace::new(&state);
         let mut m = models::Fluid { state, params, ws };
-        run_model(&mut m, scene, opts, threads)
+        w.with(&mut m, scene)
     } else if scene.time.mode == Mode::Implicit {
         let mut m = models::ImplicitSolid {
             run: crate::scene::build_implicit_run::<D>(scene)?,
             shape: models::scene_name(&scene.mpm.shape),
         };
-        run_model(&mut m, scene, opts, threads)
+        w.with(&mut m, scene)
     } else {
         let mut m = models::ExplicitSolid {
             run: crate::scene::build_solid_run::<D>(scene)?,
         };
-        run_model(&mut m, scene, opts, threads)
+        w.with(&mut m, scene)
     }
 }

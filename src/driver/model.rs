@@ -310,4 +310,10 @@ pub trait Model {
     fn counts(&self) -> Counts;
     /// Description for the summary.
     fn describe(&self) -> Description;
+    /// The particle or cell (and its material) that sets
+    /// [`Self::stable_dt`], named when the run's Δt collapses or projects an
+    /// absurd number of steps (`None`: the model does not say).
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        None
+    }
 }

@@ -36,6 +36,83 @@ pub struct RunOptions {
     /// Set (e.g. by a Ctrl-C handler) to stop cleanly at the end of the
     /// current step, with a checkpoint.
     pub interrupt: Option<Arc<AtomicBool>>,
+    /// The memory a scene may use [bytes] (`None`: what the machine has
+    /// available); a scene estimated above it is refused before anything
+    /// is allocated.
+    pub memory_limit: Option<u64>,
+    /// Go on with a scene estimated above the memory limit.
+    pub ignore_memory_limit: bool,
+}
+
+/// What the run loop checks before the first step (shared by `check` and
+/// `run`): the state passes the watchdog (unless it is off), and the first
+/// Δt is positive and
+/// does not project more than `time.max_projected_steps` steps to the end
+/// (unless `time.max_steps` bounds the run).
+#[derive(Debug, Clone)]
+pub struct Preflight {
+    /// The first step's Δt: `time.dt`, else the model's stable Δt.
+    pub dt: f64,
+    /// `(end − t) / dt`.
+    pub projected_steps: f64,
+    /// What sets the stable Δt, where the model says.
+    pub limiter: Option<crate::driver::DtLimiter>,
+}
+
+/// The checks before the first step; see [`Preflight`].
+///
+/// # Errors
+/// [`Error::Watchdog`] for an impossible initial value; [`Error::Progress`]
+/// for a Δt that is not positive or projects an absurd number of steps,
+/// naming what sets it.
+pub fn preflight<M: Model>(model: &M, scene: &Scene) -> Result<Preflight> {
+    let scan = scene.time.watchdog_interval > 0;
+    if let Some(v) = scan.then(|| model.watchdog()).flatten() {
+        return Err(Error::Watchdog {
+            step: model.steps(),
+            time: model.time(),
+            what: scene.label_materials(&v.to_string()),
+        });
+    }
+    let t = &scene.time;
+    let dt = t.dt.unwrap_or_else(|| model.stable_dt());
+    let left = (t.end - model.time()).max(0.0);
+    let projected_steps = left / dt;
+    let limiter = model.dt_limiter();
+    let bounded = t
+        .max_steps
+        .is_some_and(|n| (n as f64) <= t.max_projected_steps);
+    let no_progress = |why: String| Error::Progress {
+        step: model.steps(),
+        time: model.time(),
+        what: scene.label_materials(&why),
+    };
+    let set_by = |l: &Option<crate::driver::DtLimiter>| match (t.dt, l) {
+        (Some(_), _) => "set by time.dt".to_string(),
+        (None, Some(l)) => format!("set by {l}"),
+        (None, None) => "the model's stable step".to_string(),
+    };
+    if dt.is_nan() || dt <= 0.0 {
+        return Err(no_progress(format!(
+            "the first Δt is {dt:e} ({}); check the material constants",
+            set_by(&limiter)
+        )));
+    }
+    if !bounded && projected_steps > t.max_projected_steps {
+        return Err(no_progress(format!(
+            "time.end = {:e} at Δt = {dt:.3e} s projects {projected_steps:.3e} steps, more \
+             than time.max_projected_steps = {:e} (Δt {}); check the material constants \
+             and time.dt, or raise time.max_projected_steps or set time.max_steps",
+            t.end,
+            t.max_projected_steps,
+            set_by(&limiter)
+        )));
+    }
+    Ok(Preflight {
+        dt,
+        projected_steps,
+        limiter,
+    })
 }
 
 /// The content hash of a scene's physics: everything but its description,
@@ -48,6 +125,8 @@ pub fn scene_hash(scene: &Scene) -> String {
     s.time.end = 0.0;
     s.time.max_steps = None;
     s.time.watchdog_interval = 0;
+    s.time.min_dt_fraction = crate::scene::DEFAULT_MIN_DT_FRACTION;
+    s.time.max_projected_steps = crate::scene::DEFAULT_MAX_PROJECTED_STEPS;
     // A scene always serialises (plain data); an error would hash as empty.
     content_hash(&serde_json::to_vec(&s).unwrap_or_default())
 }
@@ -62,6 +141,7 @@ struct Cadence {
     checkpoint: Option<f64>,
     keep: usize,
     watchdog: u64,
+    min_dt_fraction: f64,
 }
 
 impl Cadence {
@@ -76,6 +156,7 @@ impl Cadence {
             checkpoint: o.checkpoint_interval,
             keep: o.checkpoint_keep,
             watchdog: scene.time.watchdog_interval,
+            min_dt_fraction: scene.time.min_dt_fraction,
         }
     }
 
@@ -370,6 +451,7 @@ pub fn run_model<M: Model>(
     opts: &RunOptions,
     threads: usize,
 ) -> Result<Summary> {
+    preflight(model, scene)?;
     let mut run = Run::begin(model, scene, opts)?;
     let bar = progress_bar(opts.progress);
     let start = Instant::now();
@@ -378,12 +460,12 @@ pub fn run_model<M: Model>(
     let mut failure: Option<Error> = None;
     while failure.is_none() && !run.cad.finished(model.time(), model.steps()) {
         let s = Instant::now();
-        if let Err(e) = run.step(model) {
-            failure = Some(model.annotate(e));
+        if let Err(e) = run.step(model, scene) {
+            failure = Some(label_error(model.annotate(e), scene));
             break;
         }
         step_s += s.elapsed().as_secs_f64();
-        failure = run.after_step(model, opts)?;
+        failure = run.after_step(model, opts)?.map(|e| label_error(e, scene));
         if model.steps().is_multiple_of(16) {
             let t = model.time();
             bar.set_position((1000.0 * t / run.cad.end) as u64);
@@ -392,17 +474,19 @@ pub fn run_model<M: Model>(
     }
     bar.finish_and_clear();
     let stopped = run.finish(model, failure)?;
+    let stopped = stopped.map(|e| label_error(e, scene));
     let summary = summarise(
         model,
         scene,
         &run.ls,
         threads,
         start.elapsed().as_secs_f64(),
-        (step_s, model.steps() - steps0),
+        (step_s, model.steps().saturating_sub(steps0)),
         run.out.output_s,
         &run.written,
         opts.restart.as_deref(),
         stopped.as_ref(),
+        &run.warnings,
     );
     write_summary(&run.dir, &summary)?;
     match stopped {
@@ -422,6 +506,8 @@ struct Run {
     ls: LoopState,
     last_good: Option<Checkpoint>,
     written: Vec<PathBuf>,
+    /// Warnings given (the Δt drop, once).
+    warnings: Vec<String>,
 }
 
 impl Run {
@@ -456,12 +542,13 @@ impl Run {
             ls,
             last_good,
             written: Vec::new(),
+            warnings: Vec::new(),
         })
     }
 
     /// One step of the model (with retries) to the end time or by the fixed
     /// Δt, its statistics added to the loop's.
-    fn step<M: Model>(&mut self, model: &mut M) -> Result<()> {
+    fn step<M: Model>(&mut self, model: &mut M, scene: &Scene) -> Result<()> {
         let left = self.cad.end - model.time();
         let req = match self.cad.fixed_dt {
             Some(dt) => DtRequest {
@@ -474,6 +561,44 @@ impl Run {
             },
         };
         let (st, tries) = step_with_retries(model, req)?;
+        // The progress guard: Δt against the largest of the run so far
+        // (the last step to the end time is as short as it needs to be).
+        let reference = if self.ls.dt_max > 0.0 {
+            self.ls.dt_max
+        } else {
+            st.dt
+        };
+        if !self.cad.finished(model.time(), model.steps()) {
+            let drop = st.dt / reference;
+            if drop.is_nan() || drop < self.cad.min_dt_fraction {
+                let by = model
+                    .dt_limiter()
+                    .map_or(String::new(), |l| format!("; the stable Δt is set by {l}"));
+                return Err(Error::Progress {
+                    step: model.steps(),
+                    time: model.time(),
+                    what: format!(
+                        "Δt = {:.3e} s fell below time.min_dt_fraction = {:e} of the run's largest Δt {reference:.3e} s{by}",
+                        st.dt, self.cad.min_dt_fraction
+                    ),
+                });
+            }
+            if drop < 0.01 && self.warnings.is_empty() {
+                let by = model
+                    .dt_limiter()
+                    .map_or(String::new(), |l| format!(", set by {l}"));
+                let warning = format!(
+                    "Δt dropped 100-fold to {:.3e} s (largest {reference:.3e} s) at \
+                     step {}, t = {:.6e}{}",
+                    st.dt,
+                    model.steps(),
+                    model.time(),
+                    scene.label_materials(&by)
+                );
+                eprintln!("warning: {warning}");
+                self.warnings.push(warning);
+            }
+        }
         let ls = &mut self.ls;
         ls.dt_min = ls.dt_min.min(st.dt);
         ls.dt_max = ls.dt_max.max(st.dt);
@@ -483,28 +608,20 @@ impl Run {
         Ok(())
     }
 
-    /// After a step: history row, snapshot, the watchdog scan (keeping the
-    /// state as the last good one when it passes), an interval checkpoint
-    /// and the interrupt flag. Returns the reason to stop, if any.
+    /// After a step: the watchdog scan (every `time.watchdog_interval`
+    /// steps, and before every snapshot and checkpoint so that none shows
+    /// a state it would reject), history row, snapshot, keeping the state
+    /// of a regular or checkpoint scan as the last good one, an interval
+    /// checkpoint and the interrupt flag. Returns the reason to stop, if
+    /// any.
     fn after_step<M: Model>(&mut self, model: &M, opts: &RunOptions) -> Result<Option<Error>> {
         let (t, steps) = (model.time(), model.steps());
         let (cad, ls) = (&self.cad, &mut self.ls);
         let done = cad.finished(t, steps);
-        if t >= ls.next_hist * NEAR {
-            self.out.history_row(t, |r| model.history_row(r));
-            ls.next_hist += cad.history.unwrap_or(0.0);
-        }
-        if t >= ls.next_out * NEAR && !done {
-            self.out.snapshot(t, &model.field_sets())?;
-            self.out.flush_history()?;
-            ls.next_out += cad.interval.unwrap_or(f64::INFINITY);
-        }
+        let snapshot_due = t >= ls.next_out * NEAR && !done;
         let checkpoint_due = t >= ls.next_ckpt * NEAR && !done;
-        if checkpoint_due {
-            ls.next_ckpt += cad.checkpoint.unwrap_or(f64::INFINITY);
-        }
-        let watch = cad.watchdog > 0 && (steps % cad.watchdog == 0 || checkpoint_due);
-        if watch {
+        let keep = cad.watchdog > 0 && (steps % cad.watchdog == 0 || checkpoint_due);
+        if keep || (cad.watchdog > 0 && snapshot_due) {
             if let Some(v) = model.watchdog() {
                 return Ok(Some(Error::Watchdog {
                     step: steps,
@@ -512,6 +629,20 @@ impl Run {
                     what: v.to_string(),
                 }));
             }
+        }
+        if t >= ls.next_hist * NEAR {
+            self.out.history_row(t, |r| model.history_row(r));
+            ls.next_hist += cad.history.unwrap_or(0.0);
+        }
+        if snapshot_due {
+            self.out.snapshot(t, &model.field_sets())?;
+            self.out.flush_history()?;
+            ls.next_out += cad.interval.unwrap_or(f64::INFINITY);
+        }
+        if checkpoint_due {
+            ls.next_ckpt += cad.checkpoint.unwrap_or(f64::INFINITY);
+        }
+        if keep {
             let reuse = self.last_good.take();
             self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out, reuse));
         }
@@ -531,12 +662,15 @@ impl Run {
         }))
     }
 
-    /// Ends the run: the last snapshot and history row (not after an
-    /// interrupt, whose checkpoint holds the state), and after a stop the
-    /// checkpoint — of the current state after an interrupt (if it passes
-    /// the watchdog), of the last good one after a failure. Returns the
-    /// stop as [`Error::Stopped`] when a checkpoint was written.
-    fn finish<M: Model>(&mut self, model: &M, failure: Option<Error>) -> Result<Option<Error>> {
+    /// Ends the run: the last snapshot and history row, and after a stop
+    /// the checkpoint — of the current state after an interrupt (if it
+    /// passes the watchdog), of the last good one after a failure. After a
+    /// failure the model goes back to the last good state (the failed step
+    /// may have left it half-updated) and that state is the last snapshot,
+    /// unless it already is one; without a last good state (watchdog off)
+    /// no snapshot is added. No time appears twice in the snapshot series.
+    /// Returns the stop as [`Error::Stopped`] when a checkpoint was written.
+    fn finish<M: Model>(&mut self, model: &mut M, failure: Option<Error>) -> Result<Option<Error>> {
         let saved = match failure {
             None => None,
             Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
@@ -556,12 +690,21 @@ impl Run {
             Some(e) => Some((e, self.last_good.take())),
         };
         let interrupted = matches!(saved, Some((Error::Interrupted { .. }, _)));
-        // The last state is written, also after a failure (it shows where
-        // the run broke down).
-        if !interrupted {
+        let failed = saved.is_some() && !interrupted;
+        // After a failure: back to the last good state, if there is one.
+        let good = match &saved {
+            Some((_, Some(ck))) if failed => {
+                let mut ck = ck.clone();
+                model.load(&mut ck).is_ok()
+            }
+            _ => !failed,
+        };
+        if !interrupted && good {
             let t = model.time();
-            self.out.snapshot(t, &model.field_sets())?;
-            if self.out.last_history_time() != Some(t) {
+            if self.out.times.last().is_none_or(|&last| t > last) {
+                self.out.snapshot(t, &model.field_sets())?;
+            }
+            if self.out.last_history_time().is_none_or(|last| t > last) {
                 self.out.history_row(t, |r| model.history_row(r));
             }
         }
@@ -584,6 +727,63 @@ impl Run {
     }
 }
 
+/// Names every material of a run's error by its scene name and its
+/// `materials[i]` index (models name them by their scene name alone; ICE
+/// errors carry the name in backticks).
+pub(crate) fn label_error(e: Error, scene: &Scene) -> Error {
+    use crate::ice::IceError;
+    match e {
+        Error::Scene(mut se) => {
+            se.message = scene.label_materials(&se.message);
+            Error::Scene(se)
+        }
+        Error::Numerical { site, what } => Error::Numerical {
+            site,
+            what: scene.label_materials(&what),
+        },
+        Error::Watchdog { step, time, what } => Error::Watchdog {
+            step,
+            time,
+            what: scene.label_materials(&what),
+        },
+        Error::Progress { step, time, what } => Error::Progress {
+            step,
+            time,
+            what: scene.label_materials(&what),
+        },
+        Error::Stopped {
+            cause,
+            checkpoint,
+            step,
+            time,
+        } => Error::Stopped {
+            cause: Box::new(label_error(*cause, scene)),
+            checkpoint,
+            step,
+            time,
+        },
+        Error::Fluid(mut ice) => {
+            match &mut ice {
+                IceError::TimestepTooLarge { site, .. }
+                | IceError::NonPhysical { site, .. }
+                | IceError::Equilibration { site, .. }
+                | IceError::PressureSolve { site, .. }
+                | IceError::Eos { site, .. } => {
+                    if let Some(name) = site.material_name.take() {
+                        let labelled = scene.label_materials(&format!("material {name}"));
+                        site.material_name = Some(labelled["material ".len()..].into());
+                    }
+                }
+                IceError::InvalidInput { reason, .. } => {
+                    *reason = scene.label_materials(reason);
+                }
+            }
+            Error::Fluid(ice)
+        }
+        e => e,
+    }
+}
+
 /// The summary of a finished or stopped run.
 #[allow(clippy::too_many_arguments)]
 fn summarise<M: Model>(
@@ -597,6 +797,7 @@ fn summarise<M: Model>(
     written: &[PathBuf],
     restart: Option<&Path>,
     error: Option<&Error>,
+    warnings: &[String],
 ) -> Summary {
     let end = model.conserved();
     let desc = model.describe();
@@ -675,5 +876,6 @@ fn summarise<M: Model>(
         checkpoints: written.iter().map(|p| p.display().to_string()).collect(),
         restarted_from: restart.map(|p| p.display().to_string()),
         error: error.map(|e| e.to_string()),
+        warnings: warnings.to_vec(),
     }
 }

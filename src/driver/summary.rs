@@ -89,6 +89,9 @@ pub struct Summary {
     pub restarted_from: Option<String>,
     /// Error that stopped the run early, if any.
     pub error: Option<String>,
+    /// Warnings of the run (a 100-fold Δt drop), also printed on stderr.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Iterations per step of an implicit mode: Newton iterations (implicit MPM)

@@ -118,7 +118,9 @@ pub struct Site {
     /// Material index, `None` for a mixture quantity (`u32` keeps the
     /// crate's error small).
     pub material: Option<u32>,
-    /// The material's scene name (shown instead of the index when known).
+    /// The material as shown (instead of the index when known): its scene
+    /// name in backticks, to which the driver adds its `materials[i]`
+    /// index.
     pub material_name: Option<Box<str>>,
 }
 
@@ -130,7 +132,7 @@ impl std::fmt::Display for Site {
             self.step, self.time, self.cell
         )?;
         match (&self.material_name, self.material) {
-            (Some(name), _) => write!(f, ", material `{name}`")?,
+            (Some(name), _) => write!(f, ", material {name}")?,
             (None, Some(m)) => write!(f, ", material {m}")?,
             (None, None) => {}
         }
@@ -241,8 +243,12 @@ pub(crate) fn site<const D: usize>(state: &IceState<D>, c: usize, material: Opti
         time: state.time,
         cell: state.layout.coords(c).to_vec(),
         material: material.map(|m| m as u32),
-        material_name: material
-            .and_then(|m| state.materials.get(m).map(|x| x.name.as_str().into())),
+        material_name: material.and_then(|m| {
+            state
+                .materials
+                .get(m)
+                .map(|x| format!("`{}`", x.name).into())
+        }),
     }
 }
 

@@ -80,7 +80,7 @@ pub fn equilibrate<const D: usize>(
     }
     let max_it = AtomicUsize::new(0);
     // A failure names the material where the cells hold only one.
-    let only: Option<Box<str>> = (nm == 1).then(|| state.materials[0].name.as_str().into());
+    let only: Option<Box<str>> = (nm == 1).then(|| format!("`{}`", state.materials[0].name).into());
     // Split the borrows: inputs (mass, temperature) read, outputs written.
     let IceState {
         layout,

@@ -343,8 +343,8 @@ impl<const D: usize> IceState<D> {
                     return Err(invalid(
                         at(),
                         format!(
-                            "material {r}: vol_frac must be finite and > 0, got {}",
-                            s.vol_frac
+                            "material `{}`: vol_frac must be finite and > 0, got {}",
+                            materials[r].name, s.vol_frac
                         ),
                     ));
                 }
@@ -352,21 +352,24 @@ impl<const D: usize> IceState<D> {
                     return Err(invalid(
                         at(),
                         format!(
-                            "material {r}: density must be finite and > 0, got {}",
-                            s.density
+                            "material `{}`: density must be finite and > 0, got {}",
+                            materials[r].name, s.density
                         ),
                     ));
                 }
                 if !s.pressure.is_finite() || (s.pressure - p0).abs() > 1e-12 * p0.abs().max(1.0) {
                     return Err(invalid(
                         at(),
-                        format!("material {r}: pressure {} differs from {p0}", s.pressure),
+                        format!(
+                            "material `{}`: pressure {} differs from {p0}",
+                            materials[r].name, s.pressure
+                        ),
                     ));
                 }
                 if !s.velocity.iter().all(|v| v.is_finite()) {
                     return Err(invalid(
                         at(),
-                        format!("material {r}: velocity must be finite"),
+                        format!("material `{}`: velocity must be finite", materials[r].name),
                     ));
                 }
                 let eos = &materials[r].eos;
@@ -374,7 +377,10 @@ impl<const D: usize> IceState<D> {
                 if !(t.is_finite() && t > 0.0) {
                     return Err(invalid(
                         at(),
-                        format!("material {r}: temperature from (rho, p) is {t}, must be > 0"),
+                        format!(
+                            "material `{}`: temperature from (rho, p) is {t}, must be > 0",
+                            materials[r].name
+                        ),
                     ));
                 }
                 let mc = &mut cells[r];

@@ -169,6 +169,11 @@ pub struct LoadSpec {
     pub force: [f64; 3],
 }
 
+/// Meshes of up to this many elements are built while validating (their
+/// node selections checked at parse time); larger ones when the run is
+/// built, after the memory guard.
+const VALIDATE_MESH_ELEMENTS: f64 = 1e6;
+
 fn err(path: impl Into<String>, msg: impl Into<String>) -> SceneError {
     SceneError::new(path, msg)
 }
@@ -283,7 +288,10 @@ impl MembraneElementsSpec {
             l.nodes().validate(&lp)?;
             finite3(&format!("{lp}.force"), &l.force)?;
         }
-        let mesh = self.mesh_geometry(i)?;
+        // A mesh too large to build while parsing (before the memory
+        // guard) has its node selections checked when it is built.
+        let small = self.elements() <= VALIDATE_MESH_ELEMENTS;
+        let mesh = self.mesh_geometry(i, small)?;
         if let Some(vm) = &self.velocity_mode {
             let vp = p("velocity_mode");
             if !matches!(self.mesh, MeshSpec::Rectangle { .. }) {
@@ -302,14 +310,23 @@ impl MembraneElementsSpec {
                 }
             }
         }
-        let edge = boundary_nodes(mesh.nodes.len(), &mesh.quads);
+        if let Some(mesh) = mesh {
+            let edge = boundary_nodes(mesh.nodes.len(), &mesh.quads);
+            self.check_selections(i, &mesh, &edge)?;
+        }
+        Ok(())
+    }
+
+    /// Every `fix` and `loads` entry selects a node of the mesh.
+    fn check_selections(&self, i: usize, mesh: &QuadMesh, edge: &[bool]) -> Result<(), SceneError> {
+        let p = |k: &str| format!("membrane_elements[{i}].{k}");
         for (k, f) in self.fix.iter().enumerate() {
-            if f.nodes().select(&mesh, &edge).is_empty() {
+            if f.nodes().select(mesh, edge).is_empty() {
                 return Err(err(p(&format!("fix[{k}]")), "selects no node of the mesh"));
             }
         }
         for (k, l) in self.loads.iter().enumerate() {
-            if l.nodes().select(&mesh, &edge).is_empty() {
+            if l.nodes().select(mesh, edge).is_empty() {
                 return Err(err(
                     p(&format!("loads[{k}]")),
                     "selects no node of the mesh",
@@ -319,8 +336,19 @@ impl MembraneElementsSpec {
         Ok(())
     }
 
-    /// The mesh's nodes and quads (validated).
-    fn mesh_geometry(&self, i: usize) -> Result<QuadMesh, SceneError> {
+    /// Elements of the mesh: from its parameters, or for a mesh file an
+    /// upper bound from its size (a quad line takes at least 16 bytes).
+    pub fn elements(&self) -> f64 {
+        match &self.mesh {
+            MeshSpec::Rectangle { cells, .. } => cells[0] as f64 * cells[1] as f64,
+            MeshSpec::Disc { cells, .. } => *cells as f64 * *cells as f64,
+            MeshSpec::File(path) => std::fs::metadata(path).map_or(0.0, |m| m.len() as f64 / 16.0),
+        }
+    }
+
+    /// The mesh's nodes and quads (validated); without `build` only its
+    /// parameters are checked (`None`; a mesh file is read either way).
+    fn mesh_geometry(&self, i: usize, build: bool) -> Result<Option<QuadMesh>, SceneError> {
         let p = |k: &str| format!("membrane_elements[{i}].mesh.{k}");
         let mesh = match &self.mesh {
             MeshSpec::Rectangle {
@@ -347,6 +375,9 @@ impl MembraneElementsSpec {
                         "must not be zero or parallel to edge_a",
                     ));
                 }
+                if !build {
+                    return Ok(None);
+                }
                 quad_mesh::rectangle(V3::from(*corner), a, b, cells[0], cells[1])
             }
             MeshSpec::Disc {
@@ -361,6 +392,9 @@ impl MembraneElementsSpec {
                         p("disc.cells"),
                         format!("must be even, 2 … 16384 (got {cells})"),
                     ));
+                }
+                if !build {
+                    return Ok(None);
                 }
                 quad_mesh::disc(V3::from(*centre), *radius, *cells)
             }
@@ -377,7 +411,7 @@ impl MembraneElementsSpec {
                 format!("element {e}: {msg}"),
             ));
         }
-        Ok(mesh)
+        Ok(Some(mesh))
     }
 
     /// Builds the mesh with its material, loads, initial state and fixed
@@ -386,8 +420,11 @@ impl MembraneElementsSpec {
     /// # Errors
     /// As [`Self::validate`].
     pub fn build(&self, i: usize, gravity: V3) -> Result<MembraneMesh, SceneError> {
-        let mesh = self.mesh_geometry(i)?;
+        let Some(mesh) = self.mesh_geometry(i, true)? else {
+            return Err(err(format!("membrane_elements[{i}].mesh"), "not built"));
+        };
         let edge = boundary_nodes(mesh.nodes.len(), &mesh.quads);
+        self.check_selections(i, &mesh, &edge)?;
         let material = MembraneMaterial {
             density: self.density,
             young: self.young,

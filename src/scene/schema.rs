@@ -205,10 +205,45 @@ pub struct TimeSpec {
     /// failure writes as a checkpoint. 0 turns the watchdog off.
     #[serde(default = "default_watchdog_interval")]
     pub watchdog_interval: u64,
+    /// The run stops when a step's Δt falls below this fraction of the
+    /// largest Δt of the run so far (0 < fraction < 1; default 1e-6); a drop
+    /// by 100× warns once.
+    #[serde(
+        default = "default_min_dt_fraction",
+        skip_serializing_if = "is_default_min_dt_fraction"
+    )]
+    pub min_dt_fraction: f64,
+    /// The run is refused before its first step when `(end − t) / Δt`
+    /// exceeds this many steps and `max_steps` does not bound it (≥ 1;
+    /// default 1e9).
+    #[serde(
+        default = "default_max_projected_steps",
+        skip_serializing_if = "is_default_max_projected_steps"
+    )]
+    pub max_projected_steps: f64,
 }
 
 fn default_watchdog_interval() -> u64 {
     10
+}
+
+/// Default `time.min_dt_fraction`.
+pub const DEFAULT_MIN_DT_FRACTION: f64 = 1e-6;
+/// Default `time.max_projected_steps`.
+pub const DEFAULT_MAX_PROJECTED_STEPS: f64 = 1e9;
+
+fn default_min_dt_fraction() -> f64 {
+    DEFAULT_MIN_DT_FRACTION
+}
+fn default_max_projected_steps() -> f64 {
+    DEFAULT_MAX_PROJECTED_STEPS
+}
+// Defaults are not serialised: scene hashes of earlier checkpoints stay.
+fn is_default_min_dt_fraction(v: &f64) -> bool {
+    *v == DEFAULT_MIN_DT_FRACTION
+}
+fn is_default_max_projected_steps(v: &f64) -> bool {
+    *v == DEFAULT_MAX_PROJECTED_STEPS
 }
 
 fn default_cfl() -> f64 {
@@ -1575,12 +1610,13 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.shear_modulus.is_some(), "shear_modulus"),
         (m.plasticity.is_some(), "plasticity"),
         (m.failure.is_some(), "failure"),
+        (m.rigid, "rigid"),
     ] {
         if v {
-            let extra = if k == "density" {
-                " (fluid densities are set per region in [[regions]])"
-            } else {
-                ""
+            let extra = match k {
+                "density" => " (fluid densities are set per region in [[regions]])",
+                "rigid" => " (a rigid solid moving through the fluid of a coupled scene)",
+                _ => "",
             };
             return Err(err(p(k), format!("only for solid materials{extra}")));
         }
@@ -3396,6 +3432,18 @@ impl Scene {
         }
         if t.max_steps == Some(0) {
             return Err(err("time.max_steps", "must be ≥ 1 (got 0)"));
+        }
+        if !(t.min_dt_fraction > 0.0 && t.min_dt_fraction < 1.0) {
+            return Err(err(
+                "time.min_dt_fraction",
+                format!("must satisfy 0 < fraction < 1 (got {})", t.min_dt_fraction),
+            ));
+        }
+        if t.max_projected_steps.is_nan() || t.max_projected_steps < 1.0 {
+            return Err(err(
+                "time.max_projected_steps",
+                format!("must be ≥ 1 (got {})", t.max_projected_steps),
+            ));
         }
         Ok(())
     }

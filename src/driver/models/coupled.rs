@@ -221,6 +221,18 @@ impl<const D: usize> Model for Coupled<D> {
         }
     }
 
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        use crate::driver::limiter::{cell_limiter, particle_limiter, tighter};
+        let run = &self.run;
+        let cells = cell_limiter(&run.fluid, 0..run.num_fluids());
+        run.fields.iter().fold(cells, |best, f| {
+            tighter(
+                best,
+                particle_limiter(&run.grid, &run.materials, &f.particles),
+            )
+        })
+    }
+
     fn describe(&self) -> Description {
         let run = &self.run;
         Description {

@@ -180,6 +180,10 @@ impl<const D: usize> Model for Fluid<D> {
         }
     }
 
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        crate::driver::limiter::cell_limiter(&self.state, 0..self.state.materials.len())
+    }
+
     fn describe(&self) -> Description {
         Description {
             iterative: self.params.implicit.is_some(),

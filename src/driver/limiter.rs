@@ -1,0 +1,115 @@
+//! What sets a model's stable time step: the particle or cell, its material
+//! and the wave speed behind the CFL limit. The progress guard of the run
+//! loop names it when a run's Δt collapses or would take an absurd number
+//! of steps ([`crate::driver::Model::dt_limiter`]).
+
+use crate::grid::Grid;
+use crate::ice::IceState;
+use crate::material::eos::EquationOfState;
+use crate::material::{PointState, SolidMaterial};
+use crate::mpm::Particles;
+
+/// The site that sets a stable time step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DtLimiter {
+    /// `particle 17` or `cell [3, 4]`.
+    pub site: String,
+    /// The material's scene name.
+    pub material: String,
+    /// The signal speed behind the limit, `h / Δt_limit` [m/s].
+    pub speed: f64,
+    /// The limit at that site before the Courant number [s].
+    pub dt: f64,
+}
+
+impl std::fmt::Display for DtLimiter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of material `{}`: signal speed {:.3e} m/s (wave speed plus |v|), Δt limit {:.3e} s",
+            self.site, self.material, self.speed, self.dt
+        )
+    }
+}
+
+/// The particle with the smallest explicit limit `h / (c + |v|)` (the
+/// argument of [`crate::mpm::explicit::stable_dt`]); `None` without
+/// particles. A serial pass: called only when the guard stops a run.
+pub fn particle_limiter<const D: usize>(
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+    p: &Particles<D>,
+) -> Option<DtLimiter> {
+    let h = grid.h.min();
+    let c_max = crate::mpm::explicit::gas_sound_speed_max(materials, p);
+    let mut best: Option<(usize, f64)> = None;
+    for i in 0..p.len() {
+        let state = PointState {
+            mass: p.mass[i],
+            vol: p.vol[i],
+            vol0: p.vol0[i],
+            work: p.work[i],
+            stress: &p.stress[i],
+            speed: p.v[i].norm(),
+        };
+        let m = materials.get(p.material[i] as usize)?;
+        let dt = m.dt_limit(h, &state, c_max);
+        // NaN limits first: they are the cause.
+        if best.is_none_or(|(_, b)| dt.is_nan() || dt < b) {
+            best = Some((i, dt));
+            if dt.is_nan() {
+                break;
+            }
+        }
+    }
+    let (i, dt) = best?;
+    Some(DtLimiter {
+        site: format!("particle {i}"),
+        material: materials[p.material[i] as usize].name.clone(),
+        speed: h / dt,
+        dt,
+    })
+}
+
+/// The interior cell and material with the largest rate
+/// `Σ_d (|u_d| + c)/h_d` of ICE materials `materials` (the sound speed
+/// from the EOS at the cell's density and temperature); `None` without
+/// cells.
+pub fn cell_limiter<const D: usize>(
+    s: &IceState<D>,
+    materials: std::ops::Range<usize>,
+) -> Option<DtLimiter> {
+    let mut best: Option<(usize, usize, f64)> = None;
+    for r in materials {
+        let (mat, mc) = (s.materials.get(r)?, s.cells.get(r)?);
+        for &c in &s.layout.interior {
+            let v = mc.sp_vol[c];
+            let cs = mat.eos.sound_speed_sq(1.0 / v, mc.temperature[c]).sqrt();
+            let rate: f64 = (0..D)
+                .map(|d| (mc.velocity[c][d].abs() + cs) / s.layout.h[d])
+                .sum();
+            if best.is_none_or(|(_, _, b)| rate.is_nan() || rate > b) {
+                best = Some((r, c, rate));
+                if rate.is_nan() {
+                    break;
+                }
+            }
+        }
+    }
+    let (r, c, rate) = best?;
+    let h = s.layout.h.min();
+    Some(DtLimiter {
+        site: format!("cell {:?}", s.layout.coords(c)),
+        material: s.materials[r].name.clone(),
+        speed: rate * h,
+        dt: 1.0 / rate,
+    })
+}
+
+/// The more limiting of two sites (the smaller Δt limit; NaN first).
+pub fn tighter(a: Option<DtLimiter>, b: Option<DtLimiter>) -> Option<DtLimiter> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(if b.dt.is_nan() || b.dt < a.dt { b } else { a }),
+        (a, b) => a.or(b),
+    }
+}
