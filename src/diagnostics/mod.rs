@@ -15,3 +15,4 @@ pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;
 pub mod zhang_block;
+pub mod zhang_spall;

@@ -9,6 +9,7 @@ pub mod ice_studies;
 pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
+pub mod multiphase_spall;
 pub mod multiphase_studies;
 pub mod reaction_studies;
 pub mod taylor_studies;
@@ -27,6 +28,11 @@ pub const STUDIES: &[Study] = &[
         "zhang_block",
         "Zhang Sec. 3 block-in-air: a disk/sphere moving with the air, weak (Eq. 18) vs strong (Eq. 7) constraint, 2D axis/diagonal and 3D",
         multiphase_studies::zhang_block,
+    ),
+    (
+        "zhang_spall",
+        "Zhang Sec. 4 plate spall (multiphase, air around): first-failure time vs 3d/c and plane vs h",
+        multiphase_spall::zhang_spall,
     ),
     (
         "reaction_burn",
