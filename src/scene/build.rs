@@ -25,7 +25,8 @@ use crate::mpm::implicit::{
     ImplicitParams, ImplicitRun, LinearSolver as ImplicitLinear, PrescribedDisplacement,
     SurfaceLoad,
 };
-use crate::mpm::{ExplicitParams, Particles};
+use crate::mpm::{ExplicitParams, Particles, UpdateScheme};
+use crate::multiphase::{MultiphaseRun, Phase};
 use crate::stepper::{SolidRun, TimeControl};
 
 fn to_vec<const D: usize>(v: &[f64]) -> SVector<f64, D> {
@@ -982,5 +983,72 @@ pub fn build_coupled_run<const D: usize>(
         });
     }
     run.init_reactions();
+    Ok(run)
+}
+
+/// Builds the multiphase run of a validated scene with a `[multiphase]`
+/// table and `D == dim`: one phase per material, in scene order.
+pub fn build_multiphase_run<const D: usize>(scene: &Scene) -> Result<MultiphaseRun<D>, SceneError> {
+    let spec = scene
+        .multiphase
+        .as_ref()
+        .ok_or_else(|| SceneError::new("multiphase", "missing"))?;
+    let grid = grid_of::<D>(scene);
+    let materials = particle_materials(scene, &grid)?;
+    let particles = fill_particles(scene, &grid, &materials)?;
+    let nodes = grid.num_nodes();
+    let phases: Vec<Phase<D>> = (0..materials.len())
+        .map(|k| {
+            let p = particles.select(|i| particles.material[i] as usize == k);
+            Phase::new(k, p, nodes)
+        })
+        .collect();
+    if let Some(k) = phases.iter().position(|ph| ph.particles.is_empty()) {
+        return Err(SceneError::new(
+            "objects",
+            format!(
+                "material `{}` has no object: every phase needs points",
+                materials[k].name
+            ),
+        ));
+    }
+    let gas = materials.iter().position(|m| m.gas().is_some());
+    let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
+    let params = ExplicitParams {
+        shape: scene.mpm.shape,
+        scheme: UpdateScheme::Usl,
+        mass_floor: 1e-12 * min_mass,
+        damping: scene.mpm.damping,
+    };
+    let time = TimeControl {
+        end: scene.time.end,
+        cfl: scene.time.cfl,
+        dt: scene.time.dt,
+        max_steps: scene.time.max_steps,
+    };
+    let mut run = MultiphaseRun::new(
+        grid,
+        materials,
+        phases,
+        gas,
+        params,
+        spec.params(
+            &scene
+                .materials
+                .iter()
+                .map(|m| m.name.as_str())
+                .collect::<Vec<_>>(),
+        ),
+        time,
+    );
+    run.nodes(0.0)
+        .map_err(|e| SceneError::new("objects", format!("initial state: {e}")))?;
+    if let Some(g) = &scene.gravity {
+        let g = nalgebra::SVector::<f64, D>::from_fn(|d, _| g[d]);
+        if g.norm() > 0.0 {
+            run.gravity = g;
+            run.body = Some(Box::new(Uniform(g)));
+        }
+    }
     Ok(run)
 }

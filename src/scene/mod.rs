@@ -13,8 +13,8 @@ mod names;
 mod schema;
 
 pub use build::{
-    build_coupled_run, build_fluid_run, build_implicit_run, build_solid_run, fill_particles,
-    grid_of,
+    build_coupled_run, build_fluid_run, build_implicit_run, build_multiphase_run, build_solid_run,
+    fill_particles, grid_of,
 };
 pub use membrane_elements::*;
 pub use multiphase::*;

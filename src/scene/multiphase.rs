@@ -4,13 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;
-use crate::grid::Boundary;
-use crate::mpm::explicit::Uniform;
-use crate::mpm::{ExplicitParams, UpdateScheme};
-use crate::multiphase::{Constraint, MultiphaseParams, MultiphaseRun, Phase, MAX_PHASES};
-use crate::stepper::TimeControl;
-
-use super::schema::{MaterialKind, Mode, Scene};
+use crate::multiphase::{Constraint, MultiphaseParams};
 
 /// Zhang's multi-velocity, multi-pressure phases (Zhang Secs. 2–3): every
 /// material on points (solids and gas points, `frame = "particles"`) is a
@@ -69,8 +63,9 @@ fn err(path: impl Into<String>, msg: impl Into<String>) -> SceneError {
 }
 
 impl MultiphaseSpec {
-    /// Checks the table against the scene's materials.
-    pub(super) fn validate(&self, scene: &Scene) -> Result<(), SceneError> {
+    /// Checks the table's values and names against the scene's material
+    /// names.
+    pub(super) fn validate_table(&self, names: &[&str]) -> Result<(), SceneError> {
         if !(self.drag.is_finite() && self.drag >= 0.0) {
             return Err(err(
                 "multiphase.drag",
@@ -83,7 +78,6 @@ impl MultiphaseSpec {
                 format!("must be in [0, 1] (got {})", self.alpha),
             ));
         }
-        let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
         let known = |path: String, n: &str| -> Result<(), SceneError> {
             if names.contains(&n) {
                 Ok(())
@@ -118,78 +112,11 @@ impl MultiphaseSpec {
                 ));
             }
         }
-        if scene.time.mode != Mode::Explicit {
-            return Err(err(
-                "time.mode",
-                format!(
-                    "the multiphase model is explicit; allowed: explicit (got {})",
-                    scene.time.mode.name()
-                ),
-            ));
-        }
-        if scene.grid.axisymmetric {
-            return Err(err(
-                "grid.axisymmetric",
-                "the multiphase model runs in plane 2D and 3D; allowed: false",
-            ));
-        }
-        if !matches!(scene.mpm.update, None | Some(UpdateScheme::Usl)) {
-            return Err(err(
-                "mpm.update",
-                "the multiphase model updates the stress last; allowed: usl",
-            ));
-        }
-        for (i, m) in scene.materials.iter().enumerate() {
-            if !(m.kind == MaterialKind::Solid || m.is_gas_point()) {
-                return Err(err(
-                    format!("materials[{i}]"),
-                    format!(
-                        "`{}`: every phase of the multiphase model lives on points; allowed: \
-                         type = \"solid\", or a fluid with frame = \"particles\"",
-                        m.name
-                    ),
-                ));
-            }
-            if m.rigid {
-                return Err(err(
-                    format!("materials[{i}].rigid"),
-                    "not offered in the multiphase model (rigid solids ride MPM-ICE)",
-                ));
-            }
-        }
-        let gases: Vec<usize> = (0..scene.materials.len())
-            .filter(|&i| scene.materials[i].is_gas_point())
-            .collect();
-        if gases.len() > 1 {
-            return Err(err(
-                format!("materials[{}]", gases[1]),
-                "the multiphase model has one gas pressure p_g (Zhang Eq. 4): at most one gas \
-                 material",
-            ));
-        }
-        if scene.materials.len() > MAX_PHASES {
-            return Err(err(
-                "materials",
-                format!(
-                    "at most {MAX_PHASES} phases (got {})",
-                    scene.materials.len()
-                ),
-            ));
-        }
-        for (axis, faces) in scene.grid.boundary.faces().iter().enumerate() {
-            if faces[0].0 == Some(Boundary::Periodic) && scene.grid.cells[axis] < 4 {
-                return Err(err(
-                    format!("grid.cells[{axis}]"),
-                    "a periodic axis needs at least 4 cells",
-                ));
-            }
-        }
         Ok(())
     }
 
     /// The model parameters for the scene's materials in scene order.
-    fn params(&self, scene: &Scene) -> MultiphaseParams {
-        let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+    pub(super) fn params(&self, names: &[&str]) -> MultiphaseParams {
         let n = names.len();
         let at = |s: &str| names.iter().position(|&x| x == s).unwrap_or(0);
         let mut drag = vec![self.drag; n * n];
@@ -211,65 +138,4 @@ impl MultiphaseSpec {
             alpha,
         }
     }
-}
-
-/// Builds the multiphase run of a validated scene with a `[multiphase]`
-/// table and `D == dim`: one phase per material, in scene order.
-pub fn build_multiphase_run<const D: usize>(scene: &Scene) -> Result<MultiphaseRun<D>, SceneError> {
-    let spec = scene
-        .multiphase
-        .as_ref()
-        .ok_or_else(|| err("multiphase", "missing"))?;
-    let grid = super::grid_of::<D>(scene);
-    let materials = super::build::particle_materials(scene, &grid)?;
-    let particles = super::fill_particles(scene, &grid, &materials)?;
-    let nodes = grid.num_nodes();
-    let phases: Vec<Phase<D>> = (0..materials.len())
-        .map(|k| {
-            let p = particles.select(|i| particles.material[i] as usize == k);
-            Phase::new(k, p, nodes)
-        })
-        .collect();
-    if let Some(k) = phases.iter().position(|ph| ph.particles.is_empty()) {
-        return Err(err(
-            "objects",
-            format!(
-                "material `{}` has no object: every phase needs points",
-                materials[k].name
-            ),
-        ));
-    }
-    let gas = materials.iter().position(|m| m.gas().is_some());
-    let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
-    let params = ExplicitParams {
-        shape: scene.mpm.shape,
-        scheme: UpdateScheme::Usl,
-        mass_floor: 1e-12 * min_mass,
-        damping: scene.mpm.damping,
-    };
-    let time = TimeControl {
-        end: scene.time.end,
-        cfl: scene.time.cfl,
-        dt: scene.time.dt,
-        max_steps: scene.time.max_steps,
-    };
-    let mut run = MultiphaseRun::new(
-        grid,
-        materials,
-        phases,
-        gas,
-        params,
-        spec.params(scene),
-        time,
-    );
-    run.nodes(0.0)
-        .map_err(|e| err("objects", format!("initial state: {e}")))?;
-    if let Some(g) = &scene.gravity {
-        let g = nalgebra::SVector::<f64, D>::from_fn(|d, _| g[d]);
-        if g.norm() > 0.0 {
-            run.gravity = g;
-            run.body = Some(Box::new(Uniform(g)));
-        }
-    }
-    Ok(run)
 }

@@ -7,6 +7,7 @@ use crate::grid::Boundary;
 use crate::material::eos::{EosError, FluidEos, IdealGas, Jwl, MieGruneisen, StiffenedGas};
 use crate::material::SolidModel;
 use crate::mpm::UpdateScheme;
+use crate::multiphase::MAX_PHASES;
 use crate::shape::ShapeKind;
 
 /// A whole scene.
@@ -2140,6 +2141,75 @@ impl Scene {
         Ok(())
     }
 
+    /// Checks of a scene with a `[multiphase]` table (Zhang's model) beyond
+    /// the table itself.
+    fn validate_multiphase(&self) -> Result<(), SceneError> {
+        if self.time.mode != Mode::Explicit {
+            return Err(err(
+                "time.mode",
+                format!(
+                    "the multiphase model is explicit; allowed: explicit (got {})",
+                    self.time.mode.name()
+                ),
+            ));
+        }
+        if self.grid.axisymmetric {
+            return Err(err(
+                "grid.axisymmetric",
+                "the multiphase model runs in plane 2D and 3D; allowed: false",
+            ));
+        }
+        if !matches!(self.mpm.update, None | Some(UpdateScheme::Usl)) {
+            return Err(err(
+                "mpm.update",
+                "the multiphase model updates the stress last; allowed: usl",
+            ));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            if !(m.kind == MaterialKind::Solid || m.is_gas_point()) {
+                return Err(err(
+                    format!("materials[{i}]"),
+                    format!(
+                        "`{}`: every phase of the multiphase model lives on points; allowed: \
+                         type = \"solid\", or a fluid with frame = \"particles\"",
+                        m.name
+                    ),
+                ));
+            }
+            if m.rigid {
+                return Err(err(
+                    format!("materials[{i}].rigid"),
+                    "not offered in the multiphase model (rigid solids ride MPM-ICE)",
+                ));
+            }
+        }
+        let gases: Vec<usize> = (0..self.materials.len())
+            .filter(|&i| self.materials[i].is_gas_point())
+            .collect();
+        if gases.len() > 1 {
+            return Err(err(
+                format!("materials[{}]", gases[1]),
+                "the multiphase model has one gas pressure p_g (Zhang Eq. 4): at most one gas \
+                 material",
+            ));
+        }
+        if self.materials.len() > MAX_PHASES {
+            return Err(err(
+                "materials",
+                format!("at most {MAX_PHASES} phases (got {})", self.materials.len()),
+            ));
+        }
+        for (axis, faces) in self.grid.boundary.faces().iter().enumerate() {
+            if faces[0].0 == Some(Boundary::Periodic) && self.grid.cells[axis] < 4 {
+                return Err(err(
+                    format!("grid.cells[{axis}]"),
+                    "a periodic axis needs at least 4 cells",
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Keys of objects that depend on their material: `density` and
     /// `pressure` belong to gas points, except that a hypo-elastic solid of
     /// a multiphase scene may start under a hydrostatic `pressure`; `except`
@@ -3187,7 +3257,9 @@ impl Scene {
         }
         self.validate_membranes()?;
         if let Some(mp) = &self.multiphase {
-            mp.validate(self)?;
+            let names: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
+            mp.validate_table(&names)?;
+            self.validate_multiphase()?;
         }
         self.validate_object_keys()?;
         let has_solid = self.materials.iter().any(|m| m.kind == MaterialKind::Solid);

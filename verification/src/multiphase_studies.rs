@@ -83,7 +83,11 @@ pub fn zhang_block(quick: bool) -> Result<StudyResult> {
     for (label, constraint, u, crossings, cfl) in sets {
         let mut pts = Vec::new();
         // CFL 0.1 takes four times the steps: not at the finest grid.
-        let ns = if cfl < 0.4 && ns.len() > 2 { &ns[..2] } else { ns };
+        let ns = if cfl < 0.4 && ns.len() > 2 {
+            &ns[..2]
+        } else {
+            ns
+        };
         for &n in ns {
             let c = BlockCase {
                 cfl,
