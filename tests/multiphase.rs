@@ -36,15 +36,9 @@ fn weak_constraint_keeps_a_disk_moving_diagonally_with_the_air_unchanged() {
     let u = [10.0, 10.0, 0.0];
     let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.05));
     assert!(dp < 1e-10 && dv < 1e-10, "dp = {dp:e}, dv = {dv:e}");
-    // Along a grid axis too (10 cells of 0.1, 10 crossings), at CFL 0.1: at
-    // CFL 0.4 (20 cells, t = 0.05) a slowly growing mode
-    // of the coupled disk and air (open; it grows at rest as well) lifts
-    // the round-off to dp = 8.8e-10, dv = 7.1e-10 by t = 0.05.
+    // Along a grid axis too.
     let u = [10.0, 0.0, 0.0];
-    let (dp, dv) = run_block::<2>(&BlockCase {
-        cfl: 0.1,
-        ..case(2, 10, "weak", u, 0.1)
-    });
+    let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.05));
     assert!(dp < 1e-10 && dv < 1e-10, "axis: dp = {dp:e}, dv = {dv:e}");
 }
 
@@ -130,10 +124,14 @@ pressure = 1.0e5
     }
     // The pressure forces of the phases cancel where the points' volumes
     // tile the space; once the slab has pushed into the air they no longer
-    // do exactly (Σθ ≠ 1 by the sampling error of Zhang Eq. 14), so the
-    // momentum is conserved to that error (measured: 3.1e-6 relative).
+    // do exactly (Σθ ≠ 1 by the sampling error of Zhang Eq. 14, times the
+    // nodal pressure), so the momentum is conserved to that error only.
+    // Measured: 3.1e-6 relative with p_g the gas points' mean pressure,
+    // 1.19e-5 with the compressibility-weighted p_g that makes the
+    // interface's pressure work balance (which removed the growing mode of
+    // the block test); the bound is that measurement's order, 3e-5.
     let p1 = momentum(&run);
-    assert!((p1 - p0).abs() < 1e-5 * p0.abs(), "{p0} → {p1}");
+    assert!((p1 - p0).abs() < 3e-5 * p0.abs(), "{p0} → {p1}");
     // The air touching the slab was set moving (with no drag it stays at
     // rest: the slab meets it only through the pressure).
     let vmax = run.phases[air]

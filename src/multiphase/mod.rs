@@ -8,8 +8,9 @@
 //!
 //! 1. Per phase: mass and momentum to the nodes (Eq. 9), velocity `ū_il`.
 //! 2. Per phase: nodal volume fraction `θ_il = Σ_p v_p S_l / V_l` (Eq. 13);
-//!    the gas pressure on the nodes `p_g,l = Σ v p S_l / Σ v S_l` over the
-//!    gas points (zero where there is no gas); `Σ_j θ_j κ_j` on the nodes.
+//!    `Σ_j θ_j κ_j` on the nodes; the pressure `p_g,l = Σ v κ p S_l / Σ v κ
+//!    S_l` over all points (κ = 1/(ρc²)): the gas pressure wherever there
+//!    is gas (its κ dwarfs a solid's), the solids' mean pressure elsewhere.
 //! 3. Per phase, the momentum equation (Eq. 4 in the MPM form Eq. 8): the
 //!    nodal force `−Σ_p v_p (σ_p + p_g,l I)·∇S_l(x_p) + m g`, i.e. Eq. 8's
 //!    `−θ_i ∇p_g V_l` and the gas pressure of the stress difference
@@ -21,7 +22,9 @@
 //!    node, pointwise implicit (the exchange solver of
 //!    [`crate::ice::exchange`], conservative and stable for any K).
 //! 5. Per phase, at its points: the volume rate `α_i ∇·ū_i + B_i` (Eqs.
-//!    1–2) with the chosen volume-fraction constraint ([`closure`]), which
+//!    1–2) with the chosen volume-fraction constraint ([`closure`]; its
+//!    interface part is built on the nodes from the same volume gradients
+//!    as the force of step 3, so the pressure work balances), which
 //!    replaces `∇·ū_i` in the point's velocity gradient (the deviatoric
 //!    part, Eq. 3, is kept); the stress update; FLIP velocity and position
 //!    (Eqs. 10–11).
@@ -122,8 +125,8 @@ pub struct MultiphaseRun<const D: usize> {
     compressibility: Vec<f64>,
     node_tmp: Vec<f64>,
     mix_num: Vec<f64>,
-    mix_vol: Vec<f64>,
-    gas_num: Vec<f64>,
+    /// Nodal interface rate per unit compressibility, Y_l / Σθκ_l.
+    interface: Vec<f64>,
     force: Vec<SVector<f64, D>>,
 }
 
@@ -170,8 +173,7 @@ impl<const D: usize> MultiphaseRun<D> {
             compressibility: vec![0.0; n],
             node_tmp: vec![0.0; n],
             mix_num: vec![0.0; n],
-            mix_vol: vec![0.0; n],
-            gas_num: vec![0.0; n],
+            interface: vec![0.0; n],
             force: vec![SVector::zeros(); n],
         }
     }
@@ -253,7 +255,6 @@ impl<const D: usize> MultiphaseRun<D> {
             grid,
             materials,
             phases,
-            gas,
             params,
             body,
             t,
@@ -262,8 +263,6 @@ impl<const D: usize> MultiphaseRun<D> {
             compressibility: comp,
             node_tmp,
             mix_num,
-            mix_vol,
-            gas_num,
             ..
         } = self;
         let mpm = CoupledMpm {
@@ -281,14 +280,12 @@ impl<const D: usize> MultiphaseRun<D> {
         // pressure sums Σ S v p of the gas and of all phases.
         comp.iter_mut().for_each(|c| *c = 0.0);
         mix_num.iter_mut().for_each(|c| *c = 0.0);
-        mix_vol.iter_mut().for_each(|c| *c = 0.0);
-        for (k, ph) in phases.iter_mut().enumerate() {
+        for ph in phases.iter_mut() {
             mpm.p2g(&ph.particles, &mut ph.gs, &mut ph.scratch)
                 .map_err(|e| name(ph, e))?;
             mpm.p2g_sum(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.theta);
             ph.theta.iter_mut().for_each(|q| *q *= inv_v);
             grid.mirror_ghosts(&mut ph.theta);
-            mix_vol.iter_mut().zip(&ph.theta).for_each(|(a, b)| *a += b);
             let m = &materials[ph.material];
             let p = &ph.particles;
             ph.point.clear();
@@ -299,35 +296,30 @@ impl<const D: usize> MultiphaseRun<D> {
                 .zip(node_tmp.iter())
                 .for_each(|(c, q)| *c += q * inv_v);
             ph.point.clear();
-            ph.point
-                .extend((0..p.len()).map(|i| -p.vol[i] * p.stress[i].trace() / 3.0));
+            ph.point.extend(
+                (0..p.len())
+                    .map(|i| -p.vol[i] * compressibility(m, p, i) * p.stress[i].trace() / 3.0),
+            );
             mpm.p2g_sum(p, &ph.point, &ph.scratch, node_tmp);
             mix_num
                 .iter_mut()
                 .zip(node_tmp.iter())
                 .for_each(|(a, b)| *a += b);
-            if *gas == Some(k) {
-                gas_num.copy_from_slice(node_tmp);
-            }
         }
         grid.mirror_ghosts(comp);
-        // The gas pressure on a node: a weighted mean of the gas points'
-        // pressures wherever the gas has any volume there, however little
-        // (a floor left the gas force −Σ v σ·∇S unbalanced on a node the gas
-        // barely reaches: accelerations of 4e9 m/s² in the block test).
-        // Where there is no gas, p_g only completes the stress difference
-        // σ + p_g I, whose p_g cancels in the continuous equations (−θ∇p_g
-        // + ∇·(θ p_g I) = p_g ∇θ, zero where θ is uniform); it takes the
-        // mean pressure of the phases there, so that at a solid's boundary
-        // not met by gas points (where the phases' sampled θ leave a gap)
-        // a uniform pressure still exerts no force.
-        let theta_gas = gas.map(|g| &phases[g].theta);
+        // The pressure p_g on a node: the compressibility-weighted mean of
+        // the points' pressures, Σ S v κ p / Σ S v κ. Where there is gas it
+        // is the gas pressure (κ of air is 1e4–1e6 times a solid's), with
+        // no floor however little gas the node holds (a floor left the gas
+        // force unbalanced on a node the gas barely reaches: 4e9 m/s² in
+        // the block test); where there is none, the solids' mean pressure,
+        // which only completes the stress difference σ + p_g I (p_g
+        // cancels in the continuous equations where θ is uniform). This
+        // weighting is what makes the closure's interface rate do exactly
+        // the work of the pressure force (see `closure::node_rate`).
         for l in 0..gas_pressure.len() {
-            let th = theta_gas.map_or(0.0, |t| t[l]);
-            gas_pressure[l] = if th > 0.0 {
-                gas_num[l] * inv_v / th
-            } else if mix_vol[l] > 0.0 {
-                mix_num[l] * inv_v / mix_vol[l]
+            gas_pressure[l] = if comp[l] > 0.0 {
+                mix_num[l] * inv_v / comp[l]
             } else {
                 0.0
             };
@@ -394,6 +386,7 @@ impl<const D: usize> MultiphaseRun<D> {
             steps,
             gas_pressure,
             compressibility: comp,
+            interface,
             force,
             ..
         } = self;
@@ -410,11 +403,13 @@ impl<const D: usize> MultiphaseRun<D> {
         // 3: the momentum equation per phase (Eq. 8).
         for ph in phases.iter_mut() {
             mpm.weighted_gradient(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.grad);
+            grid.fold_ghosts(&mut ph.grad);
+        }
+        for ph in phases.iter_mut() {
             force
                 .iter_mut()
                 .zip(ph.grad.iter().zip(gas_pressure.iter()))
                 .for_each(|(f, (g, &pg))| *f = -g * pg);
-            grid.fold_ghosts(force);
             mpm.solve(&mut ph.particles, &mut ph.gs, &mut ph.scratch, None, force)
                 .map_err(|e| name(ph, e))?;
         }
@@ -438,6 +433,36 @@ impl<const D: usize> MultiphaseRun<D> {
         }
         // 5: volume rates (Eqs. 1–2 with the constraint), stress, G2P.
         let n = phases.len();
+        let volume = grid.cell_volume();
+        {
+            let mut u = [SVector::<f64, D>::zeros(); MAX_PHASES];
+            let mut m = [0.0; MAX_PHASES];
+            let mut g = [SVector::<f64, D>::zeros(); MAX_PHASES];
+            for l in 0..interface.len() {
+                let mut theta_sum = 0.0;
+                for (j, ph) in phases.iter().enumerate() {
+                    u[j] = ph.gs.velocity[l];
+                    m[j] = ph.gs.mass[l];
+                    g[j] = ph.grad[l];
+                    theta_sum += ph.theta[l];
+                }
+                interface[l] = if comp[l] > 0.0 {
+                    closure::node_rate(
+                        &u[..n],
+                        &m[..n],
+                        &g[..n],
+                        theta_sum,
+                        volume,
+                        model.constraint,
+                        dt,
+                    ) / comp[l]
+                } else {
+                    0.0
+                };
+            }
+            grid.mirror_ghosts(interface);
+        }
+        let dispersed = model.alpha.iter().any(|&a| a < 1.0);
         for i in 0..n {
             let mut rate = std::mem::take(&mut phases[i].point);
             rate.resize(phases[i].particles.len(), 0.0);
@@ -448,12 +473,18 @@ impl<const D: usize> MultiphaseRun<D> {
                 let (comp, phases_ref) = (&*comp, &*phases);
                 let m = &materials[ph.material];
                 let p = &ph.particles;
-                let constraint = model.constraint;
+                let interface = &*interface;
                 mpm.gather(
                     p,
                     &ph.scratch,
                     &mut rate,
                     |s: &mut closure::Stencil<D>, l, w, g| {
+                        s.node_share += w * interface[l];
+                        s.compressibility += w * comp[l];
+                        s.div_own += own[l].dot(g);
+                        if !dispersed {
+                            return;
+                        }
                         for (j, q) in phases_ref.iter().enumerate() {
                             let mj = q.gs.mass[l];
                             if mj <= 0.0 {
@@ -466,11 +497,9 @@ impl<const D: usize> MultiphaseRun<D> {
                             s.div_theta_u[j] += q.theta[l] * u.dot(g);
                             s.theta_sum += w * q.theta[l];
                         }
-                        s.compressibility += w * comp[l];
-                        s.div_own += own[l].dot(g);
                     },
                     |pi, s| {
-                        let x = closure::mismatch(&s, &alpha[..n], constraint, dt);
+                        let x = closure::dispersed(&s, &alpha[..n]);
                         let kappa = compressibility(m, p, pi);
                         closure::extra_rate(&s, alpha[i], kappa, x)
                     },

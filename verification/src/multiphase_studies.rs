@@ -50,7 +50,7 @@ pub fn zhang_block(quick: bool) -> Result<StudyResult> {
         solid: "sphere",
         solid_ppc: 3,
     };
-    let sets: [(&str, &'static str, [f64; 3], f64, f64); 4] = [
+    let sets: [(&str, &'static str, [f64; 3], f64, f64); 3] = [
         (
             "weak (Eq. 18), disk, diagonal",
             "weak",
@@ -64,13 +64,6 @@ pub fn zhang_block(quick: bool) -> Result<StudyResult> {
             [10.0, 0.0, 0.0],
             10.0,
             0.4,
-        ),
-        (
-            "weak (Eq. 18), disk, along x, CFL 0.1",
-            "weak",
-            [10.0, 0.0, 0.0],
-            10.0,
-            0.1,
         ),
         (
             "strong (Eq. 7), disk, diagonal, 1 crossing",
@@ -137,8 +130,10 @@ pub fn zhang_block(quick: bool) -> Result<StudyResult> {
              (round-off) and shows for the strong one that Eq. 17's O((dx)^d / dt) error does \
              not fall with dx."
                 .into(),
-            "Open: at CFL 0.4 a slowly growing mode of the coupled solid and air lifts the \
-             round-off along x (also with the disk at rest); at CFL 0.1 it does not grow."
+            "The interface rate of the closure is built from the same nodal volume gradients \
+             as the pressure force, and p_g is the compressibility-weighted mean pressure, so \
+             the pressure work across an interface balances; before that, a mode at oblique \
+             interfaces grew from round-off (1.5e-8 at h = 0.025 diagonally, 2.8e-7 along x)."
                 .into(),
         ],
     })
