@@ -197,7 +197,7 @@ fn plate_spall_time_and_plane_match_the_elastic_wave_analysis() {
     // Zhang Sec. 4 (Fig. 2; the paper: 1.12 us computed against 1.18 us,
     // 5 %): the first failure within 5 % of 3 d / c, converging, on the
     // target's middle plane. Measured (`cargo run --release -p verification -- zhang_spall`): time
-    // +4.5 % / +2.8 % / +1.7 % and plane 0.28 / 0.17 / 0.08 mm behind it at
+    // +4.5 % / +2.8 % / +1.7 % and plane 0.28 / 0.17 / 0.12 mm behind it at
     // h = 0.1 / 0.05 / 0.025 mm (about 3 cells: the smeared fronts reach
     // the strength first on the rear side).
     use mpmice::diagnostics::zhang_spall::{analytic, run_spall};

@@ -174,6 +174,10 @@ impl<const D: usize> Model for Multiphase<D> {
         }
         self.run.t = ck.take_f64("model.time", Some(&[1]))?[0];
         self.run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
+        // The points' stiffening (the stable step's input) of the restored
+        // state, as an unbroken run has it at this step; a failure here
+        // shows again, named, at the next step.
+        let _ = self.run.nodes(0.0);
         Ok(())
     }
 
