@@ -145,6 +145,19 @@ pub fn stable_dt<const D: usize>(
     particles: &Particles<D>,
     cfl: f64,
 ) -> f64 {
+    stable_dt_stiffened(grid, materials, particles, cfl, &[])
+}
+
+/// [`stable_dt`] with each particle's signal speed raised by `√s_p`
+/// (`stiffening[p]`; missing entries count as 1): the multiphase closure's
+/// stiffening of a gas that is a small part of the mixture.
+pub fn stable_dt_stiffened<const D: usize>(
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+    particles: &Particles<D>,
+    cfl: f64,
+    stiffening: &[f64],
+) -> f64 {
     let hmin = grid.h.min();
     let c_max = gas_sound_speed_max(materials, particles);
     let limit = (0..particles.len())
@@ -158,7 +171,11 @@ pub fn stable_dt<const D: usize>(
                 stress: &particles.stress[p],
                 speed: particles.v[p].norm(),
             };
-            materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max)
+            let limit = materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max);
+            match stiffening.get(p) {
+                Some(s) => limit / s.sqrt(),
+                None => limit,
+            }
         })
         .reduce(|| f64::INFINITY, f64::min);
     cfl * limit

@@ -38,11 +38,10 @@ use nalgebra::SVector;
 use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
 use crate::ice::exchange::exchange_momentum;
-use crate::material::{PointState, SolidMaterial};
-use crate::mpm::explicit::gas_sound_speed_max;
+use crate::material::SolidMaterial;
+use crate::mpm::explicit::stable_dt_stiffened;
 use crate::mpm::{BodyForce, CoupledMpm, ExplicitParams, GridState, Particles, StepScratch};
 use crate::stepper::{Energies, TimeControl};
-use rayon::prelude::*;
 
 pub use closure::{Constraint, MAX_PHASES};
 
@@ -183,30 +182,18 @@ impl<const D: usize> MultiphaseRun<D> {
     /// [`SolidMaterial::dt_limit`]), with `c` raised by the closure's
     /// stiffening `√s_p`.
     pub fn stable_dt(&self) -> f64 {
-        let hmin = self.grid.h.min();
-        let mut dt = f64::INFINITY;
-        for ph in &self.phases {
-            let p = &ph.particles;
-            let c_max = gas_sound_speed_max(&self.materials, p);
-            let m = &self.materials[ph.material];
-            let limit = (0..p.len())
-                .into_par_iter()
-                .map(|i| {
-                    let state = PointState {
-                        mass: p.mass[i],
-                        vol: p.vol[i],
-                        vol0: p.vol0[i],
-                        work: p.work[i],
-                        stress: &p.stress[i],
-                        speed: p.v[i].norm(),
-                    };
-                    let s = ph.stiffening.get(i).copied().unwrap_or(1.0);
-                    m.dt_limit(hmin, &state, c_max) / s.sqrt()
-                })
-                .reduce(|| f64::INFINITY, f64::min);
-            dt = dt.min(limit);
-        }
-        self.time.cfl * dt
+        self.phases
+            .iter()
+            .map(|ph| {
+                stable_dt_stiffened(
+                    &self.grid,
+                    &self.materials,
+                    &ph.particles,
+                    self.time.cfl,
+                    &ph.stiffening,
+                )
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Kinetic, stored (strain and gas internal) and potential energies of
