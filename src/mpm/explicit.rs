@@ -665,47 +665,12 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &StepScratch<D>,
         node: &mut [f64],
     ) {
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
-            kernel: K,
-            ctx: &Ctx<'_, D>,
-            particles: &Particles<D>,
-            values: &[f64],
-            gs: &GridState<D>,
-            scratch: &StepScratch<D>,
-            node: &mut [f64],
-        ) {
-            let grid = ctx.grid;
-            let strides = grid.strides();
-            node.par_iter_mut().for_each(|q| *q = 0.0);
-            {
-                let out = SharedMut::new(node);
-                scratch.bins.for_each_colored(|p| {
-                    let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
-                    let mq = particles.mass[p] * values[p];
-                    pw.for_each(|m, w, _| {
-                        // SAFETY: slab colouring gives concurrent tasks
-                        // disjoint nodes.
-                        unsafe { *out.get(base + offset(m, &strides)) += w * mq };
-                    });
-                });
-            }
-            grid.fold_ghosts(node);
-            let floor = ctx.params.mass_floor;
-            node.par_iter_mut()
-                .zip(gs.mass.par_iter())
-                .for_each(|(q, &m)| *q = if m > floor { *q / m } else { 0.0 });
-        }
-        let ctx = self.ctx(None);
-        with_kernel!(
-            self.params.shape,
-            run,
-            &ctx,
-            particles,
-            values,
-            gs,
-            scratch,
-            node
-        )
+        let mass = &particles.mass;
+        self.scatter_sum(particles, scratch, node, |p| mass[p] * values[p]);
+        let floor = self.params.mass_floor;
+        node.par_iter_mut()
+            .zip(gs.mass.par_iter())
+            .for_each(|(q, &m)| *q = if m > floor { *q / m } else { 0.0 });
     }
 
     /// Adds a nodal increment to a particle scalar: `q_p += Σ_i S_ip Δq_i`
@@ -1275,22 +1240,34 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &StepScratch<D>,
         node: &mut [f64],
     ) {
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+        self.scatter_sum(particles, scratch, node, |p| values[p]);
+    }
+
+    /// `node = Σ_p S_ip value(p)`, folded at walls, with this step's bins
+    /// and domains: the one scalar scatter behind [`Self::p2g_sum`] and
+    /// [`Self::p2g_scalar`].
+    fn scatter_sum<F: Fn(usize) -> f64 + Sync>(
+        &self,
+        particles: &Particles<D>,
+        scratch: &StepScratch<D>,
+        node: &mut [f64],
+        value: F,
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>, F: Fn(usize) -> f64 + Sync>(
             kernel: K,
-            ctx: &Ctx<'_, D>,
+            grid: &Grid<D>,
             particles: &Particles<D>,
-            values: &[f64],
             scratch: &StepScratch<D>,
             node: &mut [f64],
+            value: &F,
         ) {
-            let grid = ctx.grid;
             let strides = grid.strides();
             node.par_iter_mut().for_each(|q| *q = 0.0);
             {
                 let out = SharedMut::new(node);
                 scratch.bins.for_each_colored(|p| {
                     let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
-                    let q = values[p];
+                    let q = value(p);
                     pw.for_each(|m, w, _| {
                         // SAFETY: slab colouring gives concurrent tasks
                         // disjoint nodes.
@@ -1300,16 +1277,17 @@ impl<const D: usize> CoupledMpm<'_, D> {
             }
             grid.fold_ghosts(node);
         }
-        let ctx = self.ctx(None);
-        with_kernel!(
-            self.params.shape,
-            run,
-            &ctx,
-            particles,
-            values,
-            scratch,
-            node
-        )
+        let (g, v) = (self.grid, &value);
+        match self.params.shape {
+            ShapeKind::Linear => run::<D, 2, _, F>(LinearHat, g, particles, scratch, node, v),
+            ShapeKind::Gimp => run::<D, 3, _, F>(Gimp, g, particles, scratch, node, v),
+            ShapeKind::QuadraticBspline => {
+                run::<D, 3, _, F>(QuadraticBspline, g, particles, scratch, node, v)
+            }
+            ShapeKind::CubicBspline => {
+                run::<D, 4, _, F>(CubicBspline, g, particles, scratch, node, v)
+            }
+        }
     }
 
     /// A per-particle reduction over its stencil: for every particle `p`,
