@@ -15,4 +15,5 @@ pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;
 pub mod zhang_block;
+pub mod zhang_rod;
 pub mod zhang_spall;

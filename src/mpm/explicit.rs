@@ -420,6 +420,27 @@ macro_rules! with_kernel {
     };
 }
 
+/// [`with_kernel!`] for passes that differ in r–z: `$f::<D, S, K, AXI>`
+/// with `AXI = $axi` (the grid's `axisymmetric`), so that each compiles
+/// once for plane geometry and once for r–z.
+macro_rules! with_kernel_axi {
+    ($shape:expr, $axi:expr, $f:ident, $($arg:expr),*) => {
+        if $axi {
+            with_kernel_axi!(@k $shape, true, $f, $($arg),*)
+        } else {
+            with_kernel_axi!(@k $shape, false, $f, $($arg),*)
+        }
+    };
+    (@k $shape:expr, $a:literal, $f:ident, $($arg:expr),*) => {
+        match $shape {
+            ShapeKind::Linear => $f::<D, 2, _, $a>(LinearHat, $($arg),*),
+            ShapeKind::Gimp => $f::<D, 3, _, $a>(Gimp, $($arg),*),
+            ShapeKind::QuadraticBspline => $f::<D, 3, _, $a>(QuadraticBspline, $($arg),*),
+            ShapeKind::CubicBspline => $f::<D, 4, _, $a>(CubicBspline, $($arg),*),
+        }
+    };
+}
+
 impl<const D: usize> CoupledMpm<'_, D> {
     fn ctx<'b>(&'b self, pressure: Option<(&'b [f64], f64)>) -> Ctx<'b, D> {
         Ctx {
@@ -502,11 +523,41 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &StepScratch<D>,
         node: &mut [SVector<f64, D>],
     ) {
+        self.gradient_sum(particles, weights, false, scratch, node);
+    }
+
+    /// The phase's volume gradient `g_i = Σ_p v_p ∇S_ip` (≈ `−∫ θ ∇S_i`,
+    /// Zhang's pressure term), and in r–z `Σ_p v_p (∇S_ip + S_ip/r_p e_r)`:
+    /// the nodal force of a unit pressure `−∫ θ ∇·(S_i I)` there carries the
+    /// hoop part `S_i / r` of the divergence (the kernels' hoop term with
+    /// `σ = −I`), without which a uniform pressure would push every node
+    /// off the axis. Unfolded, with this step's bins and domains.
+    pub fn volume_gradient(
+        &self,
+        particles: &Particles<D>,
+        scratch: &StepScratch<D>,
+        node: &mut [SVector<f64, D>],
+    ) {
+        let hoop = self.grid.axisymmetric;
+        self.gradient_sum(particles, &particles.vol, hoop, scratch, node);
+    }
+
+    /// `Σ_p w_p ∇S_ip` (+ `w_p S_ip / r_p` radially if `hoop`).
+    fn gradient_sum(
+        &self,
+        particles: &Particles<D>,
+        weights: &[f64],
+        hoop: bool,
+        scratch: &StepScratch<D>,
+        node: &mut [SVector<f64, D>],
+    ) {
+        #[allow(clippy::too_many_arguments)]
         fn run<const D: usize, const S: usize, K: Stencil<S>>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &Particles<D>,
             weights: &[f64],
+            hoop: bool,
             scratch: &StepScratch<D>,
             node: &mut [SVector<f64, D>],
         ) {
@@ -515,12 +566,16 @@ impl<const D: usize> CoupledMpm<'_, D> {
             node.par_iter_mut().for_each(|q| *q = SVector::zeros());
             let out = SharedMut::new(node);
             scratch.bins.for_each_colored(|p| {
-                let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
+                let x = &particles.x[p];
+                let (pw, base) = weights_at(grid, kernel, x, &scratch.lp, p);
                 let mp = weights[p];
-                pw.for_each(|m, _, g| {
+                let radial = if hoop { mp / x[0] } else { 0.0 };
+                pw.for_each(|m, w, g| {
                     // SAFETY: slab colouring gives concurrent tasks disjoint
                     // nodes.
-                    unsafe { *out.get(base + offset(m, &strides)) += g * mp };
+                    let q = unsafe { out.get(base + offset(m, &strides)) };
+                    *q += g * mp;
+                    q[0] += w * radial;
                 });
             });
         }
@@ -531,6 +586,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             &ctx,
             particles,
             weights,
+            hoop,
             scratch,
             node
         )
@@ -556,7 +612,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         extra_force: &[SVector<f64, D>],
     ) -> Result<()> {
         #[allow(clippy::too_many_arguments)]
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+        fn run<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &mut Particles<D>,
@@ -566,7 +622,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         ) -> Result<()> {
             let start = Instant::now();
             if ctx.params.scheme == UpdateScheme::Usf {
-                g2p::<D, S, K, false, POS_NONE, GRAD_VEL, false>(
+                g2p::<D, S, K, false, POS_NONE, GRAD_VEL, AXI>(
                     ctx,
                     kernel,
                     &scratch.lp,
@@ -577,7 +633,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
             }
             let mid = Instant::now();
             scratch.times.g2p_s += (mid - start).as_secs_f64();
-            p2g::<D, S, K, false, false, true, false>(
+            p2g::<D, S, K, false, false, true, AXI>(
                 ctx,
                 kernel,
                 &scratch.bins,
@@ -596,8 +652,9 @@ impl<const D: usize> CoupledMpm<'_, D> {
             Ok(())
         }
         let ctx = self.ctx(pressure);
-        with_kernel!(
+        with_kernel_axi!(
             self.params.shape,
+            self.grid.axisymmetric,
             run,
             &ctx,
             particles,
@@ -624,7 +681,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &mut StepScratch<D>,
         vol_rate: &[f64],
     ) -> Result<()> {
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+        fn run<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &mut Particles<D>,
@@ -634,11 +691,11 @@ impl<const D: usize> CoupledMpm<'_, D> {
             let start = Instant::now();
             let (lp, dx) = (&scratch.lp, &mut scratch.dx);
             if ctx.params.scheme == UpdateScheme::Usf {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, false>(
+                g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, AXI>(
                     ctx, kernel, lp, particles, gs, dx,
                 )?;
             } else {
-                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, false>(
+                g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, AXI>(
                     ctx, kernel, lp, particles, gs, dx,
                 )?;
             }
@@ -647,7 +704,8 @@ impl<const D: usize> CoupledMpm<'_, D> {
         }
         let mut ctx = self.ctx(None);
         ctx.vol_rate = vol_rate;
-        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+        let axi = self.grid.axisymmetric;
+        with_kernel_axi!(self.params.shape, axi, run, &ctx, particles, gs, scratch)
     }
 }
 
@@ -1115,10 +1173,15 @@ fn g2p<
                 _ => {}
             }
             if GRAD != GRAD_NONE {
-                if let Some(r) = ctx.vol_rate.get(p) {
-                    // Zhang Eq. 1: the phase's volume change α ∇·ū + B
-                    // replaces ∇·ū; the deviatoric part (Eq. 3) is kept.
-                    let share = r / D as f64;
+                // Zhang Eq. 1: the phase's volume change α ∇·ū + B
+                // replaces ∇·ū; the deviatoric part (Eq. 3) is kept: the
+                // extra rate is spread evenly over the D in-plane diagonal
+                // entries, and in r–z the hoop one as well.
+                let share = ctx
+                    .vol_rate
+                    .get(p)
+                    .map_or(0.0, |r| r / (D + usize::from(AXI)) as f64);
+                if share != 0.0 {
                     for a in 0..D {
                         l[(a, a)] += share;
                     }
@@ -1169,7 +1232,7 @@ fn g2p<
                 }
                 if AXI {
                     // Hoop stretch: F = diag(F_D, F₃₃), F₃₃ → r/R.
-                    let l_hoop = v_r / r_old;
+                    let l_hoop = v_r / r_old + share;
                     l3[(2, 2)] = l_hoop;
                     f_new[(2, 2)] = fp[(2, 2)] * (1.0 + dt * l_hoop);
                     j *= f_new[(2, 2)];
@@ -1443,7 +1506,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         scratch: &mut StepScratch<D>,
         vol_rate: &[f64],
     ) -> Result<()> {
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+        fn run<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &mut Particles<D>,
@@ -1452,7 +1515,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         ) -> Result<()> {
             let start = Instant::now();
             let (lp, dx) = (&scratch.lp, &mut scratch.dx);
-            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, false>(
+            g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(
                 ctx, kernel, lp, particles, gs, dx,
             )?;
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
@@ -1460,6 +1523,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
         }
         let mut ctx = self.ctx(None);
         ctx.vol_rate = vol_rate;
-        with_kernel!(self.params.shape, run, &ctx, particles, gs, scratch)
+        let axi = self.grid.axisymmetric;
+        with_kernel_axi!(self.params.shape, axi, run, &ctx, particles, gs, scratch)
     }
 }

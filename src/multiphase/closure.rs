@@ -82,6 +82,10 @@ pub struct Stencil<const D: usize> {
     /// Σ_l S_l Y_l / Σθκ_l: the nodal interface rate per unit
     /// compressibility at the point ([`node_rate`]).
     pub node_share: f64,
+    /// r–z: the own phase's radial velocity at the point, Σ S_l ū_l,r.
+    pub radial_own: f64,
+    /// r–z: Σ S_l θ_jl ū_jl,r per phase.
+    pub radial_theta_u: [f64; MAX_PHASES],
 }
 
 impl<const D: usize> Default for Stencil<D> {
@@ -95,6 +99,21 @@ impl<const D: usize> Default for Stencil<D> {
             compressibility: 0.0,
             div_own: 0.0,
             node_share: 0.0,
+            radial_own: 0.0,
+            radial_theta_u: [0.0; MAX_PHASES],
+        }
+    }
+}
+
+impl<const D: usize> Stencil<D> {
+    /// In r–z the divergences carry the hoop rate `u_r / r` at the point's
+    /// radius `r`: `∇·ū = ∂u_r/∂r + ∂u_z/∂z + u_r/r`, and likewise for
+    /// `∇·(θ ū)`.
+    pub fn add_hoop(&mut self, r: f64) {
+        let inv_r = 1.0 / r;
+        self.div_own += self.radial_own * inv_r;
+        for (d, q) in self.div_theta_u.iter_mut().zip(self.radial_theta_u) {
+            *d += q * inv_r;
         }
     }
 }
@@ -163,19 +182,32 @@ pub fn dispersed<const D: usize>(s: &Stencil<D>, alpha: &[f64]) -> f64 {
 /// The volumetric strain rate added to a particle's own `∇·ū_i` so that its
 /// volume changes at `α_i ∇·ū_i + B_i` (Eq. 1): `(α_i − 1) ∇·ū_i + κ_p (Σ_l
 /// S_l Y_l / Σθκ_l + X_dispersed / Σθκ(x_p))`, with κ_p the particle's
-/// compressibility and `s.node_share = Σ_l S_l Y_l / Σθκ_l`.
+/// compressibility and `s.node_share = Σ_l S_l Y_l / Σθκ_l`. Where the
+/// point's share `r = κ_p / Σθκ(x_p)` exceeds `c = max_share` (a vanishing
+/// phase, `multiphase.min_fraction`), B_i is scaled to the share
+/// `c (2 − r/c)`, falling to zero at `r = 2c`.
 pub fn extra_rate<const D: usize>(
     s: &Stencil<D>,
     alpha_own: f64,
     kappa: f64,
     dispersed: f64,
+    max_share: f64,
 ) -> f64 {
     let b = if s.compressibility > 0.0 {
         dispersed / s.compressibility
     } else {
         0.0
     };
-    (alpha_own - 1.0) * s.div_own + kappa * (s.node_share + b)
+    // The share r = κ_p / Σθκ up to the cap c; tapered to zero between c
+    // and 2c (continuous), zero beyond: a vanishing phase's points follow
+    // their own flow.
+    let limit = max_share * s.compressibility;
+    let scale = if kappa > limit && kappa > 0.0 {
+        (limit / kappa * (2.0 - kappa / limit)).max(0.0)
+    } else {
+        1.0
+    };
+    (alpha_own - 1.0) * s.div_own + kappa * scale * (s.node_share + b)
 }
 
 #[cfg(test)]
@@ -196,6 +228,23 @@ mod tests {
         assert!((e + u.dot(&(g[0] + g[1])) / 0.5).abs() < 1e-12);
         let st = node_rate(&[u, u], &m, &g, 0.97, 0.5, Constraint::Strong, 1e-6);
         assert!((st - e - 0.03 / 1e-6).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_vanishing_phase_takes_a_capped_then_no_share() {
+        // Σθκ = 1, node share 2: a point of κ_p takes κ_p · 2 uncapped.
+        let mut s = Stencil::<2>::default();
+        s.compressibility = 1.0;
+        s.node_share = 2.0;
+        let rate = |kappa: f64| extra_rate(&s, 1.0, kappa, 0.0, 5.0);
+        // Below the cap (share 5): unchanged.
+        assert!((rate(4.0) - 8.0).abs() < 1e-12);
+        // At the cap, at 1.5 × and at twice it: share c(2 − r/c) = 5, 2.5, 0.
+        assert!((rate(5.0) - 10.0).abs() < 1e-12);
+        assert!((rate(7.5) - 5.0).abs() < 1e-12);
+        assert!(rate(10.0).abs() < 1e-12 && rate(40.0).abs() < 1e-12);
+        // No cap: Zhang's closure.
+        assert!((extra_rate(&s, 1.0, 40.0, 0.0, f64::INFINITY) - 80.0).abs() < 1e-12);
     }
 
     #[test]

@@ -55,6 +55,10 @@ pub struct MultiphaseParams {
     pub drag: Vec<f64>,
     /// α_i of Eq. 1 per phase, in [0, 1].
     pub alpha: Vec<f64>,
+    /// The most `κ_p / Σθκ` a point's share of the volume mismatch (and
+    /// its stiffening) may reach: `1 / multiphase.min_fraction`, infinite
+    /// for Zhang's closure exactly.
+    pub max_share: f64,
 }
 
 /// One phase: the points of one material and its grid fields.
@@ -122,6 +126,9 @@ pub struct MultiphaseRun<const D: usize> {
     pub gas_pressure: Vec<f64>,
     /// Nodal Σ_j θ_j κ_j, ghosts mirrored.
     compressibility: Vec<f64>,
+    /// Nodal volume V_l: the cell volume, or in r–z the volume per radian
+    /// `∫ S_l r dr dz` ([`node_volumes`]).
+    node_volume: Vec<f64>,
     node_tmp: Vec<f64>,
     mix_num: Vec<f64>,
     /// Nodal interface rate per unit compressibility, Y_l / Σθκ_l.
@@ -156,6 +163,7 @@ impl<const D: usize> MultiphaseRun<D> {
         time: TimeControl,
     ) -> Self {
         let n = grid.num_nodes();
+        let node_volume = node_volumes(&grid, params.shape);
         Self {
             grid,
             materials,
@@ -170,6 +178,7 @@ impl<const D: usize> MultiphaseRun<D> {
             steps: 0,
             gas_pressure: vec![0.0; n],
             compressibility: vec![0.0; n],
+            node_volume,
             node_tmp: vec![0.0; n],
             mix_num: vec![0.0; n],
             interface: vec![0.0; n],
@@ -243,11 +252,13 @@ impl<const D: usize> MultiphaseRun<D> {
             materials,
             phases,
             params,
+            model,
             body,
             t,
             steps,
             gas_pressure,
             compressibility: comp,
+            node_volume,
             node_tmp,
             mix_num,
             ..
@@ -262,7 +273,6 @@ impl<const D: usize> MultiphaseRun<D> {
             step: *steps,
         };
         let name = |ph: &Phase<D>, e: Error| name_phase(e, &materials[ph.material].name);
-        let inv_v = 1.0 / grid.cell_volume();
         // 1–2: mass, momentum, volume fractions, compressibility, and the
         // pressure sums Σ S v p of the gas and of all phases.
         comp.iter_mut().for_each(|c| *c = 0.0);
@@ -271,7 +281,10 @@ impl<const D: usize> MultiphaseRun<D> {
             mpm.p2g(&ph.particles, &mut ph.gs, &mut ph.scratch)
                 .map_err(|e| name(ph, e))?;
             mpm.p2g_sum(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.theta);
-            ph.theta.iter_mut().for_each(|q| *q *= inv_v);
+            ph.theta
+                .iter_mut()
+                .zip(node_volume.iter())
+                .for_each(|(q, v)| *q /= v);
             grid.mirror_ghosts(&mut ph.theta);
             let m = &materials[ph.material];
             let p = &ph.particles;
@@ -280,8 +293,8 @@ impl<const D: usize> MultiphaseRun<D> {
                 .extend((0..p.len()).map(|i| p.vol[i] * compressibility(m, p, i)));
             mpm.p2g_sum(p, &ph.point, &ph.scratch, node_tmp);
             comp.iter_mut()
-                .zip(node_tmp.iter())
-                .for_each(|(c, q)| *c += q * inv_v);
+                .zip(node_tmp.iter().zip(node_volume.iter()))
+                .for_each(|(c, (q, v))| *c += q / v);
             ph.point.clear();
             ph.point.extend(
                 (0..p.len())
@@ -306,7 +319,7 @@ impl<const D: usize> MultiphaseRun<D> {
         // the work of the pressure force (see `closure::node_rate`).
         for l in 0..gas_pressure.len() {
             gas_pressure[l] = if comp[l] > 0.0 {
-                mix_num[l] * inv_v / comp[l]
+                mix_num[l] / (node_volume[l] * comp[l])
             } else {
                 0.0
             };
@@ -336,6 +349,8 @@ impl<const D: usize> MultiphaseRun<D> {
         // responds as if its bulk modulus were K / θ_g, and the explicit
         // step must resolve that wave (c √(κ_p / Σθκ)); without it the
         // block test at rest grew round-off by 40× per 0.02 s at CFL 0.4.
+        // `max_share` caps it with the share itself (`min_fraction`).
+        let cap = model.max_share;
         for ph in phases.iter_mut() {
             let m = &materials[ph.material];
             let mut s = std::mem::take(&mut ph.stiffening);
@@ -349,7 +364,7 @@ impl<const D: usize> MultiphaseRun<D> {
                 |c: &mut f64, l, w, _| *c += w * comp[l],
                 |i, c| {
                     if c > 0.0 {
-                        (compressibility(m, p, i) / c).max(1.0)
+                        (compressibility(m, p, i) / c).clamp(1.0, cap.max(1.0))
                     } else {
                         1.0
                     }
@@ -373,6 +388,7 @@ impl<const D: usize> MultiphaseRun<D> {
             steps,
             gas_pressure,
             compressibility: comp,
+            node_volume,
             interface,
             force,
             ..
@@ -389,7 +405,7 @@ impl<const D: usize> MultiphaseRun<D> {
         let name = |ph: &Phase<D>, e: Error| name_phase(e, &materials[ph.material].name);
         // 3: the momentum equation per phase (Eq. 8).
         for ph in phases.iter_mut() {
-            mpm.weighted_gradient(&ph.particles, &ph.particles.vol, &ph.scratch, &mut ph.grad);
+            mpm.volume_gradient(&ph.particles, &ph.scratch, &mut ph.grad);
             grid.fold_ghosts(&mut ph.grad);
         }
         for ph in phases.iter_mut() {
@@ -401,13 +417,7 @@ impl<const D: usize> MultiphaseRun<D> {
                 .map_err(|e| name(ph, e))?;
         }
         // 4: the phase interaction (Eq. 5), pointwise implicit.
-        exchange(
-            phases,
-            &model.drag,
-            dt,
-            grid.cell_volume(),
-            params.mass_floor,
-        );
+        exchange(phases, &model.drag, dt, node_volume, params.mass_floor);
         // FLIP velocities (Eq. 10), then the nodal velocities remapped from
         // them (MUSL): the closure and the stress read those.
         for ph in phases.iter_mut() {
@@ -420,7 +430,6 @@ impl<const D: usize> MultiphaseRun<D> {
         }
         // 5: volume rates (Eqs. 1–2 with the constraint), stress, G2P.
         let n = phases.len();
-        let volume = grid.cell_volume();
         {
             let mut u = [SVector::<f64, D>::zeros(); MAX_PHASES];
             let mut m = [0.0; MAX_PHASES];
@@ -439,7 +448,7 @@ impl<const D: usize> MultiphaseRun<D> {
                         &m[..n],
                         &g[..n],
                         theta_sum,
-                        volume,
+                        node_volume[l],
                         model.constraint,
                         dt,
                     ) / comp[l]
@@ -450,6 +459,8 @@ impl<const D: usize> MultiphaseRun<D> {
             grid.mirror_ghosts(interface);
         }
         let dispersed = model.alpha.iter().any(|&a| a < 1.0);
+        let max_share = model.max_share;
+        let axi = grid.axisymmetric;
         for i in 0..n {
             let mut rate = std::mem::take(&mut phases[i].point);
             rate.resize(phases[i].particles.len(), 0.0);
@@ -469,6 +480,7 @@ impl<const D: usize> MultiphaseRun<D> {
                         s.node_share += w * interface[l];
                         s.compressibility += w * comp[l];
                         s.div_own += own[l].dot(g);
+                        s.radial_own += w * own[l][0];
                         if !dispersed {
                             return;
                         }
@@ -482,13 +494,18 @@ impl<const D: usize> MultiphaseRun<D> {
                             s.momentum[j] += u * (w * mj);
                             s.grad_theta[j] += g * q.theta[l];
                             s.div_theta_u[j] += q.theta[l] * u.dot(g);
+                            s.radial_theta_u[j] += w * q.theta[l] * u[0];
                             s.theta_sum += w * q.theta[l];
                         }
                     },
-                    |pi, s| {
+                    |pi, mut s| {
+                        if axi {
+                            // r–z: the divergences' hoop parts u_r / r.
+                            s.add_hoop(p.x[pi][0]);
+                        }
                         let x = closure::dispersed(&s, &alpha[..n]);
                         let kappa = compressibility(m, p, pi);
-                        closure::extra_rate(&s, alpha[i], kappa, x)
+                        closure::extra_rate(&s, alpha[i], kappa, x, max_share)
                     },
                 );
             }
@@ -561,7 +578,7 @@ fn exchange<const D: usize>(
     phases: &mut [Phase<D>],
     drag: &[f64],
     dt: f64,
-    cell_volume: f64,
+    node_volume: &[f64],
     floor: f64,
 ) {
     let n = phases.len();
@@ -582,7 +599,7 @@ fn exchange<const D: usize>(
             if m > floor {
                 idx[c] = j;
                 w[c] = m;
-                sp[c] = cell_volume / m;
+                sp[c] = node_volume[l] / m;
                 vel[c] = ph.gs.velocity_new[l];
                 c += 1;
             }
@@ -610,4 +627,45 @@ fn exchange<const D: usize>(
             gs.accel[l] += dv / dt;
         }
     }
+}
+
+/// Nodal volumes V_l for the volume fractions (Zhang Eq. 13) and the
+/// drag: the cell volume on a plane grid; on an r–z grid the volume per
+/// radian `h_z ∫ N_i(r) ρ(r) dr`, where `ρ(r) = r₀ + |r − r₀|` counts the
+/// mirror images beyond the face `r₀ = grid.lower[0]` that the wall folding
+/// adds (at the axis, `|r|`). Away from the face (`r_i` beyond the
+/// support) this is `r_i h_r h_z`; on the first nodes it is integrated
+/// with 3-point Gauss–Legendre on half-cells, exact since the shape
+/// functions are piecewise polynomials with knots at whole or half cells
+/// (uGIMP is taken as the hat, its `lp → 0` limit).
+pub fn node_volumes<const D: usize>(grid: &Grid<D>, shape: crate::shape::ShapeKind) -> Vec<f64> {
+    let cell = grid.cell_volume();
+    let n = grid.num_nodes();
+    if !grid.axisymmetric {
+        return vec![cell; n];
+    }
+    let (h, r0) = (grid.h[0], grid.lower[0]);
+    let gauss = [
+        (-(0.6f64).sqrt(), 5.0 / 9.0),
+        (0.0, 8.0 / 9.0),
+        ((0.6f64).sqrt(), 5.0 / 9.0),
+    ];
+    // ∫ N(ξ − i) ρ(r₀ + h ξ) dξ over the support |ξ − i| < 2.
+    let radial = |i: isize| -> f64 {
+        if i >= 3 {
+            return r0 + h * i as f64;
+        }
+        let mut sum = 0.0;
+        for k in (2 * i - 4)..(2 * i + 4) {
+            let mid = 0.5 * k as f64 + 0.25;
+            for (x, w) in gauss {
+                let xi = mid + 0.25 * x;
+                sum += 0.25 * w * shape.value(xi - i as f64) * (r0 + h * xi.abs());
+            }
+        }
+        sum
+    };
+    (0..n)
+        .map(|l| cell * radial(grid.node_coords(l)[0].abs()))
+        .collect()
 }

@@ -32,6 +32,17 @@ pub struct MultiphaseSpec {
     /// Per-phase α.
     #[serde(default)]
     pub phases: Vec<PhaseSpec>,
+    /// Vanishing phases, in [0, 1) (default 0: Zhang's closure exactly):
+    /// a point takes the volume mismatch in proportion to κ_p/Σθκ, about
+    /// 1/θ for a gas point where the gas has fraction θ; with `f > 0` at
+    /// most 1/f times its share (and its sound speed is raised by at most
+    /// 1/√f for the stable step). Gas caught in thin pockets between
+    /// colliding solids (the rod case) otherwise takes the solids' whole
+    /// mismatch and is crushed and heated without bound, collapsing the
+    /// step. Where it acts, Σθ is not held (the pocket is below the grid's
+    /// resolution).
+    #[serde(default)]
+    pub min_fraction: f64,
 }
 
 fn one() -> f64 {
@@ -76,6 +87,12 @@ impl MultiphaseSpec {
             return Err(err(
                 "multiphase.alpha",
                 format!("must be in [0, 1] (got {})", self.alpha),
+            ));
+        }
+        if !(0.0..1.0).contains(&self.min_fraction) {
+            return Err(err(
+                "multiphase.min_fraction",
+                format!("must be in [0, 1) (got {})", self.min_fraction),
             ));
         }
         let known = |path: String, n: &str| -> Result<(), SceneError> {
@@ -136,6 +153,11 @@ impl MultiphaseSpec {
             constraint: self.constraint,
             drag,
             alpha,
+            max_share: if self.min_fraction > 0.0 {
+                1.0 / self.min_fraction
+            } else {
+                f64::INFINITY
+            },
         }
     }
 }

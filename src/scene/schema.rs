@@ -2153,12 +2153,6 @@ impl Scene {
                 ),
             ));
         }
-        if self.grid.axisymmetric {
-            return Err(err(
-                "grid.axisymmetric",
-                "the multiphase model runs in plane 2D and 3D; allowed: false",
-            ));
-        }
         if !matches!(self.mpm.update, None | Some(UpdateScheme::Usl)) {
             return Err(err(
                 "mpm.update",

@@ -35,6 +35,23 @@ impl ShapeKind {
 
     /// Names accepted in scene files.
     pub const NAMES: &'static str = "linear, gimp, quadratic_bspline, cubic_bspline";
+
+    /// The 1D shape function of a node at distance `r` from it (cell
+    /// units); uGIMP as its `lp → 0` limit, the hat. For set-up integrals
+    /// (the nodal volumes of an r–z grid), not for hot loops.
+    pub fn value(self, r: f64) -> f64 {
+        fn node0<const S: usize>(q: Weights1<S>) -> f64 {
+            usize::try_from(-q.base)
+                .ok()
+                .and_then(|k| q.w.get(k).copied())
+                .unwrap_or(0.0)
+        }
+        match self {
+            ShapeKind::Linear | ShapeKind::Gimp => node0(linear(r)),
+            ShapeKind::QuadraticBspline => node0(quadratic_bspline(r)),
+            ShapeKind::CubicBspline => node0(cubic_bspline(r)),
+        }
+    }
 }
 
 /// 1D weights on a stencil of `S` nodes starting at node `base`.

@@ -9,6 +9,7 @@ pub mod ice_studies;
 pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
+pub mod multiphase_rod;
 pub mod multiphase_spall;
 pub mod multiphase_studies;
 pub mod reaction_studies;
@@ -33,6 +34,11 @@ pub const STUDIES: &[Study] = &[
         "zhang_spall",
         "Zhang Sec. 4 plate spall (multiphase, air around): first-failure time vs 3d/c and plane vs h",
         multiphase_spall::zhang_spall,
+    ),
+    (
+        "zhang_rod",
+        "Zhang Figs. 3-4 tungsten rod into steel (tungsten/steel/air phases, r-z): penetration and residual length vs time at R/2, R/3, R/4, Alekseevskii-Tate band",
+        multiphase_rod::zhang_rod,
     ),
     (
         "reaction_burn",

@@ -195,7 +195,7 @@ impl<const D: usize> Model for Multiphase<D> {
             shape: scene_name(&self.run.params.shape),
             update: scene_name(&self.run.params.scheme),
             iterative: false,
-            momentum_conserved: true,
+            momentum_conserved: !self.run.grid.axisymmetric,
             phase_times: self.run.phase_times(),
             implicit_split: None,
         }
