@@ -197,6 +197,23 @@ fn gas_points_restart_bit_identically() {
 }
 
 #[test]
+fn multiphase_restarts_bit_identically() {
+    // Zhang's multiphase model: every phase's points travel in the
+    // checkpoint; the nodal fields are rebuilt from them at the next step.
+    // A tungsten square through air with drag (the phase leaves nodes,
+    // the gas is compressed) and the block test moving diagonally.
+    let mut s = case("zhang_tungsten_air.toml");
+    s.time.end = 4e-4;
+    s.output.interval = Some(1e-4);
+    assert_restart_is_bit_identical("multiphase tungsten/air", &s);
+    let mut s = case("zhang_block.toml");
+    s.grid.cells = vec![10, 10];
+    s.time.end = 0.01;
+    s.output.interval = Some(0.005);
+    assert_restart_is_bit_identical("multiphase block", &s);
+}
+
+#[test]
 fn failing_solids_restart_bit_identically() {
     // The spall bar (the centre fails at 66 us), checkpointed at 70 us
     // (after: the damage and the failed points' stress travel in the

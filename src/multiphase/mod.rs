@@ -324,23 +324,7 @@ impl<const D: usize> MultiphaseRun<D> {
                 0.0
             };
             if !gas_pressure[l].is_finite() {
-                return Err(Error::Numerical {
-                    site: FailureSite {
-                        step: *steps,
-                        time: *t,
-                        particle: None,
-                        cell: Some(l),
-                    },
-                    what: format!(
-                        "gas pressure not finite on node {:?} (phase pressures of {})",
-                        grid.node_coords(l),
-                        materials
-                            .iter()
-                            .map(|m| format!("`{}`", m.name))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                });
+                return Err(gas_pressure_failure(grid, materials, phases, l, *steps, *t));
             }
         }
         grid.mirror_ghosts(gas_pressure);
@@ -555,6 +539,61 @@ impl<const D: usize> MultiphaseRun<D> {
     /// the state between steps).
     pub fn failure(&self, what: impl Into<String>) -> Error {
         self.fail(what.into())
+    }
+}
+
+/// The failure of a non-finite gas pressure on node `l`: names the node
+/// and the first point (its index within its phase, and the phase's
+/// material) whose pressure or compressibility is not finite, the source of
+/// the node's value; where no point is (the nodal sums overflowed), the
+/// phases whose pressures meet there.
+fn gas_pressure_failure<const D: usize>(
+    grid: &Grid<D>,
+    materials: &[SolidMaterial],
+    phases: &[Phase<D>],
+    l: usize,
+    step: u64,
+    time: f64,
+) -> Error {
+    let node = format!("gas pressure not finite on node {:?}", grid.node_coords(l));
+    let culprit = phases.iter().find_map(|ph| {
+        let m = &materials[ph.material];
+        let p = &ph.particles;
+        (0..p.len())
+            .find(|&i| {
+                let k = p.vol[i] * compressibility(m, p, i);
+                !(k.is_finite() && (k * p.stress[i].trace()).is_finite())
+            })
+            .map(|i| (i, m.name.as_str()))
+    });
+    let site = |particle| FailureSite {
+        step,
+        time,
+        particle,
+        cell: Some(l),
+    };
+    match culprit {
+        Some((i, name)) => name_phase(
+            Error::Numerical {
+                site: site(Some(i)),
+                what: format!(
+                    "{node}: the pressure or compressibility of point {i} of `{name}` is not \
+                     finite"
+                ),
+            },
+            name,
+        ),
+        None => Error::Numerical {
+            site: site(None),
+            what: format!(
+                "{node} (phase pressures of {})",
+                materials
+                    .iter()
+                    .map(|m| format!("`{}`", m.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        },
     }
 }
 

@@ -112,6 +112,21 @@ impl MultiphaseSpec {
             if pr.materials[0] == pr.materials[1] {
                 return Err(err(p("materials"), "must name two different materials"));
             }
+            let same = |q: &PairSpec| {
+                let (a, b) = (&q.materials[0], &q.materials[1]);
+                (a, b) == (&pr.materials[0], &pr.materials[1])
+                    || (b, a) == (&pr.materials[0], &pr.materials[1])
+            };
+            if let Some(j) = self.pairs[..k].iter().position(same) {
+                return Err(err(
+                    p("materials"),
+                    format!(
+                        "the pair `{}`–`{}` is already given in multiphase.pairs[{j}]; one drag \
+                         coefficient per pair",
+                        pr.materials[0], pr.materials[1]
+                    ),
+                ));
+            }
             if !(pr.drag.is_finite() && pr.drag >= 0.0) {
                 return Err(err(
                     p("drag"),
@@ -122,6 +137,18 @@ impl MultiphaseSpec {
         for (k, ph) in self.phases.iter().enumerate() {
             let p = |s: &str| format!("multiphase.phases[{k}].{s}");
             known(p("material"), &ph.material)?;
+            if let Some(j) = self.phases[..k]
+                .iter()
+                .position(|q| q.material == ph.material)
+            {
+                return Err(err(
+                    p("material"),
+                    format!(
+                        "`{}` is already given in multiphase.phases[{j}]; one α per phase",
+                        ph.material
+                    ),
+                ));
+            }
             if !(0.0..=1.0).contains(&ph.alpha) {
                 return Err(err(
                     p("alpha"),

@@ -162,6 +162,13 @@ impl<const D: usize> Model for Multiphase<D> {
     fn save(&self, ck: &mut Checkpoint) {
         for (k, ph) in self.run.phases.iter().enumerate() {
             save_particles(ck, &format!("phase{k}"), &ph.particles);
+            // The stable step's input: the stiffening of the last step's
+            // start, which the current positions do not give back.
+            ck.put_f64(
+                &format!("phase{k}.stiffening"),
+                vec![ph.stiffening.len()],
+                ph.stiffening.clone(),
+            );
         }
         ck.put_f64("model.time", vec![1], vec![self.run.t]);
         ck.put_u64("model.steps", vec![1], vec![self.run.steps]);
@@ -174,10 +181,19 @@ impl<const D: usize> Model for Multiphase<D> {
         }
         self.run.t = ck.take_f64("model.time", Some(&[1]))?[0];
         self.run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
-        // The points' stiffening (the stable step's input) of the restored
-        // state, as an unbroken run has it at this step; a failure here
-        // shows again, named, at the next step.
+        // The nodal fields of the restored points (a failure here shows
+        // again, named, at the next step); then the points' stiffening, the
+        // stable step's input, as the unbroken run has it: computed at the
+        // last step's start, not at the restored positions (recomputed
+        // there only for a checkpoint without it).
         let _ = self.run.nodes(0.0);
+        for k in 0..self.run.phases.len() {
+            let name = format!("phase{k}.stiffening");
+            if ck.shape(&name).is_some() {
+                let n = self.run.phases[k].particles.len();
+                self.run.phases[k].stiffening = ck.take_f64(&name, Some(&[n]))?;
+            }
+        }
         Ok(())
     }
 
