@@ -109,7 +109,7 @@ impl StepClock {
         let n = self.times.len();
         let median_step_s = match n {
             0 => 0.0,
-            _ if n % 2 == 1 => self.times[n / 2],
+            _ if !n.is_multiple_of(2) => self.times[n / 2],
             _ => 0.5 * (self.times[n / 2 - 1] + self.times[n / 2]),
         };
         let stepping: f64 = self.times.iter().sum();
@@ -197,6 +197,9 @@ pub struct BlockRun {
     /// (multiphase: the air points' `−tr σ / 3`; MPM-ICE: the interior cells'
     /// pressure).
     pub pressure: f64,
+    /// [`Self::pressure`] over the steps after the first cell crossing
+    /// (without the start-up transient).
+    pub pressure_late: f64,
     /// Largest velocity change over the speed: every point of every phase
     /// (multiphase); the air of every interior cell and every solid particle
     /// (MPM-ICE).
@@ -300,8 +303,14 @@ pub fn run_block(case: &BlockCase) -> Result<BlockRun> {
     let (pressure, velocity) = history
         .iter()
         .fold((0.0f64, 0.0f64), |a, h| (a.0.max(h.1), a.1.max(h.2)));
+    let crossing = 1.0 / (case.cells as f64 * BLOCK_VELOCITY[0]);
+    let pressure_late = history
+        .iter()
+        .filter(|h| h.0 > crossing)
+        .fold(0.0f64, |a, h| a.max(h.1));
     Ok(BlockRun {
         pressure,
+        pressure_late,
         velocity,
         history,
         completed,
@@ -412,7 +421,7 @@ impl ShockCase {
     /// A case file that lost one of the keys edited here, or a cell count
     /// not a multiple of 5.
     pub fn scene(&self) -> Result<String> {
-        if self.cells % 5 != 0 || self.cells == 0 {
+        if !self.cells.is_multiple_of(5) || self.cells == 0 {
             return Err(SceneError::new(
                 "cells",
                 format!(
