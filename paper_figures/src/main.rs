@@ -20,7 +20,14 @@
 //! `axisym_lame` (axisymmetric r–z MPM: σ_r and σ_θ of the Lamé thick
 //! cylinder and sphere against the exact solutions), and `lian_vibration`
 //! (Lian Sec. 4 membrane elements: centre deflection of the pre-tensioned
-//! square membrane against the exact mode-(1,1) vibration).
+//! square membrane against the exact mode-(1,1) vibration), and the Zhang
+//! figures: `zhang_block` (block test: air-pressure change against time
+//! for the weak constraint Eq. 18, the strong one Eq. 7 and Guilkey's
+//! MPM-ICE on the same scene), `zhang_shock` (a Mach 1.5 shock on a steel
+//! block, both formulations: probe pressure against the exact reflected
+//! pressure, block momentum against the 1D rate) and `zhang_fig2` (plate
+//! spall, Zhang Fig. 2: first-failure time and plane against h and the
+//! 1D elastic-wave analysis).
 
 use std::path::PathBuf;
 
@@ -84,6 +91,18 @@ const FIGURES: &[(&str, &str)] = &[
         "airbag impact (York 4.4): probe displacement, bag pressure (point mean, pV) and energies vs time",
     ),
     (
+        "zhang_block",
+        "block test (Zhang 3): air-pressure change vs time, weak (Eq. 18) vs strong (Eq. 7) constraint and Guilkey MPM-ICE",
+    ),
+    (
+        "zhang_shock",
+        "Mach 1.5 shock on a steel block, Zhang multiphase vs Guilkey MPM-ICE: probe pressure vs p5, block momentum vs 1D",
+    ),
+    (
+        "zhang_fig2",
+        "plate spall (Zhang 4, Fig. 2): first-failure time and plane vs h against 3d/c and the mid-plane",
+    ),
+    (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
     ),
@@ -110,6 +129,9 @@ fn main() -> anyhow::Result<()> {
         "york_fig13" => york_dogbone_figures(args.quick, false),
         "york_fig16" => york_airbag_figures(args.quick, true),
         "york_fig17" => york_airbag_figures(args.quick, false),
+        "zhang_block" => zhang_block(args.quick),
+        "zhang_shock" => zhang_shock(args.quick),
+        "zhang_fig2" => zhang_fig2(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -755,5 +777,255 @@ fn york_airbag_figures(quick: bool, shapes: bool) -> anyhow::Result<()> {
         )?;
         println!("wrote {}", path.display());
     }
+    Ok(())
+}
+
+/// Zhang Sec. 3, the block test on the scene both formulations run
+/// (`cases/zhang_vs_guilkey_block_*.toml`, 40 cells per side; `--quick`:
+/// 20): the largest relative air-pressure change at each step against time
+/// for Zhang's weak constraint (Eq. 18), the strong one (Eq. 7, until it
+/// fails) and Guilkey's MPM-ICE. Log scale; one PNG and one CSV.
+fn zhang_block(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::formulations::{run_block, BlockCase, Formulation};
+    let out = out_dir()?;
+    let cells = if quick { 20 } else { 40 };
+    let runs = [
+        (
+            Formulation::Multiphase,
+            "weak",
+            "Zhang, weak constraint (Eq. 18)",
+        ),
+        (
+            Formulation::Multiphase,
+            "strong",
+            "Zhang, strong constraint (Eq. 7)",
+        ),
+        (Formulation::Coupled, "weak", "Guilkey MPM-ICE"),
+    ];
+    let mut series = Vec::new();
+    let mut csv = String::from("run,t [s],max |p - p1|/p1 [-],max |v - u|/|u| [-]\n");
+    for (f, constraint, label) in runs {
+        let r = run_block(&BlockCase {
+            formulation: f,
+            cells,
+            constraint,
+            shape: "gimp",
+            end: 0.05,
+        })?;
+        for (t, dp, dv) in &r.history {
+            csv.push_str(&format!("{label},{t},{dp},{dv}\n"));
+        }
+        let end = if r.completed {
+            String::new()
+        } else {
+            format!(
+                ", failed at t = {:.2e} s",
+                r.history.last().map_or(0.0, |h| h.0)
+            )
+        };
+        series.push(PlotSeries {
+            label: format!("{label}: max {:.1e}{end}", r.pressure),
+            points: r.history.iter().map(|h| (h.0, h.1)).collect(),
+            style: Style::Line,
+        });
+    }
+    std::fs::write(out.join("zhang_block.csv"), csv)?;
+    let path = out.join("zhang_block.png");
+    plot_xy(
+        &path,
+        &format!("Zhang block test: disk moving diagonally with the air, {cells} x {cells} cells"),
+        "t [s]",
+        "max |p - p1| / p1 of the air",
+        false,
+        true,
+        &series,
+    )?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// A Mach 1.5 shock on a steel block (`cases/shock_on_steel_block_*.toml`,
+/// h = 2.5 mm; `--quick`: 5 mm), Zhang's multiphase and Guilkey's MPM-ICE:
+/// the probe pressure 2 cm in front of the block against the exact p2 and
+/// p5 (`zhang_shock_pressure.png`), and the half block's momentum against
+/// the 1D rate (p5 − p1) b from the exact arrival (`zhang_shock_momentum.png`);
+/// one CSV.
+fn zhang_shock(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::formulations::{
+        run_shock, shock_exact, shock_window, Formulation, ShockCase, HALF_HEIGHT, P1,
+    };
+    let out = out_dir()?;
+    let cells = if quick { 100 } else { 200 };
+    let e = shock_exact();
+    let end = 6.34e-4;
+    let mut pressure = Vec::new();
+    let mut momentum = Vec::new();
+    let mut csv = String::from("formulation,t [s],probe pressure [Pa],block momentum [N s/m]\n");
+    for (f, label) in [
+        (Formulation::Multiphase, "Zhang multiphase"),
+        (Formulation::Coupled, "Guilkey MPM-ICE"),
+    ] {
+        let r = run_shock(&ShockCase {
+            formulation: f,
+            cells,
+            end,
+        })?;
+        for s in &r.history {
+            csv.push_str(&format!("{label},{},{},{}\n", s.t, s.probe, s.momentum));
+        }
+        pressure.push(PlotSeries {
+            label: format!("{label}: window mean {:.4} p5", r.front_pressure / e.p5),
+            points: r
+                .history
+                .iter()
+                .map(|s| (s.t * 1e3, s.probe / P1))
+                .collect(),
+            style: Style::Line,
+        });
+        momentum.push(PlotSeries {
+            label: format!(
+                "{label}: {:.3} of 1D at the window's end",
+                r.momentum_ratio()
+            ),
+            points: r.history.iter().map(|s| (s.t * 1e3, s.momentum)).collect(),
+            style: Style::Line,
+        });
+    }
+    let (w0, w1) = shock_window();
+    for (p, name) in [(e.p2, "p2 (incident)"), (e.p5, "p5 (reflected, exact 1D)")] {
+        pressure.push(PlotSeries {
+            label: format!("{name} = {:.4} p1", p / P1),
+            points: vec![(0.0, p / P1), (end * 1e3, p / P1)],
+            style: Style::Line,
+        });
+    }
+    pressure.push(PlotSeries {
+        label: "averaging window".into(),
+        points: vec![
+            (w0 * 1e3, 1.0),
+            (w0 * 1e3, 6.0),
+            (w1 * 1e3, 6.0),
+            (w1 * 1e3, 1.0),
+        ],
+        style: Style::Line,
+    });
+    momentum.push(PlotSeries {
+        label: "1D: (p5 - p1) b (t - t_hit)".into(),
+        points: vec![
+            (e.t_hit * 1e3, 0.0),
+            (end * 1e3, (e.p5 - P1) * HALF_HEIGHT * (end - e.t_hit)),
+        ],
+        style: Style::Line,
+    });
+    std::fs::write(out.join("zhang_shock.csv"), csv)?;
+    let h = 0.5 / cells as f64;
+    for (name, title, ylabel, s) in [
+        (
+            "zhang_shock_pressure.png",
+            format!("Mach 1.5 shock on a steel block, probe 2 cm ahead, h = {h} m"),
+            "p / p1",
+            &pressure,
+        ),
+        (
+            "zhang_shock_momentum.png",
+            format!("Mach 1.5 shock on a steel block: half block's x-momentum, h = {h} m"),
+            "momentum [N s/m]",
+            &momentum,
+        ),
+    ] {
+        plot_xy(&out.join(name), &title, "t [ms]", ylabel, false, false, s)?;
+        println!("wrote {}", out.join(name).display());
+    }
+    Ok(())
+}
+
+/// Zhang Sec. 4, Fig. 2 (plate spall, `cases/zhang_spall.toml`): the time
+/// and the plane of the first failure against the cell size (the
+/// `zhang_spall` study's resolutions), with the 1D elastic-wave analysis
+/// (3d/c, the target's mid-plane) and the band of every point failed by the
+/// end; one PNG each, one CSV.
+fn zhang_fig2(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::zhang_spall::{analytic, run_spall};
+    let out = out_dir()?;
+    let cells: &[usize] = if quick { &[161, 322] } else { &[161, 322, 644] };
+    let (t_exact, x_exact) = analytic();
+    let mut csv = String::from("cells,h [m],spall time [s],plane [m],band low [m],band high [m]\n");
+    let (mut times, mut planes, mut lows, mut highs) = (vec![], vec![], vec![], vec![]);
+    for &n in cells {
+        let s = run_spall(n)?;
+        let h = 0.0161 / n as f64;
+        csv.push_str(&format!(
+            "{n},{h},{},{},{},{}\n",
+            s.time, s.plane, s.band.0, s.band.1
+        ));
+        times.push((h * 1e6, s.time * 1e6));
+        planes.push((h * 1e6, s.plane * 1e3));
+        lows.push((h * 1e6, s.band.0 * 1e3));
+        highs.push((h * 1e6, s.band.1 * 1e3));
+    }
+    std::fs::write(out.join("zhang_fig2.csv"), csv)?;
+    let span = |v: &[(f64, f64)]| {
+        v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+            (a.0.min(p.0), a.1.max(p.0))
+        })
+    };
+    let (h0, h1) = span(&times);
+    plot_xy(
+        &out.join("zhang_fig2_time.png"),
+        "Zhang Fig. 2 plate spall: first-failure time vs h",
+        "h [um]",
+        "t [us]",
+        false,
+        false,
+        &[
+            PlotSeries {
+                label: "multiphase (first failed point)".into(),
+                points: times,
+                style: Style::LineMarkers,
+            },
+            PlotSeries {
+                label: format!("1D analysis 3d/c = {:.3} us", t_exact * 1e6),
+                points: vec![(h0, t_exact * 1e6), (h1, t_exact * 1e6)],
+                style: Style::Line,
+            },
+            PlotSeries {
+                label: "Zhang's computed 1.12 us (his plates)".into(),
+                points: vec![(h0, 1.12), (h1, 1.12)],
+                style: Style::Line,
+            },
+        ],
+    )?;
+    plot_xy(
+        &out.join("zhang_fig2_plane.png"),
+        "Zhang Fig. 2 plate spall: spall plane vs h",
+        "h [um]",
+        "x [mm]",
+        false,
+        false,
+        &[
+            PlotSeries {
+                label: "first failed points (mean)".into(),
+                points: planes,
+                style: Style::LineMarkers,
+            },
+            PlotSeries {
+                label: "lowest failed point at the end".into(),
+                points: lows,
+                style: Style::LineMarkers,
+            },
+            PlotSeries {
+                label: "highest failed point at the end".into(),
+                points: highs,
+                style: Style::LineMarkers,
+            },
+            PlotSeries {
+                label: format!("1D analysis: x = {:.2} mm", x_exact * 1e3),
+                points: vec![(h0, x_exact * 1e3), (h1, x_exact * 1e3)],
+                style: Style::Line,
+            },
+        ],
+    )?;
+    println!("wrote {}", out.join("zhang_fig2_time.png").display());
+    println!("wrote {}", out.join("zhang_fig2_plane.png").display());
     Ok(())
 }

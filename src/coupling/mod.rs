@@ -242,6 +242,11 @@ pub struct CoupledRun<const D: usize> {
     pub cfl: f64,
     /// Completed steps.
     pub steps: u64,
+    /// Wall time spent in the pressure stages (Guilkey Sec. 3.3 steps 2–6:
+    /// equilibration, face velocities and their exchange, `Δp` or the
+    /// implicit pressure solve, face pressure), summed over the steps and
+    /// their retries. Not part of the state (a restart starts it at 0).
+    pub pressure_s: f64,
     ws: IceWorkspace<D>,
     map: NodeCellMap<D>,
     node_pressure: Vec<f64>,
@@ -425,6 +430,7 @@ impl<const D: usize> CoupledRun<D> {
             coupling,
             cfl,
             steps: 0,
+            pressure_s: 0.0,
             ws,
             reactions: Vec::new(),
             burn_scratch: reaction::BurnScratch::default(),
@@ -697,6 +703,7 @@ impl<const D: usize> CoupledRun<D> {
         self.set_solid_cells();
         // Steps 2–6.
         let mut tries = 0;
+        let pressure_start = std::time::Instant::now();
         let info = loop {
             match ice::stage_pressure(&mut self.fluid, &self.ice, &mut self.ws, dt, true) {
                 Ok(info) => break info,
@@ -709,6 +716,7 @@ impl<const D: usize> CoupledRun<D> {
                 Err(e) => return Err(e.into()),
             }
         };
+        self.pressure_s += pressure_start.elapsed().as_secs_f64();
         let dt = info.dt;
         let layout = &self.fluid.layout;
         let vol = layout.cell_volume();

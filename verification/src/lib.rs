@@ -4,6 +4,7 @@
 pub mod axisym_studies;
 pub mod coupled_studies;
 pub mod eos_studies;
+pub mod formulation_studies;
 pub mod harness;
 pub mod ice_studies;
 pub mod impm_studies;
@@ -29,6 +30,11 @@ pub const STUDIES: &[Study] = &[
         "zhang_block",
         "Zhang Sec. 3 block-in-air: a disk/sphere moving with the air, weak (Eq. 18) vs strong (Eq. 7) constraint, 2D axis/diagonal and 3D",
         multiphase_studies::zhang_block,
+    ),
+    (
+        "zhang_vs_guilkey",
+        "Zhang multiphase beside Guilkey MPM-ICE on the same scenes: block test (disk diagonal with the air) pressure change and a Mach 1.5 shock on a steel block vs p5; cost per step, pressure-solve share",
+        formulation_studies::zhang_vs_guilkey,
     ),
     (
         "zhang_spall",
