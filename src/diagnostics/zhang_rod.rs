@@ -89,18 +89,20 @@ pub fn scene(n: usize, end: f64) -> Result<Scene, Error> {
     Ok(scene)
 }
 
-/// Nose, tail and tail velocity of the rod's points: the lowest and highest
-/// point centre (a deformed half-size `F_zz l⁰` is meaningless for the
-/// eroded points, stretched along the crater wall), and the mean axial
-/// velocity of the points that started in the rod's last 10 %.
+/// Nose, tail and tail velocity of the rod's points: the lowest point
+/// centre, the highest centre of the points that started in the rod's
+/// last 10 % (eroded debris thrown back out of the crater rises above the
+/// tail), and the mean axial velocity of those points. Centres, not
+/// centre ± `F_zz l⁰`: that is meaningless for the eroded points,
+/// stretched along the crater wall.
 fn measure(run: &MultiphaseRun<2>, rod: usize) -> (f64, f64, f64) {
     let p = &run.phases[rod].particles;
     let (mut nose, mut tail) = (f64::INFINITY, f64::NEG_INFINITY);
     let (mut mv, mut m) = (0.0, 0.0);
     for i in 0..p.len() {
         nose = nose.min(p.x[i][1]);
-        tail = tail.max(p.x[i][1]);
         if p.x0[i][1] > 0.9 * ROD_LENGTH {
+            tail = tail.max(p.x[i][1]);
             mv += p.mass[i] * p.v[i][1];
             m += p.mass[i];
         }

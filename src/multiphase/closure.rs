@@ -233,9 +233,11 @@ mod tests {
     #[test]
     fn a_vanishing_phase_takes_a_capped_then_no_share() {
         // Σθκ = 1, node share 2: a point of κ_p takes κ_p · 2 uncapped.
-        let mut s = Stencil::<2>::default();
-        s.compressibility = 1.0;
-        s.node_share = 2.0;
+        let s = Stencil::<2> {
+            compressibility: 1.0,
+            node_share: 2.0,
+            ..Default::default()
+        };
         let rate = |kappa: f64| extra_rate(&s, 1.0, kappa, 0.0, 5.0);
         // Below the cap (share 5): unchanged.
         assert!((rate(4.0) - 8.0).abs() < 1e-12);
