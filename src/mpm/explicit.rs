@@ -513,9 +513,9 @@ impl<const D: usize> CoupledMpm<'_, D> {
     }
 
     /// `Σ_p w_p ∇S_ip` on the nodes for particle weights `w` (the mass:
-    /// [`Self::mass_gradient`]; the volume: `−∫ θ ∇S_i`, the nodal
-    /// volume-fraction gradient of Zhang's pressure term). Unfolded, with
-    /// this step's bins and domains (call [`Self::p2g`] first).
+    /// [`Self::mass_gradient`]; Zhang's volume gradient, with its r–z hoop
+    /// part, is [`Self::volume_gradient`]). Unfolded, with this step's bins
+    /// and domains (call [`Self::p2g`] first).
     pub fn weighted_gradient(
         &self,
         particles: &Particles<D>,
