@@ -266,21 +266,22 @@ fn tungsten_into_still_air_with_drag_conserves_momentum_and_leaves_nodes() {
     // The tungsten square at 100 m/s along x into air at rest, with drag
     // between them, to t = 2 ms (0.2 m: 4 cells). The periodic box has no
     // outside force, so the exact total momentum is constant. The drag
-    // (Eq. 5) conserves it to round-off (see the K = 1e15 test), the
-    // pressure forces only where the sampled Σθ is uniform: their sum over
-    // the nodes is −Σ_l p_g,l Σ_i g_il (g_il the nodal volume gradient of
-    // phase i, which the phases' points tile only approximately once the
-    // air is compressed, Zhang Eq. 14). Measured drift: 4.4e-6 relative
-    // without drag, 4.5e-7 and 4.8e-7 with K = 1e6 and 1e15; bounds 1e-5
-    // and 1e-6. With drag the total energy must not grow (the drag
-    // dissipates; measured: it only falls). Without drag it grows (2.0e-5
-    // by 2 ms): an open defect, reproduced by the ignored test below, so
-    // not asserted here. The square leaves the nodes behind it: its phase
-    // vanishes there, with no NaN and a finite stable step.
+    // (Eq. 5) conserves it to round-off (see the K = 1e15 test), and so do
+    // the pressure forces: the mixture sees one reference pressure on the
+    // sampling error of Σθ (Zhang Eq. 14), the excess going back to the
+    // phases (see `multiphase::MultiphaseRun::advance`). Measured drift
+    // 1.9e-15, 4.7e-15 relative without drag and with K = 1e6 (before
+    // that: 4.4e-6 and 4.5e-7); bound 1e-12. The total energy, the drag's
+    // friction heat counted as stored energy, grows by 3.5e-5 without
+    // drag and 2.0e-5 with K = 1e6 by 2 ms: the open defect of a solid
+    // sliding past the gas (the ignored reproducer below), bounded here at
+    // 5e-5 so that it cannot grow unseen; the drag heat must be positive.
+    // The square leaves the nodes behind it: its phase vanishes there,
+    // with no NaN and a finite stable step.
     for (k, momentum_bound, energy_bound) in [
-        (0.0, 1e-5, None),
-        (1e6, 1e-6, Some(1e-12)),
-        (1e15, 1e-6, Some(1e-12)),
+        (0.0, 1e-12, 5e-5),
+        (1e6, 1e-12, 5e-5),
+        (1e15, 1e-12, 5e-5),
     ] {
         let end = 2e-3;
         let table = format!("constraint = \"weak\"\ndrag = {k:?}");
@@ -307,21 +308,28 @@ fn tungsten_into_still_air_with_drag_conserves_momentum_and_leaves_nodes() {
         println!(
             "K = {k:e}: {} steps, Δt_min = {dt_min:.3e} s; momentum {:.6e} → drift {:.2e} \
              relative; air momentum {air_x:.4e}; energy {e0:.6e} → max {:.2e} relative \
-             growth, final {:.4e}; nodes left by tungsten: {left}",
+             growth, final {:.4e}, drag heat {:.3e}; nodes left by tungsten: {left}",
             run.steps,
             m0[0],
             drift / m0[0],
             (e_max - e0) / e0,
-            run.energies().total() / e0 - 1.0
+            run.energies().total() / e0 - 1.0,
+            run.drag_heat / e0
         );
         assert!(left > 0, "the square left no node");
         assert!(
             drift < momentum_bound * m0[0],
             "K = {k:e}: momentum drift {drift:e}"
         );
-        if let Some(b) = energy_bound {
-            assert!(e_max <= e0 * (1.0 + b), "K = {k:e}: energy grew to {e_max}");
-        }
+        assert!(
+            e_max <= e0 * (1.0 + energy_bound),
+            "K = {k:e}: energy grew to {e_max}"
+        );
+        assert!(
+            (k == 0.0) == (run.drag_heat == 0.0) && run.drag_heat >= 0.0,
+            "K = {k:e}: drag heat {:e}",
+            run.drag_heat
+        );
     }
 }
 
@@ -856,4 +864,59 @@ fn bad_multiphase_input_is_rejected_with_its_key_and_the_allowed_values() {
         println!("regions of {m} → {e}");
         assert!(e.contains("`regions"), "{e}");
     }
+}
+
+#[test]
+fn tungsten_hitting_steel_in_air_conserves_momentum_at_tens_of_gigapascals() {
+    // A tungsten block at 500 m/s hits a steel block at rest across one
+    // cell of air, in the periodic box (no outside force: the total
+    // momentum is exactly constant). The elastic impact pressure is about
+    // 20 GPa, 2e5 times the air's, and the nodal pressure at metal nodes is
+    // the metals'. Before the mixture's pressure force on the sampling
+    // error of Σθ was made conservative, −Σ_l p_g,l G_l made or destroyed
+    // momentum wherever the metals' sampled volumes met unevenly (the rod
+    // case lost a tenth of its momentum by 20 µs); measured here: drift
+    // 1.05e-1 relative before, 3.3e-14 after. Bound 1e-12, and the tungsten
+    // must have handed the steel a good part of its momentum.
+    let end = 3e-4;
+    let text = scene(
+        20,
+        true,
+        end,
+        "constraint = \"weak\"\nmin_fraction = 0.2",
+        &[TUNGSTEN, STEEL, AIR],
+        &[
+            object("tungsten", [0.2, 0.3], [0.45, 0.7], [500.0, 0.0], ""),
+            object("steel", [0.5, 0.2], [0.8, 0.8], [0.0, 0.0], ""),
+            object("air", [0.0, 0.0], [1.0, 1.0], [0.0, 0.0], "except = [0, 1]\n"),
+        ],
+    );
+    let mut run = build(&text);
+    let (w, s) = (
+        run.phase_of("tungsten").unwrap(),
+        run.phase_of("steel").unwrap(),
+    );
+    let m0 = momentum(&run);
+    let (mut drift, mut p_max) = (0.0f64, 0.0f64);
+    run_to(&mut run, end, |r| {
+        let m = momentum(r);
+        drift = drift.max((m[0] - m0[0]).abs().max(m[1].abs()));
+        for ph in [w, s] {
+            let p = &r.phases[ph].particles;
+            for i in 0..p.len() {
+                p_max = p_max.max(-p.stress[i].trace() / 3.0);
+            }
+        }
+    });
+    let steel = run.phases[s].particles.momentum()[0];
+    println!(
+        "tungsten into steel: {} steps; largest metal pressure {p_max:.3e} Pa; momentum drift \
+         {:.2e} relative; steel holds {:.3} of the momentum",
+        run.steps,
+        drift / m0[0],
+        steel / m0[0]
+    );
+    assert!(p_max > 1e10, "impact pressure {p_max:e}");
+    assert!(drift < 1e-12 * m0[0], "momentum drift {:e}", drift / m0[0]);
+    assert!(steel > 0.2 * m0[0], "steel momentum {steel:e}");
 }

@@ -16,8 +16,12 @@
 //!    `−θ_i ∇p_g V_l` and the gas pressure of the stress difference
 //!    combined at the node: `∫ S_l [−θ_i ∇p_g + ∇·(θ_i p_g I)] = ∫ S_l p_g
 //!    ∇θ_i ≈ −p_g,l ∫ θ_i ∇S_l`. A uniform pressure in gas and solids then
-//!    gives no force at all, and the forces of all phases sum to zero
-//!    wherever the phases tile the space (momentum is conserved).
+//!    gives no force at all. Summed over the phases this leaves
+//!    `−p_g,l G_l`, `G_l = Σ_i Σ_p v_p ∇S_l` (≈ −V∇Σθ: the sampling error
+//!    of Σθ, Eq. 14), which conserves momentum only where p_g is uniform;
+//!    the mixture therefore sees one reference pressure on it, `−p_ref
+//!    G_l`, and the excess `(p_g,l − p_ref) G_l` is handed back to the
+//!    phases by volume share, so that momentum is conserved exactly.
 //! 4. The phase interaction `f_i = Σ_j K_ij (ū_j − ū_i)` (Eq. 5) on every
 //!    node, pointwise implicit (the exchange solver of
 //!    [`crate::ice::exchange`], conservative and stable for any K).
@@ -124,6 +128,10 @@ pub struct MultiphaseRun<const D: usize> {
     pub steps: u64,
     /// Nodal gas pressure p_g,l, ghosts mirrored.
     pub gas_pressure: Vec<f64>,
+    /// Kinetic energy the phase interaction (Eq. 5) has taken from the
+    /// nodal velocities since t = 0: friction heat, counted with the stored
+    /// energy in [`Self::energies`] (no phase's temperature takes it).
+    pub drag_heat: f64,
     /// Nodal Σ_j θ_j κ_j, ghosts mirrored.
     compressibility: Vec<f64>,
     /// Nodal volume V_l: the cell volume, or in r–z the volume per radian
@@ -134,6 +142,13 @@ pub struct MultiphaseRun<const D: usize> {
     /// Nodal interface rate per unit compressibility, Y_l / Σθκ_l.
     interface: Vec<f64>,
     force: Vec<SVector<f64, D>>,
+    /// Per node, `(p_g − p_ref) G / Σθ`: the mixture's excess pressure
+    /// force on the sampling error of Σθ per unit volume fraction (see
+    /// `advance`).
+    mixture: Vec<SVector<f64, D>>,
+    /// `p_ref = Σ v κ p / Σ v κ` over every point at the step's start: the
+    /// pressure the mixture's Σθ sampling error sees.
+    reference_pressure: f64,
 }
 
 /// Compressibility κ = 1/(ρ c²) of a point: a gas point's adiabatic one from
@@ -177,12 +192,15 @@ impl<const D: usize> MultiphaseRun<D> {
             t: 0.0,
             steps: 0,
             gas_pressure: vec![0.0; n],
+            drag_heat: 0.0,
             compressibility: vec![0.0; n],
             node_volume,
             node_tmp: vec![0.0; n],
             mix_num: vec![0.0; n],
             interface: vec![0.0; n],
             force: vec![SVector::zeros(); n],
+            mixture: vec![SVector::zeros(); n],
+            reference_pressure: 0.0,
         }
     }
 
@@ -205,10 +223,13 @@ impl<const D: usize> MultiphaseRun<D> {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Kinetic, stored (strain and gas internal) and potential energies of
-    /// all phases.
+    /// Kinetic, stored (strain, gas internal and the drag's friction heat
+    /// [`Self::drag_heat`]) and potential energies of all phases.
     pub fn energies(&self) -> Energies {
-        let mut e = Energies::default();
+        let mut e = Energies {
+            strain: self.drag_heat,
+            ..Default::default()
+        };
         for ph in &self.phases {
             e.kinetic += ph.particles.kinetic_energy();
             e.strain += ph.particles.strain_energy(&self.materials);
@@ -261,6 +282,7 @@ impl<const D: usize> MultiphaseRun<D> {
             node_volume,
             node_tmp,
             mix_num,
+            reference_pressure,
             ..
         } = self;
         let mpm = CoupledMpm {
@@ -277,6 +299,7 @@ impl<const D: usize> MultiphaseRun<D> {
         // pressure sums Σ S v p of the gas and of all phases.
         comp.iter_mut().for_each(|c| *c = 0.0);
         mix_num.iter_mut().for_each(|c| *c = 0.0);
+        let (mut sum_vk, mut sum_vkp) = (0.0, 0.0);
         for ph in phases.iter_mut() {
             mpm.p2g(&ph.particles, &mut ph.gs, &mut ph.scratch)
                 .map_err(|e| name(ph, e))?;
@@ -295,11 +318,11 @@ impl<const D: usize> MultiphaseRun<D> {
             comp.iter_mut()
                 .zip(node_tmp.iter().zip(node_volume.iter()))
                 .for_each(|(c, (q, v))| *c += q / v);
-            ph.point.clear();
-            ph.point.extend(
-                (0..p.len())
-                    .map(|i| -p.vol[i] * compressibility(m, p, i) * p.stress[i].trace() / 3.0),
-            );
+            sum_vk += ph.point.iter().sum::<f64>();
+            for (q, s) in ph.point.iter_mut().zip(&p.stress) {
+                *q *= -s.trace() / 3.0;
+            }
+            sum_vkp += ph.point.iter().sum::<f64>();
             mpm.p2g_sum(p, &ph.point, &ph.scratch, node_tmp);
             mix_num
                 .iter_mut()
@@ -307,6 +330,7 @@ impl<const D: usize> MultiphaseRun<D> {
                 .for_each(|(a, b)| *a += b);
         }
         grid.mirror_ghosts(comp);
+        *reference_pressure = if sum_vk > 0.0 { sum_vkp / sum_vk } else { 0.0 };
         // The pressure p_g on a node: the compressibility-weighted mean of
         // the points' pressures, Σ S v κ p / Σ S v κ. Where there is gas it
         // is the gas pressure (κ of air is 1e4–1e6 times a solid's), with
@@ -371,10 +395,13 @@ impl<const D: usize> MultiphaseRun<D> {
             t,
             steps,
             gas_pressure,
+            drag_heat,
             compressibility: comp,
             node_volume,
             interface,
             force,
+            mixture,
+            reference_pressure,
             ..
         } = self;
         let mpm = CoupledMpm {
@@ -392,16 +419,44 @@ impl<const D: usize> MultiphaseRun<D> {
             mpm.volume_gradient(&ph.particles, &ph.scratch, &mut ph.grad);
             grid.fold_ghosts(&mut ph.grad);
         }
+        // Summed over the phases, the force −p_g,l g_il leaves the mixture
+        // −p_g,l G_l with G_l = Σ_i g_il ≈ −V ∇Σθ, the gradient of the
+        // point-sampled Σθ (zero in the continuum, where Σθ = 1: Zhang's
+        // −Σθ∇p_g + ∇·(Σθ p_g I) = p_g ∇Σθ). Σ_l G_l = 0, but Σ_l p_g,l G_l
+        // is not where p_g varies: at a metal–metal interface at tens of
+        // GPa it made or destroyed a tenth of the rod's momentum. The
+        // mixture sees instead the one pressure p_ref on that sampling
+        // error, −p_ref G_l (summing to zero over the nodes: momentum is
+        // conserved), and the difference (p_g,l − p_ref) G_l goes back to
+        // the phases by volume share θ_il/Σθ_l: phase i is then pushed by
+        // p_g,l across the mean of its own and its neighbours' volume
+        // gradients, g_il − (θ_il/Σθ_l) G_l, which sum to zero over the
+        // phases (action and reaction), plus its share of −p_ref G_l. A
+        // uniform pressure p_g = p_ref is untouched (the block test).
+        // Shares by mass instead gave the same momentum and, within a few
+        // tenths, the same shock and energy errors.
+        let p_ref = *reference_pressure;
+        for (l, mx) in mixture.iter_mut().enumerate() {
+            let (mut g, mut share) = (SVector::<f64, D>::zeros(), 0.0);
+            for ph in phases.iter() {
+                g += ph.grad[l];
+                share += ph.theta[l];
+            }
+            *mx = if share > 0.0 {
+                g * ((gas_pressure[l] - p_ref) / share)
+            } else {
+                SVector::zeros()
+            };
+        }
         for ph in phases.iter_mut() {
-            force
-                .iter_mut()
-                .zip(ph.grad.iter().zip(gas_pressure.iter()))
-                .for_each(|(f, (g, &pg))| *f = -g * pg);
+            for l in 0..force.len() {
+                force[l] = -ph.grad[l] * gas_pressure[l] + mixture[l] * ph.theta[l];
+            }
             mpm.solve(&mut ph.particles, &mut ph.gs, &mut ph.scratch, None, force)
                 .map_err(|e| name(ph, e))?;
         }
         // 4: the phase interaction (Eq. 5), pointwise implicit.
-        exchange(phases, &model.drag, dt, node_volume, params.mass_floor);
+        *drag_heat += exchange(phases, &model.drag, dt, node_volume, params.mass_floor);
         // FLIP velocities (Eq. 10), then the nodal velocities remapped from
         // them (MUSL): the closure and the stress read those.
         for ph in phases.iter_mut() {
@@ -612,18 +667,20 @@ fn name_phase(e: Error, name: &str) -> Error {
 
 /// Eq. 5 on every node: `m_i du_i = Δt V Σ_j K_ij (u_j − u_i)`, implicit in
 /// the new velocities, among the phases with mass on the node; the change
-/// goes into `velocity_new` and the acceleration.
+/// goes into `velocity_new` and the acceleration. Returns the nodal kinetic
+/// energy it dissipates, Σ ½ m (|u|² − |u'|²) ≥ 0.
 fn exchange<const D: usize>(
     phases: &mut [Phase<D>],
     drag: &[f64],
     dt: f64,
     node_volume: &[f64],
     floor: f64,
-) {
+) -> f64 {
     let n = phases.len();
     if n < 2 || drag.iter().all(|&k| k == 0.0) {
-        return;
+        return 0.0;
     }
+    let mut heat = 0.0;
     let nodes = phases[0].gs.mass.len();
     let mut k = [0.0; MAX_PHASES * MAX_PHASES];
     let mut idx = [0usize; MAX_PHASES];
@@ -661,11 +718,13 @@ fn exchange<const D: usize>(
         );
         for r in 0..c {
             let gs = &mut phases[idx[r]].gs;
-            let dv = vel[r] - gs.velocity_new[l];
+            let old = gs.velocity_new[l];
+            heat += 0.5 * w[r] * (old.norm_squared() - vel[r].norm_squared());
             gs.velocity_new[l] = vel[r];
-            gs.accel[l] += dv / dt;
+            gs.accel[l] += (vel[r] - old) / dt;
         }
     }
+    heat
 }
 
 /// Nodal volumes V_l for the volume fractions (Zhang Eq. 13) and the
