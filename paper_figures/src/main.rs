@@ -27,7 +27,10 @@
 //! block, both formulations: probe pressure against the exact reflected
 //! pressure, block momentum against the 1D rate) and `zhang_fig2` (plate
 //! spall, Zhang Fig. 2: first-failure time and plane against h and the
-//! 1D elastic-wave analysis).
+//! 1D elastic-wave analysis) and `zhang_fig4` (tungsten rod into steel,
+//! Zhang Figs. 3–4: penetration and residual length against time at three
+//! cell sizes, from the `zhang_rod` study, with the Alekseevskii–Tate
+//! band).
 
 use std::path::PathBuf;
 
@@ -103,6 +106,10 @@ const FIGURES: &[(&str, &str)] = &[
         "plate spall (Zhang 4, Fig. 2): first-failure time and plane vs h against 3d/c and the mid-plane",
     ),
     (
+        "zhang_fig4",
+        "tungsten rod into steel (Zhang Figs. 3-4): penetration and residual length vs time at three cell sizes (from the zhang_rod study) with the Alekseevskii-Tate band",
+    ),
+    (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
     ),
@@ -132,6 +139,7 @@ fn main() -> anyhow::Result<()> {
         "zhang_block" => zhang_block(args.quick),
         "zhang_shock" => zhang_shock(args.quick),
         "zhang_fig2" => zhang_fig2(args.quick),
+        "zhang_fig4" => zhang_fig4(args.quick),
         other => bail!(
             "unknown figure `{other}`; available: {}, list",
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
@@ -1027,5 +1035,111 @@ fn zhang_fig2(quick: bool) -> anyhow::Result<()> {
     )?;
     println!("wrote {}", out.join("zhang_fig2_time.png").display());
     println!("wrote {}", out.join("zhang_fig2_plane.png").display());
+    Ok(())
+}
+
+/// Zhang Figs. 3–4 (tungsten rod into steel, `cases/zhang_rod.toml`):
+/// penetration P(t) and residual length L(t) at every cell size of the
+/// `zhang_rod` study, read from its JSON (run `verification zhang_rod
+/// [--quick]` first: R/4 takes about 15 minutes), with the
+/// Alekseevskii–Tate model at the study's two target resistances. One PNG
+/// each, one CSV.
+fn zhang_fig4(quick: bool) -> anyhow::Result<()> {
+    use mpmice::diagnostics::zhang_rod::{tate, RHO_PLATE, RHO_ROD, ROD_LENGTH, SPEED};
+    use verification::harness::StudyResult;
+    use verification::multiphase_rod::{TATE_R, TATE_Y};
+    let out = out_dir()?;
+    let mut src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../verification/results");
+    if quick {
+        src = src.join("quick");
+    }
+    let path = src.join("zhang_rod.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e}; run `verification zhang_rod{}` first",
+            path.display(),
+            if quick { " --quick" } else { "" }
+        )
+    })?;
+    let study: StudyResult = serde_json::from_str(&text)?;
+    let runs = study
+        .series
+        .iter()
+        .find(|s| s.label.starts_with("penetration vs"))
+        .ok_or_else(|| anyhow::anyhow!("{}: no Tate series", path.display()))?;
+    let column = |p: &verification::harness::Point, key: &str| -> Vec<f64> {
+        p.extra
+            .get(key)
+            .and_then(|v| v.as_array())
+            .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
+            .unwrap_or_default()
+    };
+    let mut csv = String::from("series,t [s],penetration [m],residual length [m]\n");
+    let (mut pen, mut len) = (Vec::new(), Vec::new());
+    for p in &runs.points {
+        let (t, pp, ll) = (
+            column(p, "t_s"),
+            column(p, "penetration_m"),
+            column(p, "length_m"),
+        );
+        let label = format!("multiphase h = R/{:.0}", 0.002 / p.h);
+        for ((t, pp), ll) in t.iter().zip(&pp).zip(&ll) {
+            csv.push_str(&format!("{label},{t},{pp},{ll}\n"));
+        }
+        pen.push(PlotSeries {
+            label: label.clone(),
+            points: t.iter().zip(&pp).map(|(t, p)| (t * 1e6, p * 1e3)).collect(),
+            style: Style::Line,
+        });
+        len.push(PlotSeries {
+            label,
+            points: t.iter().zip(&ll).map(|(t, l)| (t * 1e6, l * 1e3)).collect(),
+            style: Style::Line,
+        });
+    }
+    for rt in TATE_R {
+        let states = tate(
+            SPEED, ROD_LENGTH, RHO_ROD, RHO_PLATE, TATE_Y, rt, 50e-6, 1e-6,
+        );
+        let label = format!(
+            "Tate, Y_p = {:.3} GPa, R_t = {:.2} GPa",
+            TATE_Y / 1e9,
+            rt / 1e9
+        );
+        for s in &states {
+            csv.push_str(&format!("{label},{},{},{}\n", s.t, s.penetration, s.length));
+        }
+        pen.push(PlotSeries {
+            label: label.clone(),
+            points: states
+                .iter()
+                .map(|s| (s.t * 1e6, s.penetration * 1e3))
+                .collect(),
+            style: Style::Line,
+        });
+        len.push(PlotSeries {
+            label,
+            points: states.iter().map(|s| (s.t * 1e6, s.length * 1e3)).collect(),
+            style: Style::Line,
+        });
+    }
+    std::fs::write(out.join("zhang_fig4.csv"), csv)?;
+    for (name, title, ylabel, s) in [
+        (
+            "zhang_fig4_penetration.png",
+            "Tungsten rod into steel at 1.7 km/s: penetration vs time",
+            "P [mm]",
+            &pen,
+        ),
+        (
+            "zhang_fig4_length.png",
+            "Tungsten rod into steel at 1.7 km/s: residual rod length vs time",
+            "L [mm]",
+            &len,
+        ),
+    ] {
+        plot_xy(&out.join(name), title, "t [us]", ylabel, false, false, s)?;
+        println!("wrote {}", out.join(name).display());
+    }
     Ok(())
 }

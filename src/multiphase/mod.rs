@@ -471,20 +471,20 @@ impl<const D: usize> MultiphaseRun<D> {
         let n = phases.len();
         {
             let mut u = [SVector::<f64, D>::zeros(); MAX_PHASES];
-            let mut m = [0.0; MAX_PHASES];
+            let mut th = [0.0; MAX_PHASES];
             let mut g = [SVector::<f64, D>::zeros(); MAX_PHASES];
             for l in 0..interface.len() {
                 let mut theta_sum = 0.0;
                 for (j, ph) in phases.iter().enumerate() {
                     u[j] = ph.gs.velocity[l];
-                    m[j] = ph.gs.mass[l];
+                    th[j] = ph.theta[l];
                     g[j] = ph.grad[l];
                     theta_sum += ph.theta[l];
                 }
                 interface[l] = if comp[l] > 0.0 {
                     closure::node_rate(
                         &u[..n],
-                        &m[..n],
+                        &th[..n],
                         &g[..n],
                         theta_sum,
                         node_volume[l],
