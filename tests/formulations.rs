@@ -53,11 +53,11 @@ fn block_test_weak_constraint_keeps_the_air_guilkey_changes_it_a_little() {
 /// the half height), multiphase at h = 1 and 0.5 cm. The probe 2 cm in
 /// front of the face, averaged over 0.1–0.2 ms after the hit, must read the
 /// exact 1D reflected-shock pressure p5 = 5.425 p1 within 5 % (measured:
-/// 3.1 % low MPM-ICE, whose probe rings by ±30 % about it; multiphase 8.6 %
-/// low at 1 cm, 3.2 % at 0.5 cm and 0.7 % at 0.25 cm in the study, so the
+/// 3.1 % low MPM-ICE, whose probe rings by ±30 % about it; multiphase 8.4 %
+/// low at 1 cm, 3.1 % at 0.5 cm and 0.8 % at 0.25 cm in the study, so the
 /// multiphase bound applies at 0.5 cm, and its error must fall with h). By
 /// 0.2 ms after the hit the block's momentum must lie within 15 % of the 1D
-/// value (p5 − p1) b (t − t_hit) (measured: 1.11 MPM-ICE, 0.90 and 0.91
+/// value (p5 − p1) b (t − t_hit) (measured: 1.11 MPM-ICE, 0.90 and 0.90
 /// multiphase: the smeared shock loads the face early, the corner's
 /// diffraction unloads it). Until 0.15 ms the closed box's x-momentum must
 /// follow the walls' exact impulse (p4 − p1) H t (measured: within 3.0e-4
