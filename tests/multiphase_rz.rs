@@ -3,6 +3,7 @@
 //! are per radian. Exact checks: a solid of revolution at rest in air, or
 //! moving with the air along the axis, changes nothing.
 
+use mpmice::diagnostics::zhang_block::BLOCK_MATERIALS;
 use mpmice::multiphase::MultiphaseRun;
 use mpmice::scene::{build_multiphase_run, parse};
 
@@ -32,24 +33,10 @@ shape = "gimp"
 [multiphase]
 constraint = "weak"
 
-[[materials]]
-name = "solid"
-type = "solid"
-model = "linear_elastic"
-density = 1000.0
-youngs_modulus = 1.0e8
-poisson_ratio = 0.3
-
-[[materials]]
-name = "air"
-type = "fluid"
-frame = "particles"
-eos = "ideal_gas"
-gamma = 1.4
-cv = 717.5
+{BLOCK_MATERIALS}
 
 [[objects]]
-material = "solid"
+material = "block"
 geometry = {geometry}
 particles_per_cell = 3
 velocity = [0.0, {w:?}]

@@ -28,6 +28,28 @@ pub struct BlockCase {
     pub solid_ppc: usize,
 }
 
+/// The block test's two materials (`[[materials]]` tables): `block`, a
+/// linear-elastic solid (ρ = 1000, E = 1e8, ν = 0.3), and `air`, an ideal
+/// gas on points (γ = 1.4, c_v = 717.5); the objects give the densities
+/// and the 1e5 Pa prestress.
+pub const BLOCK_MATERIALS: &str = r#"
+[[materials]]
+name = "block"
+type = "solid"
+model = "linear_elastic"
+density = 1000.0
+youngs_modulus = 1.0e8
+poisson_ratio = 0.3
+
+[[materials]]
+name = "air"
+type = "fluid"
+frame = "particles"
+eos = "ideal_gas"
+gamma = 1.4
+cv = 717.5
+"#;
+
 impl BlockCase {
     /// The scene: a linear-elastic solid (ρ = 1000, E = 1e8, ν = 0.3)
     /// prestressed to the air's 1e5 Pa, ideal-gas air at 1.2 kg/m³,
@@ -81,22 +103,7 @@ shape = "gimp"
 [multiphase]
 constraint = "{constraint}"
 
-[[materials]]
-name = "block"
-type = "solid"
-model = "linear_elastic"
-density = 1000.0
-youngs_modulus = 1.0e8
-poisson_ratio = 0.3
-
-[[materials]]
-name = "air"
-type = "fluid"
-frame = "particles"
-eos = "ideal_gas"
-gamma = 1.4
-cv = 717.5
-
+{BLOCK_MATERIALS}
 [[objects]]
 material = "block"
 geometry = {geometry}
