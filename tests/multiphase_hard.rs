@@ -36,16 +36,8 @@ youngs_modulus = 2.0e11
 poisson_ratio = 0.3
 "#;
 
-/// Ideal-gas air (γ = 1.4, c_v = 717.5 J/(kg K)).
-const AIR: &str = r#"
-[[materials]]
-name = "air"
-type = "fluid"
-frame = "particles"
-eos = "ideal_gas"
-gamma = 1.4
-cv = 717.5
-"#;
+// Ideal-gas air (γ = 1.4, c_v = 717.5 J/(kg K)) on points.
+use mpmice::diagnostics::zhang_block::AIR_POINTS as AIR;
 
 /// The air's density: tungsten's over 19 000 (the issue's ratio), at
 /// p = 1e5 Pa.

@@ -3,7 +3,7 @@
 //! are per radian. Exact checks: a solid of revolution at rest in air, or
 //! moving with the air along the axis, changes nothing.
 
-use mpmice::diagnostics::zhang_block::BLOCK_MATERIALS;
+use mpmice::diagnostics::zhang_block::{AIR_POINTS, BLOCK_SOLID};
 use mpmice::multiphase::MultiphaseRun;
 use mpmice::scene::{build_multiphase_run, parse};
 
@@ -33,7 +33,7 @@ shape = "gimp"
 [multiphase]
 constraint = "weak"
 
-{BLOCK_MATERIALS}
+{BLOCK_SOLID}{AIR_POINTS}
 
 [[objects]]
 material = "block"
@@ -191,15 +191,7 @@ fn taylor_rod_in_air_matches_the_rod_in_vacuum() {
         "[multiphase]\nconstraint = \"weak\"\n\n[[materials]]",
     );
     mp.push_str(&format!(
-        r#"
-[[materials]]
-name = "air"
-type = "fluid"
-frame = "particles"
-eos = "ideal_gas"
-gamma = 1.4
-cv = 717.5
-
+        r#"{AIR_POINTS}
 [[objects]]
 material = "air"
 geometry = {{ type = "box", lower = [0.0, 0.0], upper = [{:?}, {:?}] }}

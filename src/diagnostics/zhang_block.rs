@@ -28,11 +28,10 @@ pub struct BlockCase {
     pub solid_ppc: usize,
 }
 
-/// The block test's two materials (`[[materials]]` tables): `block`, a
-/// linear-elastic solid (ρ = 1000, E = 1e8, ν = 0.3), and `air`, an ideal
-/// gas on points (γ = 1.4, c_v = 717.5); the objects give the densities
-/// and the 1e5 Pa prestress.
-pub const BLOCK_MATERIALS: &str = r#"
+/// The block test's solid (a `[[materials]]` table): `block`, linear
+/// elastic (ρ = 1000, E = 1e8, ν = 0.3); the objects give its 1e5 Pa
+/// prestress.
+pub const BLOCK_SOLID: &str = r#"
 [[materials]]
 name = "block"
 type = "solid"
@@ -40,7 +39,11 @@ model = "linear_elastic"
 density = 1000.0
 youngs_modulus = 1.0e8
 poisson_ratio = 0.3
+"#;
 
+/// Air as gas points (a `[[materials]]` table): `air`, an ideal gas with
+/// γ = 1.4, c_v = 717.5 J/(kg K); the objects give its density and state.
+pub const AIR_POINTS: &str = r#"
 [[materials]]
 name = "air"
 type = "fluid"
@@ -103,7 +106,7 @@ shape = "gimp"
 [multiphase]
 constraint = "{constraint}"
 
-{BLOCK_MATERIALS}
+{BLOCK_SOLID}{AIR_POINTS}
 [[objects]]
 material = "block"
 geometry = {geometry}
