@@ -478,6 +478,11 @@ fn bad_fluid_input_names_its_key() {
             "fluid.pressure.convective_predictor",
             "[0, 1]",
         ),
+        (
+            fluid_edit("[fluid]", "[fluid]\nisothermal_fraction = 1.0"),
+            "fluid.isothermal_fraction",
+            "[0, 1)",
+        ),
     ];
     assert_each_names_its_key(cases);
 }

@@ -148,7 +148,18 @@ pub struct IceParams<const D: usize> {
     /// particle material. Needed when solid mass reaches the cells by
     /// interpolation; `false` for fluid-only scenes.
     pub normalise_volume: bool,
+    /// Volume fraction below which a material of a mixed cell keeps its
+    /// temperature through the flow work of the Lagrangian phase
+    /// (isothermal, like the equilibration; `0` turns it off). See
+    /// [`super::sources`]: a gas trace in a cell full of a much stiffer
+    /// material takes that material's volume noise as order-one
+    /// compressions and expansions, which the equilibration undoes
+    /// without work, a ratchet that heated air traces to 1e5–1e6 K.
+    pub isothermal_fraction: f64,
 }
+
+/// Default of [`IceParams::isothermal_fraction`].
+pub const ISOTHERMAL_FRACTION: f64 = 1e-3;
 
 /// How a material moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -290,6 +301,7 @@ impl<const D: usize> IceParams<D> {
             frames: Vec::new(),
             heat_sources: Vec::new(),
             normalise_volume: false,
+            isothermal_fraction: ISOTHERMAL_FRACTION,
         }
     }
 

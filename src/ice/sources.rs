@@ -162,16 +162,48 @@ pub(super) fn cell_sources<const D: usize>(
         cell.u[r] = mom / m;
         let cv = inp.cv[r];
         let me = m * cv * mc.temperature[c];
-        cell.t[r] = if !cons {
+        cell.t[r] = if cons {
+            me / (m * cv)
+        } else if isothermal_in(inp, cell, r) {
+            (me + cell.heat[r]) / (m * cv)
+        } else {
             // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
             let f_theta = cell.theta[r] * inp.kappa[r][c] / inp.stk[c];
             (me - dt * vol * f_theta * inp.press[c] * inp.div_sum[c] + cell.heat[r]) / (m * cv)
-        } else {
-            me / (m * cv)
         };
         add_heat_sources(inp, c, r, cell);
     }
     dke_src
+}
+
+/// Whether material `r` of cell `c` is a minor material of a mixed cell,
+/// volume fraction below [`IceParams::isothermal_fraction`]: its flow work
+/// is left out of the Lagrangian phase, so that its temperature changes
+/// only by exchange, heating and advection (the rest of the cell's energy
+/// balance goes to the other materials by mass in the total-energy form).
+///
+/// The equilibration (Guilkey Eq. 13) re-partitions a cell's volume at
+/// fixed temperatures, i.e. without work. A minor gas in a cell full of a
+/// stiffer material (air at θ = 1e-15…1e-3 inside a steel block, or in
+/// water) takes that material's volume noise — node-mass noise of a
+/// moving block, stress waves — in proportion to its compressibility:
+/// order-one compressions and expansions every step (`Δv/v ≈ (K/γp) ∇·u
+/// Δt`). The Lagrangian phase charged them `−p Δv` and the equilibration
+/// undid them without work, a ratchet: the air inside a block moving at
+/// 100 m/s reached 1.4e5 K in 0.08 ms, its sound speed cut Δt 60-fold and
+/// an expansion then drove it below 0 K; the air trace in the water of the
+/// ratio-1e4 water–air tube reached 1e5 K and took 1404 steps where the
+/// water needs about 530. Holding such a material isothermal makes both
+/// halves of its volume change alike (no work). Its heat capacity is a
+/// negligible part of the cell's, so the cell's energy is unchanged to
+/// that order. Single-material cells (θ = 1) are never affected.
+#[inline]
+pub(super) fn isothermal_in<const D: usize>(
+    inp: &LagrangianInputs<'_, D>,
+    cell: &LagrangianCell<D>,
+    r: usize,
+) -> bool {
+    inp.nm > 1 && cell.theta[r] < inp.params.isothermal_fraction
 }
 
 /// Heat sources: internal energy added to material `r` of cell `c` at a
@@ -256,6 +288,9 @@ pub(super) fn conservative_energy<const D: usize>(
     let mut rest = de - dke_src;
     for r in 0..inp.nm {
         if inp.lagr[r] {
+            continue;
+        }
+        if isothermal_in(inp, cell, r) {
             continue;
         }
         let f_theta = cell.theta[r] * inp.kappa[r][c] / stk_e;

@@ -792,6 +792,9 @@ pub fn build_fluid_run<const D: usize>(
         FluidVariant::HancockAcoustic => IceParams::hancock_acoustic(bcs),
     };
     params.cfl = scene.time.cfl;
+    if let Some(f) = scene.fluid.isothermal_fraction {
+        params.isothermal_fraction = f;
+    }
     if let Some(l) = scene.fluid.limiter {
         params.advection = match l {
             LimiterKind::FirstOrder => Advection::FirstOrder,

@@ -1191,6 +1191,11 @@ pub struct FluidSpec {
     pub limiter: Option<LimiterKind>,
     /// Exchange among fluid materials (default: none).
     pub exchange: Option<ExchangeSpec>,
+    /// Volume fraction below which a material of a mixed cell is held
+    /// isothermal through the flow work of the Lagrangian phase (`[0, 1)`,
+    /// default [`crate::ice::ISOTHERMAL_FRACTION`]; `0` turns it off; see
+    /// [`crate::ice::IceParams::isothermal_fraction`]).
+    pub isothermal_fraction: Option<f64>,
     /// Implicit pressure solve (used when `time.mode = "semi_implicit"`).
     #[serde(default)]
     pub pressure: PressureSolveSpec,
@@ -2257,6 +2262,14 @@ impl Scene {
     }
 
     fn validate_solvers(&self) -> Result<(), SceneError> {
+        if let Some(f) = self.fluid.isothermal_fraction {
+            if !(f.is_finite() && (0.0..1.0).contains(&f)) {
+                return Err(err(
+                    "fluid.isothermal_fraction",
+                    format!("must be in [0, 1) (got {f})"),
+                ));
+            }
+        }
         let ps = &self.fluid.pressure;
         let lt = ps.linear_tolerance;
         if !(lt.is_finite() && lt > 0.0 && lt < 1.0) {
