@@ -96,6 +96,7 @@ fn run(cells: [usize; 2], v_left: f64, v_right: f64, right_width: f64, end: f64)
     let end_state = model.conserved();
     o.energy_error = (end_state.energies.total() - e0).abs() / ke0;
     o.momentum_error = (px(&end_state) - p0).abs() / scale;
+    eprintln!("{cells:?}, {v_left} / {v_right} m/s: {o:?}");
     o
 }
 

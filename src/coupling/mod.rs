@@ -587,6 +587,11 @@ impl<const D: usize> CoupledRun<D> {
     /// run of the burn: nothing changes). Called by whoever adds reactions
     /// to a new run.
     pub fn init_reactions(&mut self) {
+        let mut exempt = vec![false; self.fluid.num_materials()];
+        for r in &self.reactions {
+            exempt[r.product] = true;
+        }
+        self.ice.isothermal_exempt = exempt;
         self.react(0.0);
     }
 

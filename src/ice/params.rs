@@ -156,6 +156,12 @@ pub struct IceParams<const D: usize> {
     /// compressions and expansions, which the equilibration undoes
     /// without work, a ratchet that heated air traces to 1e5–1e6 K.
     pub isothermal_fraction: f64,
+    /// Materials never held isothermal (by index; shorter than the
+    /// material list means `false`): a reaction's product, whose traces
+    /// ahead of the burn receive the burn's mass and energy (held
+    /// isothermal, the very fast burn of `tests/reaction.rs` balanced its
+    /// energy to −1.1e-2 instead of −6.4e-3).
+    pub isothermal_exempt: Vec<bool>,
 }
 
 /// Default of [`IceParams::isothermal_fraction`].
@@ -302,6 +308,7 @@ impl<const D: usize> IceParams<D> {
             heat_sources: Vec::new(),
             normalise_volume: false,
             isothermal_fraction: ISOTHERMAL_FRACTION,
+            isothermal_exempt: Vec::new(),
         }
     }
 

@@ -203,7 +203,16 @@ pub(super) fn isothermal_in<const D: usize>(
     cell: &LagrangianCell<D>,
     r: usize,
 ) -> bool {
-    inp.nm > 1 && cell.theta[r] < inp.params.isothermal_fraction
+    let iso = inp.params.isothermal_fraction;
+    let theta = cell.theta[r];
+    inp.nm > 1
+        && theta < iso
+        && !inp
+            .params
+            .isothermal_exempt
+            .get(r)
+            .copied()
+            .unwrap_or(false)
 }
 
 /// Heat sources: internal energy added to material `r` of cell `c` at a
