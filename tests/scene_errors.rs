@@ -547,6 +547,11 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             "> 0",
         ),
         (
+            format!("{good}\n[coupling]\nsolid_trace_fraction = 1.0\n"),
+            "coupling.solid_trace_fraction",
+            "[0, 1)",
+        ),
+        (
             good.replace("[time]", "[mpm]\nupdate = \"musl\"\n\n[time]"),
             "mpm.update",
             "usf, usl",

@@ -936,6 +936,7 @@ pub fn build_coupled_run<const D: usize>(
         solid_temperature: cs.solid_temperature,
         momentum_exchange: cs.momentum_exchange,
         heat_exchange: cs.heat_exchange,
+        trace_fraction: cs.solid_trace_fraction,
         ..Default::default()
     };
     let SolidRun {

@@ -783,6 +783,15 @@ pub struct CouplingSpec {
     /// from zero, `V (1 − cos(π t/T))/2` (≥ 0; 0: impulsive start).
     #[serde(default)]
     pub rigid_ramp: f64,
+    /// A solid's cell mass below this fraction of the cell at its
+    /// reference density is a trace (in [0, 1); default 1e-3): its velocity
+    /// in the momentum exchange is the one it had at the start of the step.
+    #[serde(default = "default_solid_trace")]
+    pub solid_trace_fraction: f64,
+}
+
+fn default_solid_trace() -> f64 {
+    crate::coupling::SOLID_TRACE_FRACTION
 }
 
 fn default_p_ref() -> f64 {
@@ -803,6 +812,7 @@ impl Default for CouplingSpec {
             solid_temperature: default_solid_t(),
             heat_exchange: 0.0,
             rigid_ramp: 0.0,
+            solid_trace_fraction: default_solid_trace(),
         }
     }
 }
@@ -2930,6 +2940,12 @@ impl Scene {
             return Err(err(
                 "coupling.heat_exchange",
                 format!("must be finite and >= 0, got {}", c.heat_exchange),
+            ));
+        }
+        if !(0.0..1.0).contains(&c.solid_trace_fraction) {
+            return Err(err(
+                "coupling.solid_trace_fraction",
+                format!("must be in [0, 1), got {}", c.solid_trace_fraction),
             ));
         }
         for &s in &solids {
