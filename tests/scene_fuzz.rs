@@ -2,8 +2,10 @@
 //! lines deleted or duplicated, values and keys altered, text truncated,
 //! characters swapped or inserted — each checked through the library
 //! (`scene::parse`, then `driver::check_scene`, everything `run` checks
-//! before its first step). None may panic or hang; every TOML syntax error
-//! names its line and column.
+//! before its first step), and every scene `check` accepts is run for at
+//! most three steps (`driver::run_scene`, outputs in a temporary
+//! folder). None may panic or hang; every TOML syntax error names its line
+//! and column.
 
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -161,12 +163,17 @@ enum Verdict {
     Syntax(String),
     /// Rejected by the parser or validation, naming a key path.
     Rejected,
-    /// Parsed; `check` accepted it (`true`) or rejected it.
-    Checked(bool),
+    /// Parsed; `check` refused it.
+    Refused,
+    /// Accepted by `check` and run for at most three steps: it ran to its
+    /// step limit or end (`true`) or stopped with an error.
+    Ran(bool),
 }
 
-/// The verdict on one mutated scene: `Err` for a panic.
-fn verdict(text: &str) -> Result<Verdict, String> {
+/// The verdict on one mutated scene: `Err` for a panic. A scene `check`
+/// accepts is also run for at most three steps, its outputs in `dir`
+/// (removed after).
+fn verdict(text: &str, dir: std::path::PathBuf) -> Result<Verdict, String> {
     let text = text.to_string();
     std::panic::catch_unwind(move || {
         let s = match mpmice::scene::parse(&text) {
@@ -179,7 +186,18 @@ fn verdict(text: &str) -> Result<Verdict, String> {
             memory_limit: Some(256 << 20),
             ..Default::default()
         };
-        Verdict::Checked(mpmice::driver::check_scene(&s, &opts).is_ok())
+        if mpmice::driver::check_scene(&s, &opts).is_err() {
+            return Verdict::Refused;
+        }
+        let mut s = s;
+        s.time.max_steps = Some(3);
+        let opts = mpmice::driver::RunOptions {
+            out_dir: dir.clone(),
+            ..opts
+        };
+        let ran = mpmice::driver::run_scene(&s, &opts).is_ok();
+        let _ = std::fs::remove_dir_all(&dir);
+        Verdict::Ran(ran)
     })
     .map_err(|p| {
         p.downcast_ref::<String>()
@@ -216,7 +234,8 @@ fn mutated_scenes_never_panic_or_hang_and_syntax_errors_have_a_location() {
     }));
     let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
     let (mut syntax, mut located, mut rejected) = (0, 0, 0);
-    let (mut accepted, mut refused) = (0, 0);
+    let (mut accepted, mut refused, mut ran, mut stopped) = (0, 0, 0, 0);
+    let scratch = std::env::temp_dir().join(format!("mpmice_fuzz_{}", std::process::id()));
     let mut failures = Vec::new();
     let start = Instant::now();
     const MUTATIONS: usize = 2000;
@@ -230,10 +249,11 @@ fn mutated_scenes_never_panic_or_hang_and_syntax_errors_have_a_location() {
         }
         let (tx, rx) = mpsc::channel();
         let t = mutated.clone();
+        let dir = scratch.join(n.to_string());
         std::thread::Builder::new()
             .name("check".into())
             .spawn(move || {
-                let _ = tx.send(verdict(&t));
+                let _ = tx.send(verdict(&t, dir));
             })
             .expect("thread");
         match rx.recv_timeout(Duration::from_secs(20)) {
@@ -246,8 +266,15 @@ fn mutated_scenes_never_panic_or_hang_and_syntax_errors_have_a_location() {
                 }
             }
             Ok(Ok(Verdict::Rejected)) => rejected += 1,
-            Ok(Ok(Verdict::Checked(true))) => accepted += 1,
-            Ok(Ok(Verdict::Checked(false))) => refused += 1,
+            Ok(Ok(Verdict::Refused)) => refused += 1,
+            Ok(Ok(Verdict::Ran(ok))) => {
+                accepted += 1;
+                if ok {
+                    ran += 1;
+                } else {
+                    stopped += 1;
+                }
+            }
             Ok(Err(panic)) => failures.push(format!("{name} ({what}): panicked: {panic}")),
             Err(_) => {
                 failures.push(format!("{name} ({what}): no answer in 20 s (hang)"));
@@ -263,16 +290,18 @@ fn mutated_scenes_never_panic_or_hang_and_syntax_errors_have_a_location() {
         }
     }
     let _ = std::panic::take_hook();
+    let _ = std::fs::remove_dir_all(&scratch);
     eprintln!(
         "{MUTATIONS} mutations in {:.1} s: {syntax} TOML syntax errors ({located} with line and \
          column), {rejected} rejected by the parser or validation, {accepted} accepted and \
-         {refused} refused by check",
+         {refused} refused by check; of the accepted, {ran} ran three steps and {stopped} \
+         stopped with an error",
         start.elapsed().as_secs_f64()
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert_eq!(located, syntax);
     assert!(
-        syntax > 30 && rejected > 30 && accepted > 30,
-        "{syntax} {rejected} {accepted}"
+        syntax > 30 && rejected > 30 && accepted > 30 && ran > 30,
+        "{syntax} {rejected} {accepted} {ran}"
     );
 }
