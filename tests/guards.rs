@@ -258,6 +258,36 @@ fn an_absurd_projected_step_count_names_the_particle_and_material() {
     check_scene(&s, &opts(tmp.path())).expect("bounded by max_steps");
 }
 
+/// The same for the models besides the explicit solid that name what sets
+/// their Δt: a multiphase scene names the particle and its phase, a
+/// membrane of elements the element and the membrane.
+#[test]
+fn an_absurd_projected_step_count_names_the_site_in_every_explicit_model() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut phases = case("zhang_block.toml");
+    phases.materials[0].youngs_modulus = Some(1e308);
+    let mut membrane = case("lian_membrane_vibration.toml");
+    membrane.membrane_elements[0].young = 1e300;
+    for (s, parts) in [
+        (
+            phases,
+            &["particle ", " of phase 0", "material `disk` (materials[0])"][..],
+        ),
+        (membrane, &["element ", "`sheet`"][..]),
+    ] {
+        let e = check_scene(&s, &opts(tmp.path())).expect_err("refused");
+        let msg = e.to_string();
+        println!("{msg}");
+        assert!(matches!(e, Error::Progress { step: 0, .. }), "{msg}");
+        for part in parts
+            .iter()
+            .chain(&["time.max_projected_steps", "signal speed"])
+        {
+            assert!(msg.contains(part), "`{part}` missing: {msg}");
+        }
+    }
+}
+
 /// An explicit solid whose step can shrink its Δt geometrically (a
 /// collapsing run), or fail after half-updating its particles (as a
 /// blow-up would).

@@ -7,6 +7,7 @@ use crate::grid::Grid;
 use crate::ice::IceState;
 use crate::material::eos::EquationOfState;
 use crate::material::{PointState, SolidMaterial};
+use crate::membrane::element::MembraneMesh;
 use crate::mpm::Particles;
 
 /// The site that sets a stable time step.
@@ -33,12 +34,15 @@ impl std::fmt::Display for DtLimiter {
 }
 
 /// The particle with the smallest explicit limit `h / (c + |v|)` (the
-/// argument of [`crate::mpm::explicit::stable_dt`]); `None` without
-/// particles. A serial pass: called only when the guard stops a run.
+/// argument of [`crate::mpm::explicit::stable_dt_stiffened`], divided by
+/// `√stiffening[i]` where `stiffening` has an entry for the particle: the
+/// multiphase drag's stiffening); `None` without particles. A serial pass:
+/// called only when the guard stops a run.
 pub fn particle_limiter<const D: usize>(
     grid: &Grid<D>,
     materials: &[SolidMaterial],
     p: &Particles<D>,
+    stiffening: &[f64],
 ) -> Option<DtLimiter> {
     let h = grid.h.min();
     let c_max = crate::mpm::explicit::gas_sound_speed_max(materials, p);
@@ -53,7 +57,10 @@ pub fn particle_limiter<const D: usize>(
             speed: p.v[i].norm(),
         };
         let m = materials.get(p.material[i] as usize)?;
-        let dt = m.dt_limit(h, &state, c_max);
+        let dt = match stiffening.get(i) {
+            Some(s) => m.dt_limit(h, &state, c_max) / s.sqrt(),
+            None => m.dt_limit(h, &state, c_max),
+        };
         // NaN limits first: they are the cause.
         if best.is_none_or(|(_, b)| dt.is_nan() || dt < b) {
             best = Some((i, dt));
@@ -104,6 +111,25 @@ pub fn cell_limiter<const D: usize>(
         speed: rate * h,
         dt: 1.0 / rate,
     })
+}
+
+/// The membrane element with the smallest limit of Lian Eq. 48 over
+/// `meshes` (scene names `names`); `None` without elements.
+pub fn element_limiter(meshes: &[MembraneMesh], names: &[String]) -> Option<DtLimiter> {
+    let mut best: Option<DtLimiter> = None;
+    for (m, name) in meshes.iter().zip(names) {
+        let Some((e, dt)) = m.limiting_element() else {
+            continue;
+        };
+        let site = DtLimiter {
+            site: format!("element {e}"),
+            material: name.clone(),
+            speed: m.material.wave_speed(),
+            dt,
+        };
+        best = tighter(best, Some(site));
+    }
+    best
 }
 
 /// The more limiting of two sites (the smaller Δt limit; NaN first).

@@ -388,26 +388,48 @@ impl MembraneMesh {
     /// wave speed c and L_e = area / longest side (LS-DYNA's shell length
     /// with the default option), on the current geometry.
     pub fn stable_dt(&self) -> f64 {
-        let c = self.material.wave_speed();
         let le = self
             .quads
             .par_iter()
-            .map(|q| {
-                let p = corners(&self.x, q);
-                let area = frame(&p)
-                    .map(|fr| local_geometry(&p, &fr).area)
-                    .unwrap_or(0.0);
-                let longest = (0..4)
-                    .map(|k| (p[(k + 1) % 4] - p[k]).norm())
-                    .fold(0.0, f64::max);
-                if area > 0.0 && longest > 0.0 {
-                    area / longest
-                } else {
-                    f64::INFINITY
-                }
-            })
+            .map(|q| self.characteristic_length(q))
             .reduce(|| f64::INFINITY, f64::min);
-        le / c
+        le / self.material.wave_speed()
+    }
+
+    /// The element with the smallest limit of [`Self::stable_dt`] and that
+    /// limit (`None` without elements); a serial pass, for the progress
+    /// guard's message.
+    pub fn limiting_element(&self) -> Option<(usize, f64)> {
+        let c = self.material.wave_speed();
+        let mut best: Option<(usize, f64)> = None;
+        for (e, q) in self.quads.iter().enumerate() {
+            let dt = self.characteristic_length(q) / c;
+            // A NaN limit (a non-finite position) is the cause: first.
+            if dt.is_nan() {
+                return Some((e, dt));
+            }
+            if best.is_none_or(|(_, b)| dt < b) {
+                best = Some((e, dt));
+            }
+        }
+        best
+    }
+
+    /// Lian Eq. 48's length of quad `q`: its area over its longest side
+    /// (infinite for a degenerate quad).
+    fn characteristic_length(&self, q: &[u32; 4]) -> f64 {
+        let p = corners(&self.x, q);
+        let area = frame(&p)
+            .map(|fr| local_geometry(&p, &fr).area)
+            .unwrap_or(0.0);
+        let longest = (0..4)
+            .map(|k| (p[(k + 1) % 4] - p[k]).norm())
+            .fold(0.0, f64::max);
+        if area > 0.0 && longest > 0.0 {
+            area / longest
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Node forces at x^n: internal forces of the stored stress (Lian Eqs.

@@ -228,7 +228,7 @@ impl<const D: usize> Model for Coupled<D> {
         run.fields.iter().fold(cells, |best, f| {
             tighter(
                 best,
-                particle_limiter(&run.grid, &run.materials, &f.particles),
+                particle_limiter(&run.grid, &run.materials, &f.particles, &[]),
             )
         })
     }

@@ -154,4 +154,8 @@ impl Model for MembraneContact {
         d.momentum_conserved = d.momentum_conserved && self.membranes.describe().momentum_conserved;
         d
     }
+
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        crate::driver::limiter::tighter(self.solid.dt_limiter(), self.membranes.dt_limiter())
+    }
 }

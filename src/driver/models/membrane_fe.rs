@@ -307,6 +307,10 @@ impl Model for MembraneFe {
             ..Default::default()
         }
     }
+
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        crate::driver::limiter::element_limiter(&self.meshes, &self.names)
+    }
 }
 
 impl MembraneFe {

@@ -220,4 +220,18 @@ impl<const D: usize> Model for Multiphase<D> {
             implicit_split: None,
         }
     }
+
+    fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
+        use crate::driver::limiter::{particle_limiter, tighter};
+        let r = &self.run;
+        r.phases.iter().enumerate().fold(None, |best, (k, ph)| {
+            let site = particle_limiter(&r.grid, &r.materials, &ph.particles, &ph.stiffening).map(
+                |mut l| {
+                    l.site = format!("{} of phase {k}", l.site);
+                    l
+                },
+            );
+            tighter(best, site)
+        })
+    }
 }

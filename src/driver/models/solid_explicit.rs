@@ -217,7 +217,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
 
     fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
         let r = &self.run;
-        crate::driver::limiter::particle_limiter(&r.grid, &r.materials, &r.particles)
+        crate::driver::limiter::particle_limiter(&r.grid, &r.materials, &r.particles, &[])
     }
 
     fn describe(&self) -> Description {
