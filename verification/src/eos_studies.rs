@@ -148,7 +148,7 @@ pub fn water_air_shock_tube(quick: bool) -> Result<StudyResult> {
     let mut series = Vec::new();
     let mut notes = vec![
         "explicit ICE (and semi-implicit where labelled: direct solver, sound_speed_factor 1), high_resolution variant, cfl 0.4, momentum exchange 1e15, no heat exchange; domain [0, 1] m, diaphragm at 0.7 m, t = 2e-4 s; h = 1/N m".to_string(),
-        "L1(rho): mean over the cells of |rho_mix - exact cell average| (kg/m^3); interface: |x_lower + sum(theta_water h) - (x0 + u* t)| (m)".to_string(),
+        "L1(rho): mean over the cells of |rho_mix - exact cell average| (kg/m^3); beyond 2h of the contact: the same sum without the cells whose centre is within 2h of x0 + u* t, over all cells (the waves' error: the smeared contact adds about h |rho_water - rho_air| / L times a factor set by where the contact sits in its cell, which at ratio 100, where the contact moves 1.2 mm, does not settle); interface: |x_lower + sum(theta_water h) - (x0 + u* t)| (m)".to_string(),
     ];
     // The semi-implicit pressure (Guilkey Eq. 29 solved implicitly) with
     // the acoustic Courant number at cfl (sound_speed_factor = 1; with 0 its
@@ -161,7 +161,7 @@ pub fn water_air_shock_tube(quick: bool) -> Result<StudyResult> {
         ("semi-implicit ratio 1e4", 1.0e9, true),
     ];
     for (label, p_water, semi) in runs {
-        let (mut l1, mut xi) = (Vec::new(), Vec::new());
+        let (mut l1, mut waves, mut xi) = (Vec::new(), Vec::new(), Vec::new());
         for &n in ns {
             let mut s = with_cells(&base, n);
             s.regions[1].pressure = p_water;
@@ -180,6 +180,7 @@ pub fn water_air_shock_tube(quick: bool) -> Result<StudyResult> {
                     .with_extra("min_temperature", r.min_temperature)
                     .with_extra("min_density", r.min_density),
             );
+            waves.push(Point::new(r.h, r.l1_rho_waves, r.wall_s, ups));
             xi.push(
                 Point::new(r.h, r.interface_error(), r.wall_s, ups)
                     .with_extra("interface", r.interface)
@@ -192,6 +193,11 @@ pub fn water_air_shock_tube(quick: bool) -> Result<StudyResult> {
             ));
         }
         series.push(Series::new(format!("{label} density"), "L1", l1));
+        series.push(Series::new(
+            format!("{label} density beyond 2h of the contact"),
+            "L1",
+            waves,
+        ));
         series.push(Series::new(
             format!("{label} interface position"),
             "abs",
