@@ -43,20 +43,18 @@ struct Block {
     v: f64,
 }
 
+/// A block `[x0, x1] × [0, height]` at x-velocity `v`.
+fn block(x0: f64, x1: f64, height: f64, v: f64) -> Block {
+    Block {
+        x: [x0, x1],
+        height,
+        v,
+    }
+}
+
 /// The case's blocks at ±`v` m/s.
 fn mirrored(v: f64) -> [Block; 2] {
-    [
-        Block {
-            x: [0.04, 0.08],
-            height: 0.025,
-            v,
-        },
-        Block {
-            x: [0.12, 0.16],
-            height: 0.025,
-            v: -v,
-        },
-    ]
+    [block(0.04, 0.08, 0.025, v), block(0.12, 0.16, 0.025, -v)]
 }
 
 /// Runs the case on `cells` with `blocks` to `end`.
@@ -183,16 +181,8 @@ fn steel_blocks_meeting_at_20_m_per_s_in_air_keep_the_air_physical() {
 #[test]
 fn unequal_blocks_meeting_in_air_keep_the_air_physical() {
     let blocks = [
-        Block {
-            x: [0.04, 0.08],
-            height: 0.025,
-            v: 100.0,
-        },
-        Block {
-            x: [0.12, 0.14],
-            height: 0.025,
-            v: -50.0,
-        },
+        block(0.04, 0.08, 0.025, 100.0),
+        block(0.12, 0.14, 0.025, -50.0),
     ];
     let o = run([40, 10], blocks, 1e-3);
     check_common(&o, 1e4);
@@ -219,16 +209,8 @@ fn unequal_blocks_meeting_in_air_keep_the_air_physical() {
 #[test]
 fn a_small_block_hitting_a_taller_one_in_air_keeps_the_air_physical() {
     let blocks = [
-        Block {
-            x: [0.04, 0.08],
-            height: 0.04,
-            v: 50.0,
-        },
-        Block {
-            x: [0.12, 0.13],
-            height: 0.025,
-            v: -100.0,
-        },
+        block(0.04, 0.08, 0.04, 50.0),
+        block(0.12, 0.13, 0.025, -100.0),
     ];
     let o = run([80, 20], blocks, 1e-3);
     check_common(&o, 2e4);
