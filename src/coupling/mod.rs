@@ -840,13 +840,17 @@ impl<const D: usize> CoupledRun<D> {
             // and the exchange dragged the air to 1000 m/s within 1 µs;
             // unequal blocks meeting in air failed with negative air
             // temperatures at 0.30 and 0.35 ms (tests/two_solids_in_air.rs).
-            let floor = f.floor_mass(ff.max(self.coupling.trace_fraction), vol);
+            // (A rigid field's nodes carry its prescribed velocity: no
+            // trace of it is polluted.)
+            let floor = f.floor_mass(ff, vol);
+            let trace = f.floor_mass(ff.max(self.coupling.trace_fraction), vol);
             for (k, &c) in layout.interior.iter().enumerate() {
-                pv[c] = if f.cell_mass[k] > floor {
-                    f.rigid_now.unwrap_or(f.cell_velocity[k])
-                } else {
+                let m = f.cell_mass[k];
+                pv[c] = match f.rigid_now {
+                    Some(v) if m > floor => v,
+                    None if m > trace => f.cell_velocity[k],
                     // Absent or a trace: the velocity it was given.
-                    sc.velocity[c]
+                    _ => sc.velocity[c],
                 };
             }
         }
