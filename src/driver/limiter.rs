@@ -6,8 +6,9 @@
 use crate::grid::Grid;
 use crate::ice::IceState;
 use crate::material::eos::EquationOfState;
-use crate::material::{PointState, SolidMaterial};
+use crate::material::SolidMaterial;
 use crate::membrane::element::MembraneMesh;
+use crate::mpm::explicit::{gas_sound_speed_max, particle_dt_limit};
 use crate::mpm::Particles;
 
 /// The site that sets a stable time step.
@@ -33,11 +34,10 @@ impl std::fmt::Display for DtLimiter {
     }
 }
 
-/// The particle with the smallest explicit limit `h / (c + |v|)` (the
-/// argument of [`crate::mpm::explicit::stable_dt_stiffened`], divided by
-/// `√stiffening[i]` where `stiffening` has an entry for the particle: the
-/// multiphase drag's stiffening); `None` without particles. A serial pass:
-/// called only when the guard stops a run.
+/// The particle with the smallest explicit limit `h / (c + |v|)`
+/// ([`particle_dt_limit`], with the multiphase drag's `stiffening` where
+/// given); `None` without particles. A serial pass: called only when the
+/// guard stops a run.
 pub fn particle_limiter<const D: usize>(
     grid: &Grid<D>,
     materials: &[SolidMaterial],
@@ -45,22 +45,10 @@ pub fn particle_limiter<const D: usize>(
     stiffening: &[f64],
 ) -> Option<DtLimiter> {
     let h = grid.h.min();
-    let c_max = crate::mpm::explicit::gas_sound_speed_max(materials, p);
+    let c_max = gas_sound_speed_max(materials, p);
     let mut best: Option<(usize, f64)> = None;
     for i in 0..p.len() {
-        let state = PointState {
-            mass: p.mass[i],
-            vol: p.vol[i],
-            vol0: p.vol0[i],
-            work: p.work[i],
-            stress: &p.stress[i],
-            speed: p.v[i].norm(),
-        };
-        let m = materials.get(p.material[i] as usize)?;
-        let dt = match stiffening.get(i) {
-            Some(s) => m.dt_limit(h, &state, c_max) / s.sqrt(),
-            None => m.dt_limit(h, &state, c_max),
-        };
+        let dt = particle_dt_limit(materials, p, stiffening, h, c_max, i);
         // NaN limits first: they are the cause.
         if best.is_none_or(|(_, b)| dt.is_nan() || dt < b) {
             best = Some((i, dt));

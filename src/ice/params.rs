@@ -160,7 +160,7 @@ pub struct IceParams<const D: usize> {
     /// material list means `false`): a reaction's product, whose traces
     /// ahead of the burn receive the burn's mass and energy (held
     /// isothermal, the very fast burn of `tests/reaction.rs` balanced its
-    /// energy to −1.1e-2 instead of −6.4e-3).
+    /// energy to −4.09e-2 instead of −6.41e-3).
     pub isothermal_exempt: Vec<bool>,
 }
 

@@ -203,16 +203,8 @@ pub(super) fn isothermal_in<const D: usize>(
     cell: &LagrangianCell<D>,
     r: usize,
 ) -> bool {
-    let iso = inp.params.isothermal_fraction;
-    let theta = cell.theta[r];
-    inp.nm > 1
-        && theta < iso
-        && !inp
-            .params
-            .isothermal_exempt
-            .get(r)
-            .copied()
-            .unwrap_or(false)
+    let exempt = inp.params.isothermal_exempt.get(r) == Some(&true);
+    inp.nm > 1 && cell.theta[r] < inp.params.isothermal_fraction && !exempt
 }
 
 /// Heat sources: internal energy added to material `r` of cell `c` at a

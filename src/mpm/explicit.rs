@@ -162,23 +162,36 @@ pub fn stable_dt_stiffened<const D: usize>(
     let c_max = gas_sound_speed_max(materials, particles);
     let limit = (0..particles.len())
         .into_par_iter()
-        .map(|p| {
-            let state = PointState {
-                mass: particles.mass[p],
-                vol: particles.vol[p],
-                vol0: particles.vol0[p],
-                work: particles.work[p],
-                stress: &particles.stress[p],
-                speed: particles.v[p].norm(),
-            };
-            let limit = materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max);
-            match stiffening.get(p) {
-                Some(s) => limit / s.sqrt(),
-                None => limit,
-            }
-        })
+        .map(|p| particle_dt_limit(materials, particles, stiffening, hmin, c_max, p))
         .reduce(|| f64::INFINITY, f64::min);
     cfl * limit
+}
+
+/// Particle `p`'s limit of [`stable_dt_stiffened`] before the Courant
+/// number: its material's `dt_limit` at the smallest cell size `hmin` (gas
+/// points' `c_max` from [`gas_sound_speed_max`]) over `√stiffening[p]`
+/// where `stiffening` has an entry for it.
+pub fn particle_dt_limit<const D: usize>(
+    materials: &[SolidMaterial],
+    particles: &Particles<D>,
+    stiffening: &[f64],
+    hmin: f64,
+    c_max: f64,
+    p: usize,
+) -> f64 {
+    let state = PointState {
+        mass: particles.mass[p],
+        vol: particles.vol[p],
+        vol0: particles.vol0[p],
+        work: particles.work[p],
+        stress: &particles.stress[p],
+        speed: particles.v[p].norm(),
+    };
+    let limit = materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max);
+    match stiffening.get(p) {
+        Some(s) => limit / s.sqrt(),
+        None => limit,
+    }
 }
 
 /// The largest sound speed among the gas points (York Eq. 24's `c_max`);
