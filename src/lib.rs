@@ -22,3 +22,4 @@ pub mod output;
 pub mod scene;
 pub mod shape;
 pub mod stepper;
+pub mod study;

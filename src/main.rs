@@ -41,6 +41,54 @@ enum Command {
         /// Run a scene whose memory estimate exceeds the available memory.
         #[arg(long)]
         ignore_memory_limit: bool,
+        /// Override a scene key: `--set grid.cells=[800] --set
+        /// materials.gas.gamma=1.4` (repeatable; see the README).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Write into a non-empty output folder: a previous run's outputs
+        /// there (snapshots, series, history, summary, checkpoints) are
+        /// removed first.
+        #[arg(long)]
+        force: bool,
+    },
+    /// A convergence study of the scene: run it at grid.cells × 1, 2, …,
+    /// 2^N (particles per cell fixed), measure a field's error against a
+    /// reference and the observed order; writes STUDY.json, .csv and .png
+    /// like the built-in studies, and each run's outputs below.
+    Study {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Halvings of the cell size (N + 1 runs per series).
+        #[arg(long, default_value_t = 2)]
+        refine: usize,
+        /// Override a scene key (repeatable), as for `run`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Sweep a key: one series per value, `--sweep fluid.variant=literal,high_resolution`
+        /// (commas inside [ ], { } and quotes do not split).
+        #[arg(long, value_name = "KEY=V1,V2,...")]
+        sweep: Option<String>,
+        /// The field whose error is measured, SET.FIELD (default
+        /// cells.mixture_density, or particles.velocity without cells).
+        #[arg(long)]
+        field: Option<String>,
+        /// What the errors are measured against: `finest` (the finest run)
+        /// or `riemann` (exact solution of a 1D two-state fluid scene).
+        #[arg(long, default_value = "finest")]
+        reference: String,
+        /// A history column whose final value gets Richardson's estimate
+        /// of its order, converged value and uncertainty.
+        #[arg(long)]
+        quantity: Option<String>,
+        /// Output folder (default: out/study_<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write into a non-empty output folder (see `run --force`).
+        #[arg(long)]
+        force: bool,
+        /// Worker threads per run (default: all cores).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
     },
     /// Validate a scene without running it: everything `run` checks before
     /// its first step (building the particles and cells included), and the
@@ -52,6 +100,9 @@ enum Command {
         /// memory (it is then built to check it).
         #[arg(long)]
         ignore_memory_limit: bool,
+        /// Override a scene key (repeatable), as for `run`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
 }
 
@@ -107,8 +158,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Check {
             scene,
             ignore_memory_limit,
+            set,
         } => {
-            let s = mpmice::scene::load(&scene)?;
+            let s = mpmice::scene::load_with(&scene, &overrides(&set)?)?;
             let opts = mpmice::driver::RunOptions {
                 ignore_memory_limit,
                 ..Default::default()
@@ -159,8 +211,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             quiet,
             restart,
             ignore_memory_limit,
+            set,
+            force,
         } => {
-            let s = mpmice::scene::load(&scene)?;
+            let s = mpmice::scene::load_with(&scene, &overrides(&set)?)?;
             if !quiet {
                 eprintln!(
                     "memory: about {}",
@@ -170,6 +224,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let out_dir = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().unwrap_or_default())
             });
+            if restart.is_none() {
+                claim_out_dir(&out_dir, force)?;
+            }
             let opts = mpmice::driver::RunOptions {
                 out_dir: out_dir.clone(),
                 threads,
@@ -223,5 +280,145 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             )?;
             Ok(())
         }
+        Command::Study {
+            scene,
+            refine,
+            set,
+            sweep,
+            field,
+            reference,
+            quantity,
+            out,
+            force,
+            threads,
+        } => study(StudyArgs {
+            scene,
+            refine,
+            set,
+            sweep,
+            field,
+            reference,
+            quantity,
+            out,
+            force,
+            threads,
+        }),
     }
+}
+
+/// The `--set` arguments.
+fn overrides(set: &[String]) -> anyhow::Result<Vec<mpmice::scene::Override>> {
+    Ok(set
+        .iter()
+        .map(|a| mpmice::scene::Override::parse(a))
+        .collect::<Result<_, _>>()?)
+}
+
+/// Refuses a non-empty output folder unless `force`; with `force`,
+/// removes what a previous run wrote there (snapshots, series, history,
+/// summary, study results, checkpoints and study runs), so that no stale
+/// file sits beside the new ones. Other files are left alone.
+fn claim_out_dir(dir: &std::path::Path, force: bool) -> anyhow::Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    let entries: Vec<_> = entries.filter_map(|e| e.ok()).collect();
+    if entries.is_empty() {
+        return Ok(());
+    }
+    if !force {
+        anyhow::bail!(
+            "output folder {} is not empty ({} entries): pass --force to replace a previous \
+             run's outputs there, or choose another --out",
+            dir.display(),
+            entries.len()
+        );
+    }
+    for e in entries {
+        let name = e.file_name().to_string_lossy().to_string();
+        let path = e.path();
+        let ours_dir = name == "checkpoints" || name.starts_with("series_");
+        let ours_file = name == "history.csv"
+            || name == "summary.json"
+            || [".pvd", ".vtu", ".vti", ".vtp", ".csv", ".json", ".png"]
+                .iter()
+                .any(|x| name.ends_with(x));
+        if ours_dir && path.is_dir() {
+            std::fs::remove_dir_all(&path)
+                .map_err(|err| anyhow::anyhow!("removing {}: {err}", path.display()))?;
+        } else if ours_file && path.is_file() {
+            std::fs::remove_file(&path)
+                .map_err(|err| anyhow::anyhow!("removing {}: {err}", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The arguments of `mpmice study`.
+struct StudyArgs {
+    scene: PathBuf,
+    refine: usize,
+    set: Vec<String>,
+    sweep: Option<String>,
+    field: Option<String>,
+    reference: String,
+    quantity: Option<String>,
+    out: Option<PathBuf>,
+    force: bool,
+    threads: usize,
+}
+
+fn study(a: StudyArgs) -> anyhow::Result<()> {
+    use mpmice::study::{harness, run_study, Reference, StudySpec};
+    let text = std::fs::read_to_string(&a.scene)
+        .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", a.scene.display()))?;
+    let set = overrides(&a.set)?;
+    // The scene as given must load (errors named by key path).
+    mpmice::scene::parse_with(&text, &set)?;
+    let sweep = match &a.sweep {
+        None => None,
+        Some(arg) => {
+            let (key, list) = arg
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("--sweep `{arg}` is not KEY=V1,V2,..."))?;
+            Some((key.trim().to_string(), mpmice::scene::split_values(list)))
+        }
+    };
+    let stem = a.scene.file_stem().unwrap_or_default().to_string_lossy();
+    let spec = StudySpec {
+        name: format!("study_{stem}"),
+        refine: a.refine,
+        field: a.field,
+        reference: Reference::parse(&a.reference)?,
+        quantity: a.quantity,
+        sweep,
+    };
+    let out = a
+        .out
+        .unwrap_or_else(|| mpmice::study::default_out(&a.scene));
+    claim_out_dir(&out, a.force)?;
+    let result = run_study(&text, &set, &spec, &out, a.threads, &mut |line| {
+        eprintln!("{line}")
+    })?;
+    harness::write_study(&out, &result)?;
+    let mut o = std::io::stdout();
+    for s in &result.series {
+        writeln!(
+            o,
+            "{} [{}]: observed order {:.3}",
+            s.label, s.norm, s.observed_order
+        )?;
+        for p in &s.points {
+            writeln!(
+                o,
+                "  h = {:.4e}  error = {:.4e}  wall {:.2} s",
+                p.h, p.error, p.wall_s
+            )?;
+        }
+    }
+    for n in &result.notes {
+        writeln!(o, "{n}")?;
+    }
+    writeln!(o, "results in {}", out.display())?;
+    Ok(())
 }

@@ -43,6 +43,32 @@ pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
         .map_err(|e| run_loop::label_error(e, scene))
 }
 
+/// What a run leaves for a study: its summary, the snapshot fields of its
+/// initial and final states and its last history row.
+#[derive(Debug, Clone)]
+pub struct KeptRun {
+    /// The run summary (as `summary.json`).
+    pub summary: Summary,
+    /// [`Model::field_sets`] before the first step.
+    pub initial: Vec<model::FieldSet>,
+    /// [`Model::field_sets`] at the end.
+    pub last: Vec<model::FieldSet>,
+    /// `(column, value)` of the history row at the end (time first).
+    pub history: Vec<(String, f64)>,
+}
+
+/// [`run_scene`], keeping the initial and final snapshot fields and the
+/// final history values (for `mpmice study`).
+///
+/// # Errors
+/// As [`run_scene`].
+pub fn run_scene_keep(scene: &Scene, opts: &RunOptions) -> Result<KeptRun> {
+    guard_memory(scene, opts)?;
+    let (pool, threads) = pool(opts)?;
+    pool.install(|| with_model(scene, KeepIt { opts, threads }))
+        .map_err(|e| run_loop::label_error(e, scene))
+}
+
 /// What `check` reports of a scene that would run.
 #[derive(Debug, Clone)]
 pub struct CheckReport {
@@ -104,6 +130,28 @@ impl WithModel for RunIt<'_> {
     type Out = Summary;
     fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<Summary> {
         run_model(model, scene, self.opts, self.threads)
+    }
+}
+
+struct KeepIt<'a> {
+    opts: &'a RunOptions,
+    threads: usize,
+}
+
+impl WithModel for KeepIt<'_> {
+    type Out = KeptRun;
+    fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<KeptRun> {
+        let initial = model.field_sets();
+        let summary = run_model(model, scene, self.opts, self.threads)?;
+        let mut row = vec![model.time()];
+        model.history_row(&mut row);
+        let names = std::iter::once("time").chain(model.history_columns().into_iter().map(|c| c.0));
+        Ok(KeptRun {
+            summary,
+            initial,
+            last: model.field_sets(),
+            history: names.map(str::to_string).zip(row).collect(),
+        })
     }
 }
 

@@ -10,6 +10,7 @@ mod ignored;
 mod membrane_elements;
 mod multiphase;
 mod names;
+mod overrides;
 mod schema;
 
 pub use build::{
@@ -18,6 +19,7 @@ pub use build::{
 };
 pub use membrane_elements::*;
 pub use multiphase::*;
+pub use overrides::{load_with, parse_with, split_values, Override};
 pub use schema::*;
 
 use crate::error::SceneError;

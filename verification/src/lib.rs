@@ -5,7 +5,9 @@ pub mod axisym_studies;
 pub mod coupled_studies;
 pub mod eos_studies;
 pub mod formulation_studies;
-pub mod harness;
+/// The study harness lives in `mpmice::study::harness` (the `mpmice study`
+/// command writes its results with the same code).
+pub use mpmice::study::harness;
 pub mod ice_studies;
 pub mod impm_studies;
 pub mod lian_studies;

@@ -20,7 +20,7 @@
 //! read back from the JSON may differ from the written one by 1 ulp. The
 //! CSV written by [`write_study`] is always bit-exact.
 //!
-//! This module does not depend on `mpmice`; all file writes are atomic
+//! This module depends on nothing else in `mpmice`; all file writes are atomic
 //! (temporary sibling + rename).
 
 use std::fmt::Write as _;
