@@ -167,3 +167,37 @@ fn study_writes_the_built_in_files() {
     assert!(!ok && err.contains("finest, riemann"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Snapshots are taken at the times asked for (`output.interval` 0.05 on
+/// Sod: 0, 0.05, …, 0.2 to round-off; before, the first step past each,
+/// e.g. 0.10040), and the last history row is not repeated.
+#[test]
+fn snapshots_fall_on_the_requested_times() {
+    let s = sod();
+    let dir = tmp("times");
+    let (ok, _, err) = mpmice(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "grid.cells=[100]",
+    ]);
+    assert!(ok, "{err}");
+    let pvd = std::fs::read_to_string(dir.join("cells.pvd")).unwrap();
+    let times: Vec<f64> = pvd
+        .split("timestep=\"")
+        .skip(1)
+        .map(|r| r.split('"').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(times.len(), 5, "{pvd}");
+    for (k, t) in times.iter().enumerate() {
+        assert!((t - 0.05 * k as f64).abs() < 1e-14, "{times:?}");
+    }
+    let hist = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let rows: Vec<&str> = hist.lines().skip(1).collect();
+    let t_of = |r: &str| r.split(',').next().unwrap().to_string();
+    assert_ne!(t_of(rows[rows.len() - 1]), t_of(rows[rows.len() - 2]));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -17,8 +17,8 @@ use crate::stepper::Energies;
 /// The time step the loop asks a model to take.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DtRequest {
-    /// Upper bound: the time left to the end, the scene's fixed step, or a
-    /// retry's cut.
+    /// Upper bound: the time left to the end or to the next snapshot, the
+    /// scene's fixed step, or a retry's cut.
     pub value: f64,
     /// Take exactly `value` (a fixed time step, `time.dt`) instead of
     /// `min(stable Δt, value)`.

@@ -549,18 +549,38 @@ impl Run {
     /// One step of the model (with retries) to the end time or by the fixed
     /// Δt, its statistics added to the loop's.
     fn step<M: Model>(&mut self, model: &mut M, scene: &Scene) -> Result<()> {
-        let left = self.cad.end - model.time();
-        let req = match self.cad.fixed_dt {
-            Some(dt) => DtRequest {
-                value: dt.min(left),
-                exact: true,
-            },
-            None => DtRequest {
-                value: left,
-                exact: false,
-            },
+        // Steps end on the end time and on every snapshot time (a snapshot
+        // asked for at t = 0.1 is taken at 0.1, not at the first step past
+        // it).
+        let t = model.time();
+        let left = self.cad.end - t;
+        let to_out = self.ls.next_out - t;
+        let cap = if to_out > (1.0 - NEAR) * self.cad.end && to_out < left {
+            to_out
+        } else {
+            left
+        };
+        let (req, nominal) = match self.cad.fixed_dt {
+            Some(dt) => (
+                DtRequest {
+                    value: dt.min(cap),
+                    exact: true,
+                },
+                dt,
+            ),
+            None => (
+                DtRequest {
+                    value: cap,
+                    exact: false,
+                },
+                f64::INFINITY,
+            ),
         };
         let (st, tries) = step_with_retries(model, req)?;
+        // A step the loop shortened to land on an output or the end time is
+        // no sign of a collapsing Δt: it is left out of the progress guard
+        // and of the Δt statistics.
+        let shortened = req.value < nominal && st.dt >= req.value * NEAR;
         // The progress guard: Δt against the largest of the run so far
         // (the last step to the end time is as short as it needs to be).
         let reference = if self.ls.dt_max > 0.0 {
@@ -568,7 +588,7 @@ impl Run {
         } else {
             st.dt
         };
-        if !self.cad.finished(model.time(), model.steps()) {
+        if !self.cad.finished(model.time(), model.steps()) && !shortened {
             let drop = st.dt / reference;
             if drop.is_nan() || drop < self.cad.min_dt_fraction {
                 let by = model
@@ -600,8 +620,10 @@ impl Run {
             }
         }
         let ls = &mut self.ls;
-        ls.dt_min = ls.dt_min.min(st.dt);
-        ls.dt_max = ls.dt_max.max(st.dt);
+        if !shortened || ls.dt_max == 0.0 {
+            ls.dt_min = ls.dt_min.min(st.dt);
+            ls.dt_max = ls.dt_max.max(st.dt);
+        }
         ls.iters.add(st.nonlinear_iterations, st.linear_iterations);
         ls.iters.retries += st.retries as u64 + tries as u64;
         ls.retries += tries as u64;

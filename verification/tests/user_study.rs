@@ -26,10 +26,16 @@ fn out(tag: &str) -> std::path::PathBuf {
 /// `cases/sod.toml` from 100 cells, refined twice, against the exact
 /// Riemann solution, gives the built-in `ice_sod --quick` high-resolution
 /// series: the same errors (the same scheme, N = 100, 200, 400, the same
-/// norm) and so its order to well within 0.1 (measured: 0.9753 both).
+/// norm) and so its order to well within 0.1 (measured: 0.9753 both). The
+/// snapshots are left out (`output.interval` = the end time): the run loop
+/// lands a step on every snapshot time, which the built-in loop does not
+/// (with the case's four snapshots: order 0.9759, errors within 0.1 %).
 #[test]
 fn sod_study_from_the_scene_matches_the_built_in_study() {
-    let set = [Override::parse("grid.cells=[100]").unwrap()];
+    let set = [
+        Override::parse("grid.cells=[100]").unwrap(),
+        Override::parse("output.interval=0.2").unwrap(),
+    ];
     let dir = out("riemann");
     let r = run_study(SOD, &set, &spec(Reference::Riemann), &dir, 2, &mut |_| {}).unwrap();
     let user = &r.series[0];
