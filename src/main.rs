@@ -270,6 +270,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     format!("{x:.2e}")
                 }
             };
+            if let Some(b) = &sum.boundary_exchange {
+                writeln!(
+                    std::io::stdout(),
+                    "through the boundary: mass {:.4e}, momentum ({:.4e}, {:.4e}, {:.4e}), energy {:.4e} (the drifts are net of it)",
+                    b.mass, b.momentum[0], b.momentum[1], b.momentum[2], b.energy
+                )?;
+            }
             writeln!(
                 std::io::stdout(),
                 "drift: mass {}, momentum {}, energy {}; outputs in {}",

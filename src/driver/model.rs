@@ -38,6 +38,10 @@ pub struct StepStats {
     /// Attempts the model itself cut and repeated inside the step (implicit
     /// MPM's Δt control); the loop's own retries are counted apart.
     pub retries: usize,
+    /// What entered the state through the domain boundary in this step,
+    /// where the model accounts for it (ICE); the summary subtracts it from
+    /// the change of the totals.
+    pub boundary: Option<crate::ice::BoundaryExchange>,
 }
 
 /// Conservation totals of one material.

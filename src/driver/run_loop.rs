@@ -11,6 +11,7 @@ use crate::driver::model::{Conserved, DtRequest, MaterialTotals, Model};
 use crate::driver::outputs::Outputs;
 use crate::driver::summary::{write_summary, IterationStats, Summary};
 use crate::error::{Error, Result};
+use crate::ice::BoundaryExchange;
 use crate::output::checkpoint::{content_hash, Checkpoint, CheckpointError};
 use crate::scene::{OutputSpec, Scene};
 use crate::stepper::Energies;
@@ -178,6 +179,9 @@ struct LoopState {
     retries: u64,
     iters: IterationStats,
     initial: Conserved,
+    /// What entered through the domain boundary so far, where the model
+    /// accounts for it (`None`: it does not).
+    exchange: Option<BoundaryExchange>,
 }
 
 impl LoopState {
@@ -191,6 +195,7 @@ impl LoopState {
             retries: 0,
             iters: IterationStats::default(),
             initial,
+            exchange: None,
         }
     }
 
@@ -238,6 +243,20 @@ impl LoopState {
             })
             .collect();
         ck.put_f64("loop.initial_materials", vec![m.len(), 6], data);
+        let x = self.exchange;
+        let b = x.unwrap_or_default();
+        ck.put_f64(
+            "loop.exchange",
+            vec![6],
+            vec![
+                if x.is_some() { 1.0 } else { 0.0 },
+                b.mass,
+                b.momentum[0],
+                b.momentum[1],
+                b.momentum[2],
+                b.energy,
+            ],
+        );
     }
 
     /// Restores the state saved by [`Self::save`]; `names` are the model's
@@ -246,6 +265,12 @@ impl LoopState {
         let s = ck.take_f64("loop.scalars", Some(&[11]))?;
         let c = ck.take_u64("loop.counters", Some(&[4]))?;
         let m = ck.take_f64("loop.initial_materials", Some(&[names.len(), 6]))?;
+        let x = ck.take_f64("loop.exchange", Some(&[6]))?;
+        let exchange = (x[0] != 0.0).then_some(BoundaryExchange {
+            mass: x[1],
+            momentum: [x[2], x[3], x[4]],
+            energy: x[5],
+        });
         let materials = names
             .iter()
             .zip(m.chunks_exact(6))
@@ -281,6 +306,7 @@ impl LoopState {
                 },
                 momentum_scale: s[7],
             },
+            exchange,
         })
     }
 }
@@ -620,6 +646,9 @@ impl Run {
             }
         }
         let ls = &mut self.ls;
+        if let Some(b) = st.boundary {
+            ls.exchange.get_or_insert_with(Default::default).add(&b);
+        }
         if !shortened || ls.dt_max == 0.0 {
             ls.dt_min = ls.dt_min.min(st.dt);
             ls.dt_max = ls.dt_max.max(st.dt);
@@ -832,9 +861,15 @@ fn summarise<M: Model>(
             0.0
         }
     };
-    let (m0, m1) = (ls.initial.mass(), end.mass());
+    // The drifts are what is left of the change of each total after what
+    // crossed the boundary (where the model accounts for it).
+    let b = ls.exchange.unwrap_or_default();
+    let (m0, m1) = (ls.initial.mass(), end.mass() - b.mass);
     let (p0, p1) = (ls.initial.momentum(), end.momentum());
-    let dp = (0..3).map(|d| (p1[d] - p0[d]).powi(2)).sum::<f64>().sqrt();
+    let dp = (0..3)
+        .map(|d| (p1[d] - b.momentum[d] - p0[d]).powi(2))
+        .sum::<f64>()
+        .sqrt();
     let (e0, e1) = (ls.initial.energies, end.energies);
     let e_scale = if e0.total().abs() > 0.0 {
         e0.total().abs()
@@ -887,7 +922,8 @@ fn summarise<M: Model>(
         } else {
             dp
         },
-        energy_drift: (e1.total() - e0.total()) / e_scale,
+        energy_drift: (e1.total() - b.energy - e0.total()) / e_scale,
+        boundary_exchange: ls.exchange,
         initial_energy: e0,
         final_energy: e1,
         initial_materials: ls.initial.materials.clone(),

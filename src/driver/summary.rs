@@ -56,14 +56,25 @@ pub struct Summary {
     pub dt_min: f64,
     /// Largest timestep.
     pub dt_max: f64,
-    /// (M_end − M_0)/M_0.
+    /// (M_end − M_0 − M_in)/M_0, `M_in` the mass that came in through the
+    /// boundary (`boundary_exchange`; 0 where the model does not account
+    /// for it).
     pub mass_drift: f64,
-    /// |P_end − P_0| / Σ m|v| at the start (|P_end − P_0| if that is zero);
-    /// NaN (JSON null) where walls exchange momentum with the system.
+    /// |P_end − P_0 − P_in| / Σ m|v| at the start (|…| if that is zero),
+    /// `P_in` the momentum that came in through the boundary (advected, and
+    /// the boundary faces' pressure impulse); NaN (JSON null) where walls
+    /// exchange momentum with the system unaccounted.
     pub momentum_drift: f64,
-    /// (E_end − E_0)/|E_0| of kinetic + stored + body-force potential energy
-    /// (relative to the largest end energy if E_0 = 0).
+    /// (E_end − E_0 − E_in)/|E_0| of kinetic + stored + body-force potential
+    /// energy (relative to the largest end energy if E_0 = 0), `E_in` the
+    /// energy advected in and the boundary faces' pressure work.
     pub energy_drift: f64,
+    /// What crossed the domain boundary over the run (mass, momentum,
+    /// energy in), where the model accounts for it (ICE fluids; absent
+    /// otherwise). The drifts above are net of it; the raw change of a total
+    /// is its drift plus this.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boundary_exchange: Option<crate::ice::BoundaryExchange>,
     /// Energies at the start (kinetic, strain, potential for solids; for
     /// fluids `strain` holds the internal energy).
     pub initial_energy: Energies,

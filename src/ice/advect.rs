@@ -36,6 +36,16 @@ pub fn stage_advect<const D: usize>(
         .implicit
         .as_ref()
         .map_or(0.0, |sp| sp.convective_predictor);
+    // What crosses the boundary: the face pressures' impulse and work,
+    // then each material's advected fluxes.
+    ws.exchange = super::BoundaryExchange::default();
+    super::boundary_exchange::add_pressure(
+        &state.layout,
+        &ws.pstar,
+        &ws.mix_vflux,
+        dt,
+        &mut ws.exchange,
+    );
     // Step 12: advection with compatible fluxes.
     for r in 0..nm {
         if params.frame(r) != Frame::Eulerian {
@@ -91,6 +101,7 @@ fn advect_material<const D: usize>(
         params.advection,
         &mut ws.fluxes,
     );
+    super::boundary_exchange::add_advected(layout, &ws.fluxes, conservative, &mut ws.exchange);
     let fx = &ws.fluxes;
     let (o_m, o_u, o_t, o_v) = (
         Out::new(&mut ws.new_mass[r]),

@@ -43,6 +43,7 @@
 pub mod advect;
 pub mod advection;
 pub mod boundary;
+pub mod boundary_exchange;
 mod carried;
 pub mod equilibration;
 pub mod exchange;
@@ -68,6 +69,7 @@ use crate::material::eos::{EosError, FluidEos};
 pub use advect::stage_advect;
 pub use advection::{Advection, Limiter};
 pub use boundary::{IceBoundary, InflowState};
+pub use boundary_exchange::BoundaryExchange;
 pub use equilibration::EquilibrationSettings;
 pub use exchange::ExchangeCoefficients;
 pub use implicit_params::{pressure_mg_options, LinearSolver, SemiImplicit};

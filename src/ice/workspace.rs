@@ -28,6 +28,8 @@ pub struct IceWorkspace<const D: usize> {
     pub(super) e_l: Vec<Vec<f64>>,
     pub(super) v_l: Vec<Vec<f64>>,
     pub(super) fluxes: AdvectionFluxes<D>,
+    /// What crossed the boundary in the last step (Eulerian materials).
+    pub(super) exchange: super::BoundaryExchange,
     pub(super) new_mass: Vec<Vec<f64>>,
     pub(super) new_vel: Vec<Vec<SVector<f64, D>>>,
     pub(super) new_temp: Vec<Vec<f64>>,
@@ -50,6 +52,13 @@ pub struct IceWorkspace<const D: usize> {
 }
 
 impl<const D: usize> IceWorkspace<D> {
+    /// What crossed the domain boundary in the last step: the Eulerian
+    /// materials' advection and the face pressures' impulse and work
+    /// ([`super::boundary_exchange`]).
+    pub fn boundary_exchange(&self) -> super::BoundaryExchange {
+        self.exchange
+    }
+
     /// Workspace for a state's layout and materials.
     pub fn new(state: &IceState<D>) -> Self {
         let n = state.layout.len();
@@ -73,6 +82,7 @@ impl<const D: usize> IceWorkspace<D> {
             e_l: (0..nm).map(|_| s()).collect(),
             v_l: (0..nm).map(|_| s()).collect(),
             fluxes: AdvectionFluxes::new(n),
+            exchange: super::BoundaryExchange::default(),
             new_mass: (0..nm).map(|_| s()).collect(),
             new_vel: (0..nm).map(|_| sv()).collect(),
             new_temp: (0..nm).map(|_| s()).collect(),

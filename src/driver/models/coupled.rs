@@ -90,6 +90,7 @@ impl<const D: usize> Model for Coupled<D> {
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
             retries: 0,
+            boundary: None,
         })
     }
 

@@ -131,6 +131,7 @@ impl<const D: usize> Model for Fluid<D> {
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
             retries: 0,
+            boundary: Some(self.ws.boundary_exchange()),
         })
     }
 

@@ -60,6 +60,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
             nonlinear_iterations: st.newton_iterations,
             linear_iterations: st.linear_iterations,
             retries: st.retries,
+            boundary: None,
         })
     }
 

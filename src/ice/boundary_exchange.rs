@@ -1,0 +1,104 @@
+//! What crosses the domain boundary in one ICE step: the mass, momentum and
+//! energy the advection carries through the boundary faces, the impulse of
+//! the face pressures there and their work. The run summary subtracts it
+//! from the change of the totals, so that what is left is the scheme's
+//! numerical drift (Sod's momentum change `(p_L − p_R) t` is a boundary
+//! impulse, not a drift).
+//!
+//! Momentum: the pressure force on the materials of a cell, `−Δt V θ_r
+//! ∇p*` (Guilkey Eq. 33), summed over the materials (`Σ θ_r = 1` after the
+//! equilibration) and the cells telescopes to the boundary faces, `Δt A
+//! (p*_lower − p*_upper)` per row; the exchange sums to zero. Energy: the
+//! face work `p*_f (Σ θ u*)_f A Δt` of the conservative form
+//! ([`super::EnergyForm::Conservative`]) at the boundary faces and the
+//! advected internal and kinetic energy; in the non-conservative form the
+//! kinetic energy through a face is `|F_mu|² / (2 F_M)` from the mass and
+//! momentum fluxes. Viscous boundary stresses and gravity are not in it.
+
+use nalgebra::SVector;
+
+use super::advection::AdvectionFluxes;
+use super::state::CellLayout;
+
+/// Mass, momentum (padded to 3D) and energy that entered the fluid through
+/// the domain boundary.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct BoundaryExchange {
+    /// Mass in [kg] (per depth in 1D/2D).
+    pub mass: f64,
+    /// Momentum in.
+    pub momentum: [f64; 3],
+    /// Energy in (internal + kinetic + pressure work).
+    pub energy: f64,
+}
+
+impl BoundaryExchange {
+    /// Adds `o`.
+    pub fn add(&mut self, o: &Self) {
+        self.mass += o.mass;
+        for d in 0..3 {
+            self.momentum[d] += o.momentum[d];
+        }
+        self.energy += o.energy;
+    }
+}
+
+/// Every boundary face: direction, flat face index and `+1` at a lower
+/// face (a positive flux enters), `−1` at an upper one.
+fn boundary_faces<const D: usize>(
+    layout: &CellLayout<D>,
+) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+    (0..D).flat_map(move |d| {
+        let lower = layout.boundary_cells[d][0]
+            .iter()
+            .map(move |&c| (d, c, 1.0));
+        let upper = layout.boundary_cells[d][1]
+            .iter()
+            .map(move |&c| (d, c + layout.strides[d], -1.0));
+        lower.chain(upper)
+    })
+}
+
+/// Adds what one material's advection `fx` carried in through the boundary
+/// faces; `kinetic`: `fx.kinetic` holds the kinetic energy fluxes.
+pub(super) fn add_advected<const D: usize>(
+    layout: &CellLayout<D>,
+    fx: &AdvectionFluxes<D>,
+    kinetic: bool,
+    acc: &mut BoundaryExchange,
+) {
+    for (d, f, s) in boundary_faces(layout) {
+        let fm = fx.mass[d][f];
+        let fu: SVector<f64, D> = fx.momentum[d][f];
+        acc.mass += s * fm;
+        for k in 0..D {
+            acc.momentum[k] += s * fu[k];
+        }
+        let ke = if kinetic {
+            fx.kinetic[d][f]
+        } else if fm != 0.0 {
+            fu.norm_squared() / (2.0 * fm)
+        } else {
+            0.0
+        };
+        acc.energy += s * (fx.energy[d][f] + ke);
+    }
+}
+
+/// Adds the impulse `Δt A p*_f n` and the work `p*_f V (mixture volume
+/// flux)` of the face pressures at the boundary faces (`mix_vflux` holds
+/// `Δt A/V Σ θ u*`).
+pub(super) fn add_pressure<const D: usize>(
+    layout: &CellLayout<D>,
+    pstar: &[Vec<f64>; D],
+    mix_vflux: &[Vec<f64>; D],
+    dt: f64,
+    acc: &mut BoundaryExchange,
+) {
+    let vol = layout.cell_volume();
+    for (d, f, s) in boundary_faces(layout) {
+        let area = vol / layout.h[d];
+        acc.momentum[d] += s * pstar[d][f] * area * dt;
+        acc.energy += s * pstar[d][f] * mix_vflux[d][f] * vol;
+    }
+}
