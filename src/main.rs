@@ -234,6 +234,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 restart,
                 interrupt: Some(interrupt_flag()?),
                 ignore_memory_limit,
+                command_line: std::env::args().collect(),
                 ..Default::default()
             };
             let sum = mpmice::driver::run_scene(&s, &opts)?;

@@ -201,3 +201,50 @@ fn snapshots_fall_on_the_requested_times() {
     assert_ne!(t_of(rows[rows.len() - 1]), t_of(rows[rows.len() - 2]));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `summary.json` says where its numbers come from: the program, its
+/// version and commit, the date, the command line, the threads and the
+/// scene as run (with the `--set` overrides resolved).
+#[test]
+fn the_summary_carries_its_provenance() {
+    let s = sod();
+    let dir = tmp("provenance");
+    let (ok, _, err) = mpmice(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+        "--threads",
+        "1",
+        "--set",
+        "grid.cells=[50]",
+    ]);
+    assert!(ok, "{err}");
+    let sum: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    let p = &sum["provenance"];
+    assert_eq!(p["program"], "mpmice");
+    assert_eq!(p["version"], env!("CARGO_PKG_VERSION"));
+    let git = p["git"].as_str().unwrap();
+    assert!(
+        git == "unknown" || (git.len() == 40 && git.chars().all(|c| c.is_ascii_hexdigit())),
+        "{git}"
+    );
+    let date = p["date_utc"].as_str().unwrap();
+    assert!(
+        date.len() == 20 && date.ends_with('Z') && date.starts_with("20"),
+        "{date}"
+    );
+    let cl: Vec<&str> = p["command_line"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(cl.contains(&"grid.cells=[50]"), "{cl:?}");
+    assert_eq!(p["threads"], 1);
+    assert_eq!(p["scene"]["grid"]["cells"], serde_json::json!([50]));
+    assert_eq!(p["scene"]["materials"][0]["gamma"], 1.4);
+    let _ = std::fs::remove_dir_all(&dir);
+}

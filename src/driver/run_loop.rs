@@ -34,6 +34,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Continue from this checkpoint folder instead of the initial state.
     pub restart: Option<PathBuf>,
+    /// The command line, recorded in the summary's provenance.
+    pub command_line: Vec<String>,
     /// Set (e.g. by a Ctrl-C handler) to stop cleanly at the end of the
     /// current step, with a checkpoint.
     pub interrupt: Option<Arc<AtomicBool>>,
@@ -510,7 +512,7 @@ pub fn run_model<M: Model>(
         (step_s, model.steps().saturating_sub(steps0)),
         run.out.output_s,
         &run.written,
-        opts.restart.as_deref(),
+        opts,
         stopped.as_ref(),
         &run.warnings,
     );
@@ -846,7 +848,7 @@ fn summarise<M: Model>(
     (step_s, run_steps): (f64, u64),
     output_s: f64,
     written: &[PathBuf],
-    restart: Option<&Path>,
+    opts: &RunOptions,
     error: Option<&Error>,
     warnings: &[String],
 ) -> Summary {
@@ -932,8 +934,9 @@ fn summarise<M: Model>(
         iterations,
         watchdog_interval: scene.time.watchdog_interval,
         checkpoints: written.iter().map(|p| p.display().to_string()).collect(),
-        restarted_from: restart.map(|p| p.display().to_string()),
+        restarted_from: opts.restart.as_deref().map(|p| p.display().to_string()),
         error: error.map(|e| e.to_string()),
         warnings: warnings.to_vec(),
+        provenance: super::summary::Provenance::of(scene, &opts.command_line, threads),
     }
 }

@@ -103,6 +103,78 @@ pub struct Summary {
     /// Warnings of the run (a 100-fold Δt drop), also printed on stderr.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Program, commit, date, command line, threads and the scene as run.
+    pub provenance: Provenance,
+}
+
+/// Where a run's numbers come from: the program and the scene as run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Provenance {
+    /// Program name.
+    pub program: &'static str,
+    /// Its version (`Cargo.toml`).
+    pub version: &'static str,
+    /// The git commit it was built from ("unknown" outside a checkout).
+    pub git: &'static str,
+    /// When the summary was written, UTC (ISO 8601).
+    pub date_utc: String,
+    /// The command line (empty when run as a library).
+    pub command_line: Vec<String>,
+    /// Worker threads.
+    pub threads: usize,
+    /// The scene's content hash (the checkpoint's).
+    pub scene_hash: String,
+    /// The scene as run: every key resolved, defaults and `--set`
+    /// overrides included.
+    pub scene: serde_json::Value,
+}
+
+impl Provenance {
+    /// The provenance of a run of `scene` now.
+    pub fn of(scene: &crate::scene::Scene, command_line: &[String], threads: usize) -> Self {
+        Self {
+            program: env!("CARGO_PKG_NAME"),
+            version: env!("CARGO_PKG_VERSION"),
+            git: env!("MPMICE_GIT_HASH"),
+            date_utc: utc_now(),
+            command_line: command_line.to_vec(),
+            threads,
+            scene_hash: super::scene_hash(scene),
+            // Plain data always serialises.
+            scene: serde_json::to_value(scene).unwrap_or_default(),
+        }
+    }
+}
+
+/// The current UTC time as `YYYY-MM-DDThh:mm:ssZ`.
+pub fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    utc_of(secs)
+}
+
+/// `YYYY-MM-DDThh:mm:ssZ` of `secs` seconds after 1970-01-01T00:00:00Z
+/// (the proleptic Gregorian calendar: days to year, month, day by the
+/// 400-year cycle of 146 097 days, years starting on 1 March).
+fn utc_of(secs: u64) -> String {
+    let days = (secs / 86_400) as i64;
+    let rem = secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
 }
 
 /// Iterations per step of an implicit mode: Newton iterations (implicit MPM)
@@ -156,4 +228,20 @@ pub(crate) fn write_summary(dir: &Path, summary: &Summary) -> Result<()> {
         std::io::Write::write_all(w, b"\n")
     })
     .map_err(|e| Error::io(&path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::utc_of;
+
+    #[test]
+    fn utc_dates_of_known_instants() {
+        assert_eq!(utc_of(0), "1970-01-01T00:00:00Z");
+        // 2000-02-29 (a leap day of a century leap year) 12:34:56.
+        assert_eq!(utc_of(951_827_696), "2000-02-29T12:34:56Z");
+        // 2026-11-26T20:00:00Z.
+        assert_eq!(utc_of(1_795_723_200), "2026-11-26T20:00:00Z");
+        // 2100-03-01 (2100 is no leap year).
+        assert_eq!(utc_of(4_107_542_400), "2100-03-01T00:00:00Z");
+    }
 }
