@@ -241,7 +241,7 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
     }
     atomic_write_bytes(&dir.join(format!("{stem}.csv")), csv.as_bytes())?;
 
-    let plot_series: Vec<PlotSeries> = result
+    let mut plot_series: Vec<PlotSeries> = result
         .series
         .iter()
         .map(|s| {
@@ -259,6 +259,9 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
             }
         })
         .collect();
+    if let Some(t) = slope_triangle(&result.series) {
+        plot_series.push(t);
+    }
     plot_xy(
         &dir.join(format!("{stem}.png")),
         &result.study,
@@ -268,6 +271,38 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
         true,
         &plot_series,
     )
+}
+
+/// A reference slope triangle for a log-log plot of error against `h`:
+/// slope the observed order of the first series that has one, rounded to
+/// the nearest half (at least ½), spanning a factor 2 in `h` from the
+/// smallest `h`, below the smallest error there (so it covers no data).
+/// `None` without a series with a finite order and positive points.
+pub fn slope_triangle(series: &[Series]) -> Option<PlotSeries> {
+    let s = series.iter().find(|s| s.observed_order.is_finite())?;
+    let order = ((s.observed_order * 2.0).round() / 2.0).max(0.5);
+    let valid = |p: &&Point| p.h.is_finite() && p.h > 0.0 && p.error.is_finite() && p.error > 0.0;
+    let h0 = s
+        .points
+        .iter()
+        .filter(valid)
+        .map(|p| p.h)
+        .fold(f64::INFINITY, f64::min);
+    let e_min = series
+        .iter()
+        .flat_map(|s| s.points.iter().filter(valid))
+        .map(|p| p.error)
+        .fold(f64::INFINITY, f64::min);
+    if !(h0.is_finite() && e_min.is_finite()) {
+        return None;
+    }
+    let (h1, y0) = (2.0 * h0, 0.4 * e_min);
+    let y1 = y0 * 2f64.powf(order);
+    Some(PlotSeries {
+        label: format!("slope {order}"),
+        points: vec![(h0, y0), (h1, y0), (h1, y1), (h0, y0)],
+        style: Style::Line,
+    })
 }
 
 /// How a [`PlotSeries`] is drawn.
@@ -914,6 +949,29 @@ fn atomic_write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slope_triangle_has_the_rounded_order_below_the_data() {
+        let pts = |e: [f64; 3]| -> Vec<Point> {
+            [0.1, 0.05, 0.025]
+                .iter()
+                .zip(e)
+                .map(|(&h, e)| Point::new(h, e, 0.0, 0.0))
+                .collect()
+        };
+        let s = vec![
+            Series::new("a", "L1", pts([4e-2, 1.1e-2, 2.6e-3])),
+            Series::new("b", "L1", pts([1e-3, 5e-4, 2.5e-4])),
+        ];
+        let t = slope_triangle(&s).expect("triangle");
+        assert_eq!(t.label, "slope 2");
+        let (h0, y0) = t.points[0];
+        assert_eq!(h0, 0.025);
+        assert!(y0 < 2.5e-4);
+        let (h1, y1) = t.points[2];
+        assert!(((y1 / y0).ln() / (h1 / h0).ln() - 2.0).abs() < 1e-12);
+        assert!(slope_triangle(&[Series::new("c", "L1", vec![])]).is_none());
+    }
 
     const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
