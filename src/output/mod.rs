@@ -37,7 +37,7 @@ pub fn atomic_write<F>(path: &Path, f: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    let tmp = tmp_sibling(path)?;
+    let tmp = tmp_sibling(path, "")?;
     let result = write_and_rename(path, &tmp, f);
     if result.is_err() {
         // Best effort: the temporary file may not exist (e.g. create failed).
@@ -46,9 +46,10 @@ where
     result
 }
 
-/// Temporary sibling name of `path`: `.<name>.<pid>.<n>.tmp` in the same
-/// directory.
-fn tmp_sibling(path: &Path) -> io::Result<PathBuf> {
+/// Temporary sibling name of `path`: `.<name>.<pid>.<n>.tmp<suffix>` in
+/// the same directory (a suffix keeps an extension that a writer reads the
+/// format from, e.g. `.png`).
+pub(crate) fn tmp_sibling(path: &Path, suffix: &str) -> io::Result<PathBuf> {
     let name = path.file_name().ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
@@ -58,7 +59,7 @@ fn tmp_sibling(path: &Path) -> io::Result<PathBuf> {
     let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(name);
-    tmp_name.push(format!(".{}.{n}.tmp", std::process::id()));
+    tmp_name.push(format!(".{}.{n}.tmp{suffix}", std::process::id()));
     Ok(path.with_file_name(tmp_name))
 }
 

@@ -27,9 +27,10 @@ use std::fmt::Write as _;
 use std::fs::{self, File};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{bail, Context, Result};
+
+use crate::output::fmt_f64;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -182,17 +183,6 @@ fn study_stem(study: &str) -> Result<String> {
         bail!("study name {study:?} cannot be used as a file name");
     }
     Ok(stem)
-}
-
-/// Formats an `f64` in Rust's shortest round-trip form (plain for moderate
-/// magnitudes, scientific for tiny or huge ones, `NaN`/`inf` otherwise).
-fn fmt_f64(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
 }
 
 /// Quotes a CSV cell if needed (RFC 4180).
@@ -915,35 +905,15 @@ pub fn write_results_md(results_dir: &Path, md_path: &Path) -> Result<()> {
     atomic_write_bytes(md_path, out.as_bytes())
 }
 
-/// Counter making temporary names unique within the process.
-static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// `.<name>.<pid>.<n>.tmp<suffix>` next to `path`.
-fn tmp_sibling(path: &Path, suffix: &str) -> Result<PathBuf> {
-    let Some(name) = path.file_name() else {
-        bail!("output path `{}` has no file name", path.display());
-    };
-    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut tmp = std::ffi::OsString::from(".");
-    tmp.push(name);
-    tmp.push(format!(".{}.{n}.tmp{suffix}", std::process::id()));
-    Ok(path.with_file_name(tmp))
+/// Writes `bytes` to `path` atomically ([`crate::output::atomic_write`]).
+fn atomic_write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    crate::output::atomic_write(path, |w| w.write_all(bytes))
+        .with_context(|| format!("writing {}", path.display()))
 }
 
-/// Writes `bytes` to `path` atomically: temporary sibling, sync, rename.
-fn atomic_write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = tmp_sibling(path, "")?;
-    let result = (|| -> std::io::Result<()> {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
+fn tmp_sibling(path: &Path, suffix: &str) -> Result<PathBuf> {
+    crate::output::tmp_sibling(path, suffix)
+        .with_context(|| format!("output path `{}`", path.display()))
 }
 
 #[cfg(test)]
@@ -976,6 +946,7 @@ mod tests {
     const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
     fn test_dir(tag: &str) -> PathBuf {
+        use std::sync::atomic::{AtomicU64, Ordering};
         static N: AtomicU64 = AtomicU64::new(0);
         let n = N.fetch_add(1, Ordering::Relaxed);
         let dir =
