@@ -42,6 +42,10 @@ pub struct Particles<const D: usize> {
     /// explicit step sizes it at its first step; 0 for materials without
     /// failure).
     pub damage: Vec<f64>,
+    /// A particle's identity: its index in the order the scene created the
+    /// particles, kept when particles are removed (burnt out) or split into
+    /// solid fields, so that outputs of different times can be matched.
+    pub id: Vec<u64>,
 }
 
 impl<const D: usize> Particles<D> {
@@ -85,6 +89,7 @@ impl<const D: usize> Particles<D> {
         if !self.damage.is_empty() {
             self.damage.push(0.0);
         }
+        self.id.push(self.id.last().map_or(0, |&l| l + 1));
     }
 
     /// Sizes [`Particles::damage`] to one entry per particle (new entries
@@ -136,6 +141,7 @@ impl<const D: usize> Particles<D> {
         if !self.damage.is_empty() {
             retain_by(&mut self.damage, keep);
         }
+        retain_by(&mut self.id, keep);
     }
 
     /// Appends copies of all of `other`'s particles.
@@ -167,6 +173,7 @@ impl<const D: usize> Particles<D> {
         } else if !self.damage.is_empty() {
             self.damage.push(0.0);
         }
+        self.id.push(other.id[p]);
     }
 
     /// Total mass.
@@ -219,5 +226,46 @@ impl<const D: usize> Particles<D> {
             .zip(&self.x)
             .map(|(m, x)| m * g.dot(x))
             .sum::<f64>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Particles;
+    use nalgebra::SVector;
+
+    /// Ids follow a particle through removal, splitting and joining.
+    #[test]
+    fn ids_follow_the_particles() {
+        let mut p = Particles::<1>::default();
+        for i in 0..6 {
+            let x = SVector::<f64, 1>::new(i as f64);
+            p.push(x, x, 1.0, 1.0, x, (i % 2) as u16);
+        }
+        assert_eq!(p.id, [0, 1, 2, 3, 4, 5]);
+        p.retain(&[true, false, true, true, false, true]);
+        assert_eq!(p.id, [0, 2, 3, 5]);
+        let odd = p.select(|i| p.material[i] == 1);
+        let even = p.select(|i| p.material[i] == 0);
+        assert_eq!(
+            (odd.id.as_slice(), even.id.as_slice()),
+            (&[3, 5][..], &[0, 2][..])
+        );
+        let mut all = even.clone();
+        all.append(&odd);
+        assert_eq!(all.id, [0, 2, 3, 5]);
+        // A particle added later gets a new id.
+        all.push(
+            SVector::zeros(),
+            SVector::zeros(),
+            1.0,
+            1.0,
+            SVector::zeros(),
+            0,
+        );
+        assert_eq!(all.id[4], 6);
+        for (&id, x) in all.id.iter().zip(&all.x).take(4) {
+            assert_eq!(id as f64, x[0]);
+        }
     }
 }

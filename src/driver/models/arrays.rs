@@ -99,6 +99,7 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     if !p.damage.is_empty() {
         put_scalars(ck, &n("damage"), &p.damage);
     }
+    ck.put_u64_with(&n("id"), vec![p.len()], |buf| buf.extend(&p.id));
 }
 
 /// Loads the particle arrays saved by [`save_particles`]; the material
@@ -137,6 +138,7 @@ pub fn load_particles<const D: usize>(
         } else {
             Vec::new()
         },
+        id: ck.take_u64(&n("id"), Some(&[len]))?,
     })
 }
 
@@ -182,6 +184,11 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
                 "J",
                 "-",
                 Values::Scalar(p.f.iter().map(|f| f.determinant()).collect()),
+            ),
+            OutField::new(
+                "id",
+                "-",
+                Values::Scalar(p.id.iter().map(|&i| i as f64).collect()),
             ),
             OutField::new(
                 "material",
