@@ -55,41 +55,7 @@ enum Command {
     /// 2^N (particles per cell fixed), measure a field's error against a
     /// reference and the observed order; writes STUDY.json, .csv and .png
     /// like the built-in studies, and each run's outputs below.
-    Study {
-        /// Scene file (TOML).
-        scene: PathBuf,
-        /// Halvings of the cell size (N + 1 runs per series).
-        #[arg(long, default_value_t = 2)]
-        refine: usize,
-        /// Override a scene key (repeatable), as for `run`.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Sweep a key: one series per value, `--sweep fluid.variant=literal,high_resolution`
-        /// (commas inside [ ], { } and quotes do not split).
-        #[arg(long, value_name = "KEY=V1,V2,...")]
-        sweep: Option<String>,
-        /// The field whose error is measured, SET.FIELD (default
-        /// cells.mixture_density, or particles.velocity without cells).
-        #[arg(long)]
-        field: Option<String>,
-        /// What the errors are measured against: `finest` (the finest run)
-        /// or `riemann` (exact solution of a 1D two-state fluid scene).
-        #[arg(long, default_value = "finest")]
-        reference: String,
-        /// A history column whose final value gets Richardson's estimate
-        /// of its order, converged value and uncertainty.
-        #[arg(long)]
-        quantity: Option<String>,
-        /// Output folder (default: out/study_<scene name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Write into a non-empty output folder (see `run --force`).
-        #[arg(long)]
-        force: bool,
-        /// Worker threads per run (default: all cores).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
-    },
+    Study(StudyArgs),
     /// Validate a scene without running it: everything `run` checks before
     /// its first step (building the particles and cells included), and the
     /// memory estimate.
@@ -288,29 +254,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             )?;
             Ok(())
         }
-        Command::Study {
-            scene,
-            refine,
-            set,
-            sweep,
-            field,
-            reference,
-            quantity,
-            out,
-            force,
-            threads,
-        } => study(StudyArgs {
-            scene,
-            refine,
-            set,
-            sweep,
-            field,
-            reference,
-            quantity,
-            out,
-            force,
-            threads,
-        }),
+        Command::Study(args) => study(args),
     }
 }
 
@@ -363,16 +307,40 @@ fn claim_out_dir(dir: &std::path::Path, force: bool) -> anyhow::Result<()> {
 }
 
 /// The arguments of `mpmice study`.
+#[derive(clap::Args)]
 struct StudyArgs {
+    /// Scene file (TOML).
     scene: PathBuf,
+    /// Halvings of the cell size (N + 1 runs per series).
+    #[arg(long, default_value_t = 2)]
     refine: usize,
+    /// Override a scene key (repeatable), as for `run`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Sweep a key: one series per value, `--sweep fluid.variant=literal,high_resolution`
+    /// (commas inside [ ], { } and quotes do not split).
+    #[arg(long, value_name = "KEY=V1,V2,...")]
     sweep: Option<String>,
+    /// The field whose error is measured, SET.FIELD (default
+    /// cells.mixture_density, or particles.velocity without cells).
+    #[arg(long)]
     field: Option<String>,
+    /// What the errors are measured against: `finest` (the finest run)
+    /// or `riemann` (exact solution of a 1D two-state fluid scene).
+    #[arg(long, default_value = "finest")]
     reference: String,
+    /// A history column whose final value gets Richardson's estimate
+    /// of its order, converged value and uncertainty.
+    #[arg(long)]
     quantity: Option<String>,
+    /// Output folder (default: out/study_<scene name>).
+    #[arg(long)]
     out: Option<PathBuf>,
+    /// Write into a non-empty output folder (see `run --force`).
+    #[arg(long)]
     force: bool,
+    /// Worker threads per run (default: all cores).
+    #[arg(long, default_value_t = 0)]
     threads: usize,
 }
 

@@ -28,6 +28,20 @@ fn mpmice(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// `mpmice run cases/sod.toml --out DIR --quiet EXTRA…`.
+fn run_sod(dir: &Path, extra: &[&str]) -> (bool, String, String) {
+    let s = sod();
+    let mut args = vec![
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend(extra);
+    mpmice(&args)
+}
+
 /// Every value type reaches the scene: an array, a float, a bare word, a
 /// quoted string and an element picked by name; `check` reports the
 /// overridden cell count.
@@ -173,17 +187,8 @@ fn study_writes_the_built_in_files() {
 /// e.g. 0.10040), and the last history row is not repeated.
 #[test]
 fn snapshots_fall_on_the_requested_times() {
-    let s = sod();
     let dir = tmp("times");
-    let (ok, _, err) = mpmice(&[
-        "run",
-        s.to_str().unwrap(),
-        "--out",
-        dir.to_str().unwrap(),
-        "--quiet",
-        "--set",
-        "grid.cells=[100]",
-    ]);
+    let (ok, _, err) = run_sod(&dir, &["--set", "grid.cells=[100]"]);
     assert!(ok, "{err}");
     let pvd = std::fs::read_to_string(dir.join("cells.pvd")).unwrap();
     let times: Vec<f64> = pvd
@@ -207,19 +212,8 @@ fn snapshots_fall_on_the_requested_times() {
 /// scene as run (with the `--set` overrides resolved).
 #[test]
 fn the_summary_carries_its_provenance() {
-    let s = sod();
     let dir = tmp("provenance");
-    let (ok, _, err) = mpmice(&[
-        "run",
-        s.to_str().unwrap(),
-        "--out",
-        dir.to_str().unwrap(),
-        "--quiet",
-        "--threads",
-        "1",
-        "--set",
-        "grid.cells=[50]",
-    ]);
+    let (ok, _, err) = run_sod(&dir, &["--threads", "1", "--set", "grid.cells=[50]"]);
     assert!(ok, "{err}");
     let sum: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
