@@ -81,7 +81,7 @@ pub struct BurnLaw {
     pub rate_constant: f64,
     /// Pressure exponent `n ≥ 0`.
     pub pressure_exponent: f64,
-    /// The reactant burns where its temperature is at least this [K].
+    /// The reactant burns where its temperature is at least this \[K\].
     pub threshold_temperature: f64,
     /// Heat of reaction `Q ≥ 0` [J/kg] released into the product.
     pub heat_of_reaction: f64,
@@ -140,12 +140,12 @@ pub struct Reaction {
 /// What a reaction has done since the start of the run.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ReactionTotals {
-    /// Reactant mass converted into product [kg].
+    /// Reactant mass converted into product \[kg\].
     pub mass: f64,
     /// Energy the product received with it, `Σ Δm (c_v,s T + Q + ½|v|²)`
-    /// [J].
+    /// \[J\].
     pub energy: f64,
-    /// Of which heat of reaction, `Σ Δm Q` [J].
+    /// Of which heat of reaction, `Σ Δm Q` \[J\].
     pub heat: f64,
 }
 

@@ -153,7 +153,7 @@ pub struct LameMeasured {
     pub steps: u64,
     /// Particles.
     pub particles: usize,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub wall_s: f64,
 }
 

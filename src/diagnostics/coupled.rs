@@ -190,7 +190,7 @@ pub struct Block {
 pub struct Gas {
     /// Density [kg/m³].
     pub rho: f64,
-    /// Pressure [Pa].
+    /// Pressure \[Pa\].
     pub p: f64,
     /// Velocity [m/s].
     pub velocity: [f64; 2],

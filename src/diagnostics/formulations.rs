@@ -71,9 +71,9 @@ impl Formulation {
 pub struct Cost {
     /// Steps taken.
     pub steps: u64,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub wall_s: f64,
-    /// Median wall time of one step [s] (its stable-step computation
+    /// Median wall time of one step \[s\] (its stable-step computation
     /// included).
     pub median_step_s: f64,
     /// MPM-ICE: the share of the stepping's wall time spent in the
@@ -138,7 +138,7 @@ fn edit(text: &str, from: &str, to: &str) -> Result<String> {
     }
 }
 
-/// Air pressure of both scenes before anything happens [Pa].
+/// Air pressure of both scenes before anything happens \[Pa\].
 pub const P1: f64 = 101_325.0;
 
 /// Velocity of disk and air in the block test [m/s].
@@ -324,39 +324,39 @@ pub fn run_block(case: &BlockCase) -> Result<BlockRun> {
 pub struct ShockExact {
     /// Incident shock Mach number.
     pub mach: f64,
-    /// Pressure behind the incident shock [Pa].
+    /// Pressure behind the incident shock \[Pa\].
     pub p2: f64,
     /// Gas velocity behind it [m/s].
     pub u2: f64,
     /// Incident shock speed [m/s].
     pub shock_speed: f64,
-    /// Driver pressure of the shock tube that makes this shock [Pa].
+    /// Driver pressure of the shock tube that makes this shock \[Pa\].
     pub p4: f64,
-    /// Pressure behind the shock reflected from a rigid wall [Pa].
+    /// Pressure behind the shock reflected from a rigid wall \[Pa\].
     pub p5: f64,
     /// Speed of the reflected shock [m/s].
     pub reflected_speed: f64,
     /// Sound speed behind the reflected shock [m/s].
     pub a5: f64,
-    /// Time at which the incident shock reaches the block's front face [s].
+    /// Time at which the incident shock reaches the block's front face \[s\].
     pub t_hit: f64,
 }
 
-/// Diaphragm position of the shock case [m].
+/// Diaphragm position of the shock case \[m\].
 pub const DIAPHRAGM: f64 = 0.1;
-/// The block's front face [m].
+/// The block's front face \[m\].
 pub const FRONT: f64 = 0.3;
-/// The block's half height `b` (the symmetry plane is y = 0) [m].
+/// The block's half height `b` (the symmetry plane is y = 0) \[m\].
 pub const HALF_HEIGHT: f64 = 0.1;
 /// The pressure probe: 2 cm in front of the face, on the symmetry plane.
 pub const PROBE: [f64; 2] = [0.28, 0.0];
-/// Height of the simulated half domain [m].
+/// Height of the simulated half domain \[m\].
 pub const HEIGHT: f64 = 0.2;
 /// Until this time the walls at x = 0 and x = 0.5 see exactly `p4` and
 /// `p1` (the rarefaction's head, leaving the diaphragm at `a4 = 347` m/s,
 /// is still 5 cm from the wall at x = 0; nothing reaches x = 0.5 before
 /// the end), so the x-momentum of everything in the box is
-/// `(p4 − p1) H t` [s].
+/// `(p4 − p1) H t` \[s\].
 pub const WALL_CHECK_T: f64 = 1.5e-4;
 
 /// The exact 1D values of the shock case: Rankine–Hugoniot for a Mach 1.5
@@ -447,9 +447,9 @@ impl ShockCase {
 /// One sample of a shock run.
 #[derive(Debug, Clone, Copy)]
 pub struct ShockSample {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Air pressure at [`PROBE`] [Pa] (multiphase: the nodal gas pressure
+    /// Air pressure at [`PROBE`] \[Pa\] (multiphase: the nodal gas pressure
     /// `p_g` of the nearest node; MPM-ICE: the pressure of the cell holding
     /// it).
     pub probe: f64,
@@ -464,7 +464,7 @@ pub struct ShockSample {
 pub struct ShockRun {
     /// After every step.
     pub history: Vec<ShockSample>,
-    /// Mean probe pressure over [`shock_window`] (steps ending in it) [Pa].
+    /// Mean probe pressure over [`shock_window`] (steps ending in it) \[Pa\].
     pub front_pressure: f64,
     /// The block's momentum at the end of the window [N s/m] (linear
     /// between the samples around it).

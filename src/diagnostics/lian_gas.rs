@@ -51,7 +51,7 @@ pub struct GasExpansionRun {
     pub escaped: usize,
     /// Steps taken.
     pub steps: u64,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub wall_s: f64,
 }
 

@@ -72,7 +72,7 @@ pub fn hencky(poisson: f64) -> (f64, f64) {
     (b0, k)
 }
 
-/// Fundamental frequency [Hz] of a square membrane of side `side` with
+/// Fundamental frequency \[Hz\] of a square membrane of side `side` with
 /// fixed edges under the isotropic tension T = σ₀ t: f₁₁ = c / (√2 L),
 /// c = √(T / (ρ t)) = √(σ₀/ρ).
 pub fn square_membrane_f11(side: f64, prestress: f64, density: f64) -> f64 {
@@ -84,13 +84,13 @@ pub fn square_membrane_f11(side: f64, prestress: f64, density: f64) -> f64 {
 /// prestress σ₀ = 10 kPa (E/σ₀ = 100), edges fixed in every direction.
 #[derive(Debug, Clone, Copy)]
 pub struct SquareVibration {
-    /// Side L [m].
+    /// Side L \[m\].
     pub side: f64,
-    /// Thickness [m].
+    /// Thickness \[m\].
     pub thickness: f64,
     /// Material (hourglass coefficient included).
     pub material: MembraneMaterial,
-    /// Prestress σ₀ [Pa].
+    /// Prestress σ₀ \[Pa\].
     pub prestress: f64,
     /// Centre velocity amplitude of the initial mode-(1,1) velocity [m/s].
     pub amplitude: f64,
@@ -123,9 +123,9 @@ pub struct VibrationResult {
     /// Elements per side.
     pub cells: usize,
     /// Measured period (between the 1st and 3rd zero crossing of the centre
-    /// deflection) [s].
+    /// deflection) \[s\].
     pub period: f64,
-    /// Exact period 1/f₁₁ [s].
+    /// Exact period 1/f₁₁ \[s\].
     pub exact: f64,
     /// |T − T_exact| / T_exact.
     pub error: f64,
@@ -211,9 +211,9 @@ impl SquareVibration {
 /// p a/(E t) = 1e-5, relaxed by mass-proportional damping.
 #[derive(Debug, Clone, Copy)]
 pub struct HenckyDisc {
-    /// Radius a [m].
+    /// Radius a \[m\].
     pub radius: f64,
-    /// Thickness [m].
+    /// Thickness \[m\].
     pub thickness: f64,
     /// Material; `damping` is set from the expected lowest frequency.
     pub material: MembraneMaterial,
@@ -250,9 +250,9 @@ impl Default for HenckyDisc {
 pub struct HenckyResult {
     /// Elements across the diameter.
     pub cells: usize,
-    /// Centre deflection at the end [m].
+    /// Centre deflection at the end \[m\].
     pub w0: f64,
-    /// Hencky's w₀ = K a (p a/(E t))^{1/3} [m].
+    /// Hencky's w₀ = K a (p a/(E t))^{1/3} \[m\].
     pub exact: f64,
     /// |w₀ − exact| / exact.
     pub error: f64,
@@ -325,11 +325,11 @@ impl HenckyDisc {
 pub struct PointLoadResult {
     /// Elements per side.
     pub cells: usize,
-    /// Energy taken out by the hourglass forces [J].
+    /// Energy taken out by the hourglass forces \[J\].
     pub hourglass: f64,
-    /// Stored energy [J].
+    /// Stored energy \[J\].
     pub strain: f64,
-    /// Work of the point load [J].
+    /// Work of the point load \[J\].
     pub work: f64,
     /// Steps taken.
     pub steps: u64,

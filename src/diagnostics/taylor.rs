@@ -31,9 +31,9 @@ use crate::error::Result;
 use crate::material::plasticity::von_mises;
 use crate::scene::{build_solid_run, Scene};
 
-/// Rod radius R₀ [m] (D₀ = 7.62 mm).
+/// Rod radius R₀ \[m\] (D₀ = 7.62 mm).
 pub const R0: f64 = 3.81e-3;
-/// Rod length L₀ [m].
+/// Rod length L₀ \[m\].
 pub const L0: f64 = 25.4e-3;
 
 /// Measured final shapes of OFHC copper rods of this size, (speed [m/s],
@@ -50,18 +50,18 @@ pub const MEASURED: [(f64, f64, f64); 3] = [
 /// What one Taylor run measured.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct TaylorMeasured {
-    /// Cell size h [m].
+    /// Cell size h \[m\].
     pub h: f64,
     /// Impact speed [m/s].
     pub speed: f64,
-    /// Final length L [m].
+    /// Final length L \[m\].
     pub length: f64,
-    /// Lowest particle edge min (z − a_z) [m]: the gap between the rod and
+    /// Lowest particle edge min (z − a_z) \[m\]: the gap between the rod and
     /// the wall (≈ 0 while the rod sits on it).
     pub gap: f64,
-    /// Largest (mushroom) diameter [m].
+    /// Largest (mushroom) diameter \[m\].
     pub diameter: f64,
-    /// Footprint diameter (initial bottom row) [m].
+    /// Footprint diameter (initial bottom row) \[m\].
     pub footprint: f64,
     /// Initial kinetic energy K₀ [J/rad].
     pub kinetic0: f64,
@@ -83,7 +83,7 @@ pub struct TaylorMeasured {
     pub particles: usize,
     /// Steps.
     pub steps: u64,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub wall_s: f64,
 }
 
@@ -111,7 +111,7 @@ impl TaylorMeasured {
 
 /// Runs the Taylor scene `base` (`cases/taylor_anvil.toml`) with a cell of
 /// R₀/`n` (`n` rounded up to a multiple of 3), impact speed `speed` [m/s],
-/// to `end` [s].
+/// to `end` \[s\].
 ///
 /// # Errors
 /// A scene that does not build, or a step that fails.

@@ -164,7 +164,7 @@ pub struct YorkSodRun {
     pub density_range: (f64, f64),
     /// Smallest specific internal energy over the whole tube.
     pub energy_min: f64,
-    /// Wall time of the time loop [s].
+    /// Wall time of the time loop \[s\].
     pub wall_s: f64,
     /// Time steps taken.
     pub steps: u64,
@@ -377,12 +377,12 @@ pressure = 0.0
 pub struct PistonRun {
     /// Exact ω of Eq. 27 [rad/s].
     pub omega_exact: f64,
-    /// Measured period [s]: `2π/ω` of the single-frequency least-squares
+    /// Measured period \[s\]: `2π/ω` of the single-frequency least-squares
     /// fit of the displacement history ([`fit_frequency`]), which averages
     /// out the gas column's and the spring's high-frequency ripple.
     pub period: f64,
     /// The period from the mean spacing of the piston velocity's downward
-    /// zero crossings (linearly interpolated) [s]: the fit's starting guess.
+    /// zero crossings (linearly interpolated) \[s\]: the fit's starting guess.
     /// The ripple shifts each crossing by its velocity over the
     /// fundamental's slope, and the finer the grid the less the ripple is
     /// damped, so this estimate does not converge (m = 0.1, three periods:
@@ -390,7 +390,7 @@ pub struct PistonRun {
     pub period_crossings: f64,
     /// Piston displacement history `(t, x − x0)`.
     pub history: Vec<(f64, f64)>,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub wall_s: f64,
     /// Steps.
     pub steps: u64,

@@ -172,19 +172,19 @@ mod tests {
 ///   the peak load is ~10⁻⁴).
 #[derive(Debug, Clone)]
 pub struct Airbag {
-    /// Cell size [m].
+    /// Cell size \[m\].
     pub h: f64,
     /// Membrane point spacing as a fraction of `h`.
     pub spacing_over_h: f64,
-    /// Fabric Young's modulus [Pa].
+    /// Fabric Young's modulus \[Pa\].
     pub young: f64,
-    /// Duration of the damped preliminary inflation [s] (0: none).
+    /// Duration of the damped preliminary inflation \[s\] (0: none).
     pub inflate_time: f64,
     /// Mass-proportional damping during the inflation [1/s].
     pub inflate_damping: f64,
-    /// Duration of the impact [s].
+    /// Duration of the impact \[s\].
     pub impact_time: f64,
-    /// Interval of the recorded history [s].
+    /// Interval of the recorded history \[s\].
     pub history_interval: f64,
     /// The gas fills the spheroid shrunk by this fraction of `h` (both
     /// semi-axes), at the density that keeps York's gas mass `ρ₀ V_bag`
@@ -221,13 +221,13 @@ impl Default for Airbag {
 }
 
 impl Airbag {
-    /// Bag radius a [m].
+    /// Bag radius a \[m\].
     pub const BAG_RADIUS: f64 = 0.3575;
-    /// Bag half-depth c [m].
+    /// Bag half-depth c \[m\].
     pub const BAG_HALF_DEPTH: f64 = 0.17875;
-    /// Gap between the floor and the bag's back pole [m].
+    /// Gap between the floor and the bag's back pole \[m\].
     pub const FLOOR_GAP: f64 = 0.01;
-    /// Fabric thickness [m] (York Table VI).
+    /// Fabric thickness \[m\] (York Table VI).
     pub const THICKNESS: f64 = 5.0e-4;
     /// Fabric density [kg/m³] (York Table VI).
     pub const FABRIC_DENSITY: f64 = 662.0;
@@ -239,24 +239,24 @@ impl Airbag {
     pub const AIR_DENSITY: f64 = 1.2156;
     /// Initial specific internal energy [J/kg].
     pub const AIR_ENERGY: f64 = 8226.0;
-    /// Probe radius [m] (York Table V: diameter 200 mm).
+    /// Probe radius \[m\] (York Table V: diameter 200 mm).
     pub const PROBE_RADIUS: f64 = 0.1;
-    /// Probe length [m] (not given; chosen).
+    /// Probe length \[m\] (not given; chosen).
     pub const PROBE_LENGTH: f64 = 0.1;
-    /// Probe mass [kg] (York Table V).
+    /// Probe mass \[kg\] (York Table V).
     pub const PROBE_MASS: f64 = 6.03;
     /// Probe speed [m/s] (York Table V).
     pub const PROBE_SPEED: f64 = 3.90;
-    /// Probe Young's modulus [Pa] (chosen, see above).
+    /// Probe Young's modulus \[Pa\] (chosen, see above).
     pub const PROBE_YOUNG: f64 = 5.0e8;
-    /// Grid extent: r ∈ [0, R_MAX], z ∈ [0, Z_MAX] [m].
+    /// Grid extent: r ∈ [0, R_MAX], z ∈ [0, Z_MAX] \[m\].
     pub const R_MAX: f64 = 0.6;
     /// See [`Self::R_MAX`].
     pub const Z_MAX: f64 = 0.8;
-    /// Where the probe waits during the inflation: its lower face [m].
+    /// Where the probe waits during the inflation: its lower face \[m\].
     pub const PROBE_PARK: f64 = 0.65;
 
-    /// Initial air pressure `(γ − 1) ρ₀ e₀` [Pa] (York: 4000).
+    /// Initial air pressure `(γ − 1) ρ₀ e₀` \[Pa\] (York: 4000).
     pub fn pressure0() -> f64 {
         (Self::GAMMA - 1.0) * Self::AIR_DENSITY * Self::AIR_ENERGY
     }
@@ -395,21 +395,21 @@ formats = ["csv"]
 /// volumes m³: the per-radian values times 2π).
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct AirbagSample {
-    /// Time since the probe's release [s].
+    /// Time since the probe's release \[s\].
     pub t: f64,
-    /// Probe displacement into the bag (mean z at release − mean z) [m].
+    /// Probe displacement into the bag (mean z at release − mean z) \[m\].
     pub penetration: f64,
     /// Probe velocity along z (mass-weighted mean; < 0 towards the bag).
     pub probe_velocity: f64,
-    /// Mean gas point pressure [Pa].
+    /// Mean gas point pressure \[Pa\].
     pub mean_pressure: f64,
-    /// `Σ p V / V_enclosed` [Pa].
+    /// `Σ p V / V_enclosed` \[Pa\].
     pub volume_pressure: f64,
-    /// Enclosed volume [m³].
+    /// Enclosed volume \[m³\].
     pub volume: f64,
-    /// Sum of the gas points' volumes [m³].
+    /// Sum of the gas points' volumes \[m³\].
     pub gas_volume: f64,
-    /// Sum of the volumes of the gas points inside the bag [m³].
+    /// Sum of the volumes of the gas points inside the bag \[m³\].
     pub gas_volume_inside: f64,
     /// `p V^γ` with the point-mean pressure, relative to its value at
     /// release.
@@ -441,34 +441,34 @@ pub struct AirbagRun {
     pub inflated: AirbagSample,
     /// Impact history.
     pub history: Vec<AirbagSample>,
-    /// Largest penetration [m] and its time [s].
+    /// Largest penetration \[m\] and its time \[s\].
     pub peak_penetration: (f64, f64),
     /// Largest probe velocity away from the bag after the peak [m/s]
     /// (the rebound velocity once the probe has left the bag).
     pub rebound_velocity: f64,
     /// Probe velocity at the end [m/s].
     pub end_velocity: f64,
-    /// Largest mean gas point pressure [Pa] and largest `p V` pressure.
+    /// Largest mean gas point pressure \[Pa\] and largest `p V` pressure.
     pub peak_pressure: (f64, f64),
     /// Largest |p V^γ / (p V^γ)₀ − 1| (point-mean, p V pressures).
     pub adiabat_drift: (f64, f64),
     /// Largest |E(t) − E(0)| / (the probe's initial kinetic energy).
     pub energy_error: f64,
-    /// Membrane mass [kg] (whole bag).
+    /// Membrane mass \[kg\] (whole bag).
     pub bag_mass: f64,
-    /// Probe mass [kg].
+    /// Probe mass \[kg\].
     pub probe_mass: f64,
     /// Membrane points at release, at the peak and at the end: `(t,
     /// [[r, z]…])`.
     pub shapes: Vec<(f64, Vec<[f64; 2]>)>,
-    /// The probe's lower face at release [m] (at time t it is this less
+    /// The probe's lower face at release \[m\] (at time t it is this less
     /// the penetration).
     pub probe_bottom0: f64,
     /// Particles.
     pub particles: usize,
     /// Steps (inflation and impact).
     pub steps: u64,
-    /// Wall time [s].
+    /// Wall time \[s\].
     pub wall_s: f64,
 }
 

@@ -310,7 +310,7 @@ pub struct DogBoneRun {
     pub steps: u64,
     /// Particles.
     pub particles: usize,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub wall_s: f64,
 }
 

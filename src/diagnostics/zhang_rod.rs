@@ -17,13 +17,13 @@ use crate::scene::{build_multiphase_run, parse, Scene};
 /// The case file.
 pub const SCENE: &str = include_str!("../../cases/zhang_rod.toml");
 
-/// Rod radius R [m].
+/// Rod radius R \[m\].
 pub const ROD_RADIUS: f64 = 0.002;
-/// Rod length L₀ [m].
+/// Rod length L₀ \[m\].
 pub const ROD_LENGTH: f64 = 0.05;
 /// Impact speed [m/s].
 pub const SPEED: f64 = 1700.0;
-/// Plate thickness [m]; its impact face is z = 0.
+/// Plate thickness \[m\]; its impact face is z = 0.
 pub const PLATE: f64 = 0.0495;
 /// Rod density (Johnson & Cook 1983's tungsten alloy) [kg/m³].
 pub const RHO_ROD: f64 = 17000.0;
@@ -33,11 +33,11 @@ pub const RHO_PLATE: f64 = 7830.0;
 /// One sample of a run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RodSample {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Depth of the rod's nose below the plate's original face [m].
+    /// Depth of the rod's nose below the plate's original face \[m\].
     pub penetration: f64,
-    /// Tail minus nose [m].
+    /// Tail minus nose \[m\].
     pub length: f64,
     /// Mean axial velocity of the rod's last 10 % (its tail) [m/s].
     pub tail_velocity: f64,
@@ -46,7 +46,7 @@ pub struct RodSample {
 /// What a run measured.
 #[derive(Debug, Clone)]
 pub struct RodRun {
-    /// Cell size [m].
+    /// Cell size \[m\].
     pub h: f64,
     /// Samples, the first at t = 0.
     pub samples: Vec<RodSample>,
@@ -54,9 +54,9 @@ pub struct RodRun {
     pub steps: u64,
     /// Points of all phases.
     pub points: usize,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub wall_s: f64,
-    /// Smallest step [s].
+    /// Smallest step \[s\].
     pub dt_min: f64,
     /// |Σ m v_z − initial| / initial over the run (all phases; per radian).
     pub momentum_drift: f64,
@@ -221,11 +221,11 @@ pub fn run(scene: &Scene, every: f64) -> Result<RodRun, Error> {
 /// One state of the Alekseevskii–Tate model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TateState {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Penetration depth [m].
+    /// Penetration depth \[m\].
     pub penetration: f64,
-    /// Rod length [m].
+    /// Rod length \[m\].
     pub length: f64,
     /// Rod (tail) velocity [m/s].
     pub velocity: f64,

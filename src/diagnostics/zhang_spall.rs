@@ -9,9 +9,9 @@ use crate::scene::{build_multiphase_run, parse};
 /// The case file.
 pub const SCENE: &str = include_str!("../../cases/zhang_spall.toml");
 
-/// Flyer thickness d [m].
+/// Flyer thickness d \[m\].
 pub const FLYER: f64 = 0.0023;
-/// The impact face's position [m].
+/// The impact face's position \[m\].
 pub const IMPACT_FACE: f64 = 0.0023;
 
 /// The analytic spall: time `3 d / c` and plane `d` behind the impact face,

@@ -20,7 +20,7 @@ pub struct DtLimiter {
     pub material: String,
     /// The signal speed behind the limit, `h / Δt_limit` [m/s].
     pub speed: f64,
-    /// The limit at that site before the Courant number [s].
+    /// The limit at that site before the Courant number \[s\].
     pub dt: f64,
 }
 

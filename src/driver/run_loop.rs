@@ -39,7 +39,7 @@ pub struct RunOptions {
     /// Set (e.g. by a Ctrl-C handler) to stop cleanly at the end of the
     /// current step, with a checkpoint.
     pub interrupt: Option<Arc<AtomicBool>>,
-    /// The memory a scene may use [bytes] (`None`: what the machine has
+    /// The memory a scene may use \[bytes\] (`None`: what the machine has
     /// available); a scene estimated above it is refused before anything
     /// is allocated.
     pub memory_limit: Option<u64>,

@@ -24,7 +24,7 @@ use super::state::CellLayout;
 /// the domain boundary.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct BoundaryExchange {
-    /// Mass in [kg] (per depth in 1D/2D).
+    /// Mass in \[kg\] (per depth in 1D/2D).
     pub mass: f64,
     /// Momentum in.
     pub momentum: [f64; 3],

@@ -50,9 +50,9 @@ pub struct JohnsonCookFailure {
     pub d5: f64,
     /// Reference strain rate ε̇₀ > 0 [1/s].
     pub rate0: f64,
-    /// Room temperature [K] of T*.
+    /// Room temperature \[K\] of T*.
     pub t_room: f64,
-    /// Melting temperature [K] of T* (> `t_room`).
+    /// Melting temperature \[K\] of T* (> `t_room`).
     pub t_melt: f64,
 }
 
@@ -74,9 +74,9 @@ pub enum Failure {
     /// Johnson–Cook ductile damage (needs plasticity).
     JohnsonCook(JohnsonCookFailure),
     /// Brittle failure when the largest principal stress reaches
-    /// `spall_strength` [Pa] (> 0).
+    /// `spall_strength` \[Pa\] (> 0).
     Tensile {
-        /// Spall strength σ_s > 0 [Pa].
+        /// Spall strength σ_s > 0 \[Pa\].
         spall_strength: f64,
     },
 }

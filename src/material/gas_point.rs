@@ -50,7 +50,7 @@ use super::eos::{EquationOfState, FluidEos};
 /// The Wilkins-type artificial viscosity of York Eqs. 24–25.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArtificialViscosity {
-    /// Geometric length g [m] (York: `√2 Δx`).
+    /// Geometric length g \[m\] (York: `√2 Δx`).
     pub g: f64,
     /// Artificial bulk coefficient κ̃ ≥ 0 (York: 0.75).
     pub kappa: f64,

@@ -49,7 +49,7 @@ impl Jwl {
     /// Largest compression `ρ/ρ₀` searched by [`EquationOfState::density`].
     const MAX_COMPRESSION: f64 = 1.0e3;
 
-    /// Creates the EOS from `A`, `B` [Pa], `R₁`, `R₂`, `ω`, the reference
+    /// Creates the EOS from `A`, `B` \[Pa\], `R₁`, `R₂`, `ω`, the reference
     /// density `ρ₀` and `c_v`; `t0` is the reference temperature at which
     /// the pressure `p(ρ₀, T₀)` must be positive.
     ///

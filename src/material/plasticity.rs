@@ -29,9 +29,9 @@ use nalgebra::Matrix3;
 /// T* = (T − T_room)/(T_melt − T_room) clamped to [0, 1].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JohnsonCook {
-    /// Initial yield stress A [Pa].
+    /// Initial yield stress A \[Pa\].
     pub a: f64,
-    /// Hardening modulus B [Pa].
+    /// Hardening modulus B \[Pa\].
     pub b: f64,
     /// Hardening exponent n.
     pub n: f64,
@@ -41,9 +41,9 @@ pub struct JohnsonCook {
     pub m: f64,
     /// Reference strain rate ε̇₀ > 0 [1/s].
     pub rate0: f64,
-    /// Room (reference) temperature [K].
+    /// Room (reference) temperature \[K\].
     pub t_room: f64,
-    /// Melting temperature [K] (> `t_room`).
+    /// Melting temperature \[K\] (> `t_room`).
     pub t_melt: f64,
 }
 
@@ -53,16 +53,16 @@ pub struct JohnsonCook {
 pub enum FlowStress {
     /// σ_y = σ₀ + H ε̄.
     Linear {
-        /// Initial yield stress σ₀ ≥ 0 [Pa].
+        /// Initial yield stress σ₀ ≥ 0 \[Pa\].
         yield_stress: f64,
-        /// Plastic hardening modulus H ≥ 0 [Pa].
+        /// Plastic hardening modulus H ≥ 0 \[Pa\].
         hardening: f64,
     },
     /// σ_y = σ₀ + K ε̄ⁿ (Ludwik).
     PowerLaw {
-        /// Initial yield stress σ₀ ≥ 0 [Pa].
+        /// Initial yield stress σ₀ ≥ 0 \[Pa\].
         yield_stress: f64,
-        /// Strength coefficient K ≥ 0 [Pa].
+        /// Strength coefficient K ≥ 0 \[Pa\].
         k: f64,
         /// Hardening exponent n in (0, 1].
         n: f64,
@@ -190,7 +190,7 @@ pub struct J2 {
 pub struct PlasticState {
     /// Equivalent plastic strain ε̄.
     pub plastic_strain: f64,
-    /// Temperature [K].
+    /// Temperature \[K\].
     pub temperature: f64,
     /// Damage D ∈ [0, 1] of a failing material (1: failed; see
     /// [`crate::material::failure`]); 0 elsewhere.

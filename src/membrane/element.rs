@@ -48,7 +48,7 @@ const HOURGLASS: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 pub struct MembraneMaterial {
     /// Density ρ [kg/m³].
     pub density: f64,
-    /// Young's modulus E [Pa].
+    /// Young's modulus E \[Pa\].
     pub young: f64,
     /// Poisson's ratio ν.
     pub poisson: f64,
@@ -225,7 +225,7 @@ pub struct MembraneError {
 pub struct MembraneMesh {
     /// Material and element settings.
     pub material: MembraneMaterial,
-    /// Uniform pressure on every element [Pa], along its current normal
+    /// Uniform pressure on every element \[Pa\], along its current normal
     /// ê₃ (a follower load; ê₃ follows the corner order by the right-hand
     /// rule).
     pub pressure: f64,
@@ -241,7 +241,7 @@ pub struct MembraneMesh {
     pub mass: Vec<f64>,
     /// Fixed directions per node (x, y, z): held at zero velocity.
     pub fixed: Vec<[bool; 3]>,
-    /// Applied node forces [N] (point loads; a contact may add its forces
+    /// Applied node forces \[N\] (point loads; a contact may add its forces
     /// here before [`Self::trial_velocities`]).
     pub f_applied: Vec<V3>,
     /// Internal (stress + hourglass) node forces of the last

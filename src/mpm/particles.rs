@@ -29,7 +29,7 @@ pub struct Particles<const D: usize> {
     pub work: Vec<f64>,
     /// Index into the scene's solid materials.
     pub material: Vec<u16>,
-    /// Temperature T_p [K]. Only the solid–fluid heat exchange of a coupled
+    /// Temperature T_p \[K\]. Only the solid–fluid heat exchange of a coupled
     /// run changes it (Guilkey Sec. 3.3 step 10: the exchange's change goes
     /// from the cells to the nodes and then to the particles); elsewhere it
     /// stays at its initial value ([`Particles::INITIAL_TEMPERATURE`] unless
@@ -49,7 +49,7 @@ pub struct Particles<const D: usize> {
 }
 
 impl<const D: usize> Particles<D> {
-    /// Temperature a particle gets from [`Particles::push`] [K].
+    /// Temperature a particle gets from [`Particles::push`] \[K\].
     pub const INITIAL_TEMPERATURE: f64 = 300.0;
 
     /// Number of particles.

@@ -16,11 +16,11 @@ pub struct MembraneElementsSpec {
     pub name: String,
     /// The mesh.
     pub mesh: MeshSpec,
-    /// Thickness t > 0 [m].
+    /// Thickness t > 0 \[m\].
     pub thickness: f64,
     /// Density ρ > 0 [kg/m³].
     pub density: f64,
-    /// Young's modulus E > 0 [Pa].
+    /// Young's modulus E > 0 \[Pa\].
     pub young: f64,
     /// Poisson's ratio, 0 ≤ ν < 0.5.
     pub poisson: f64,
@@ -30,10 +30,10 @@ pub struct MembraneElementsSpec {
     /// Mass-proportional damping α ≥ 0 [1/s] (dynamic relaxation).
     #[serde(default)]
     pub damping: f64,
-    /// Uniform pressure [Pa] along each element's normal (follower load).
+    /// Uniform pressure \[Pa\] along each element's normal (follower load).
     #[serde(default)]
     pub pressure: f64,
-    /// Initial in-plane stress `[σxx, σyy, σxy]` [Pa] in each element's
+    /// Initial in-plane stress `[σxx, σyy, σxy]` \[Pa\] in each element's
     /// frame (`[σ0, σ0, 0]`: isotropic pretension σ0).
     #[serde(default)]
     pub prestress: [f64; 3],
@@ -63,11 +63,11 @@ pub enum MeshSpec {
     /// A structured rectangle: nodes at corner + (i/na) edge_a + (j/nb)
     /// edge_b, normal edge_a × edge_b.
     Rectangle {
-        /// A corner [m].
+        /// A corner \[m\].
         corner: [f64; 3],
-        /// First edge vector [m].
+        /// First edge vector \[m\].
         edge_a: [f64; 3],
-        /// Second edge vector [m].
+        /// Second edge vector \[m\].
         edge_b: [f64; 3],
         /// Elements along edge_a and edge_b.
         cells: [usize; 2],
@@ -75,9 +75,9 @@ pub enum MeshSpec {
     /// A disc in the plane z = centre.z (normal +z), `cells × cells`
     /// elements (even), butterfly layout.
     Disc {
-        /// Centre [m].
+        /// Centre \[m\].
         centre: [f64; 3],
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
         /// Elements across the diameter (even, ≥ 2).
         cells: usize,
@@ -130,9 +130,9 @@ impl LoadSpec {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSelector {
-    /// Lower corner [m].
+    /// Lower corner \[m\].
     pub lower: [f64; 3],
-    /// Upper corner [m].
+    /// Upper corner \[m\].
     pub upper: [f64; 3],
 }
 
@@ -165,7 +165,7 @@ pub struct LoadSpec {
     /// Nodes inside an axis-aligned box (bounds included).
     #[serde(default, rename = "box")]
     pub bounds: Option<BoxSelector>,
-    /// Total force [N], shared equally.
+    /// Total force \[N\], shared equally.
     pub force: [f64; 3],
 }
 

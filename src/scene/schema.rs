@@ -380,17 +380,17 @@ pub enum FlowKind {
 pub struct PlasticitySpec {
     /// Flow-stress law.
     pub flow: FlowKind,
-    /// Initial yield stress σ₀ ≥ 0 [Pa] (linear, power_law).
+    /// Initial yield stress σ₀ ≥ 0 \[Pa\] (linear, power_law).
     pub yield_stress: Option<f64>,
-    /// Hardening modulus H ≥ 0 [Pa] (linear; default 0: perfectly plastic).
+    /// Hardening modulus H ≥ 0 \[Pa\] (linear; default 0: perfectly plastic).
     pub hardening_modulus: Option<f64>,
-    /// Strength coefficient K ≥ 0 [Pa] (power_law).
+    /// Strength coefficient K ≥ 0 \[Pa\] (power_law).
     pub hardening_coefficient: Option<f64>,
     /// Hardening exponent in (0, 1] (power_law).
     pub hardening_exponent: Option<f64>,
-    /// Johnson–Cook A [Pa].
+    /// Johnson–Cook A \[Pa\].
     pub a: Option<f64>,
-    /// Johnson–Cook B [Pa].
+    /// Johnson–Cook B \[Pa\].
     pub b: Option<f64>,
     /// Johnson–Cook n in (0, 1].
     pub n: Option<f64>,
@@ -400,9 +400,9 @@ pub struct PlasticitySpec {
     pub m: Option<f64>,
     /// Johnson–Cook reference strain rate ε̇₀ > 0 [1/s] (default 1).
     pub reference_rate: Option<f64>,
-    /// Johnson–Cook room temperature [K] (default 300).
+    /// Johnson–Cook room temperature \[K\] (default 300).
     pub room_temperature: Option<f64>,
-    /// Johnson–Cook melting temperature [K] (> room_temperature).
+    /// Johnson–Cook melting temperature \[K\] (> room_temperature).
     pub melt_temperature: Option<f64>,
     /// Taylor–Quinney fraction β of plastic work turned into heat, in
     /// [0, 1] (default 0.9).
@@ -533,11 +533,11 @@ pub struct FailureSpec {
     pub d5: Option<f64>,
     /// Reference strain rate ε̇₀ > 0 [1/s] of ε̇*.
     pub reference_rate: Option<f64>,
-    /// Room temperature [K] of T*.
+    /// Room temperature \[K\] of T*.
     pub room_temperature: Option<f64>,
-    /// Melting temperature [K] of T*.
+    /// Melting temperature \[K\] of T*.
     pub melt_temperature: Option<f64>,
-    /// Spall strength σ_s > 0 [Pa] (tensile).
+    /// Spall strength σ_s > 0 \[Pa\] (tensile).
     pub spall_strength: Option<f64>,
 }
 
@@ -670,9 +670,9 @@ impl EosKind {
     }
 }
 
-/// Default `reference_temperature` of the Mie–Grüneisen and JWL EOS [K].
+/// Default `reference_temperature` of the Mie–Grüneisen and JWL EOS \[K\].
 pub const DEFAULT_EOS_REFERENCE_TEMPERATURE: f64 = 300.0;
-/// Default `reference_pressure` of the Mie–Grüneisen EOS [Pa] (one
+/// Default `reference_pressure` of the Mie–Grüneisen EOS \[Pa\] (one
 /// atmosphere).
 pub const DEFAULT_EOS_REFERENCE_PRESSURE: f64 = 101_325.0;
 
@@ -724,9 +724,9 @@ pub struct MaterialSpec {
     pub reference_temperature: Option<f64>,
     /// Mie–Grüneisen: pressure at `(ρ₀, T₀)` (default 101325 Pa).
     pub reference_pressure: Option<f64>,
-    /// JWL: A [Pa].
+    /// JWL: A \[Pa\].
     pub a: Option<f64>,
-    /// JWL: B [Pa].
+    /// JWL: B \[Pa\].
     pub b: Option<f64>,
     /// JWL: R₁ > 0.
     pub r1: Option<f64>,
@@ -850,7 +850,7 @@ pub struct ReactionSpec {
     /// `n` ≥ 0 (default 0: a constant regression rate).
     #[serde(default)]
     pub pressure_exponent: f64,
-    /// The reactant burns where its temperature is at least this [K] (> 0).
+    /// The reactant burns where its temperature is at least this \[K\] (> 0).
     pub threshold_temperature: f64,
     /// Heat of reaction `Q` [J/kg] ≥ 0 (default 0).
     #[serde(default)]
