@@ -259,6 +259,10 @@ pub struct CoupledRun<const D: usize> {
     /// implicit pressure solve, face pressure), summed over the steps and
     /// their retries. Not part of the state (a restart starts it at 0).
     pub pressure_s: f64,
+    /// How many times the last step halved its Δt because the pressure
+    /// stage failed retryably (e.g. the outer iteration of the implicit
+    /// pressure not converging); the run summary counts them as retries.
+    pub last_halvings: usize,
     ws: IceWorkspace<D>,
     map: NodeCellMap<D>,
     node_pressure: Vec<f64>,
@@ -443,6 +447,7 @@ impl<const D: usize> CoupledRun<D> {
             cfl,
             steps: 0,
             pressure_s: 0.0,
+            last_halvings: 0,
             ws,
             reactions: Vec::new(),
             burn_scratch: reaction::BurnScratch::default(),
@@ -734,6 +739,7 @@ impl<const D: usize> CoupledRun<D> {
             }
         };
         self.pressure_s += pressure_start.elapsed().as_secs_f64();
+        self.last_halvings = tries;
         let dt = info.dt;
         let layout = &self.fluid.layout;
         let vol = layout.cell_volume();

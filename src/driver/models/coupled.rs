@@ -89,7 +89,7 @@ impl<const D: usize> Model for Coupled<D> {
             dt: info.dt,
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
-            retries: 0,
+            retries: self.run.last_halvings,
             boundary: None,
         })
     }
