@@ -37,14 +37,12 @@ use crate::scene::{MaterialKind, Mode, Scene};
 /// needs more memory than `opts.memory_limit` (default: what the machine
 /// has) is refused before allocating unless `opts.ignore_memory_limit`.
 pub fn run_scene(scene: &Scene, opts: &RunOptions) -> Result<Summary> {
-    guard_memory(scene, opts)?;
-    let (pool, threads) = pool(opts)?;
-    pool.install(|| with_model(scene, RunIt { opts, threads }))
-        .map_err(|e| run_loop::label_error(e, scene))
+    run_keeping(scene, opts, false).map(|k| k.summary)
 }
 
 /// What a run leaves for a study: its summary, the snapshot fields of its
-/// initial and final states and its last history row.
+/// initial and final states and its last history row (all three empty
+/// from [`run_scene`], which keeps only the summary).
 #[derive(Debug, Clone)]
 pub struct KeptRun {
     /// The run summary (as `summary.json`).
@@ -63,10 +61,25 @@ pub struct KeptRun {
 /// # Errors
 /// As [`run_scene`].
 pub fn run_scene_keep(scene: &Scene, opts: &RunOptions) -> Result<KeptRun> {
+    run_keeping(scene, opts, true)
+}
+
+/// The memory guard, the thread pool and the run; with `keep`, the fields
+/// and history a study reads too.
+fn run_keeping(scene: &Scene, opts: &RunOptions, keep: bool) -> Result<KeptRun> {
     guard_memory(scene, opts)?;
     let (pool, threads) = pool(opts)?;
-    pool.install(|| with_model(scene, KeepIt { opts, threads }))
-        .map_err(|e| run_loop::label_error(e, scene))
+    pool.install(|| {
+        with_model(
+            scene,
+            RunIt {
+                opts,
+                threads,
+                keep,
+            },
+        )
+    })
+    .map_err(|e| run_loop::label_error(e, scene))
 }
 
 /// What `check` reports of a scene that would run.
@@ -124,25 +137,27 @@ trait WithModel {
 struct RunIt<'a> {
     opts: &'a RunOptions,
     threads: usize,
+    /// Keep the initial and final fields and the last history row.
+    keep: bool,
 }
 
 impl WithModel for RunIt<'_> {
-    type Out = Summary;
-    fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<Summary> {
-        run_model(model, scene, self.opts, self.threads)
-    }
-}
-
-struct KeepIt<'a> {
-    opts: &'a RunOptions,
-    threads: usize,
-}
-
-impl WithModel for KeepIt<'_> {
     type Out = KeptRun;
     fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<KeptRun> {
-        let initial = model.field_sets();
+        let initial = if self.keep {
+            model.field_sets()
+        } else {
+            Vec::new()
+        };
         let summary = run_model(model, scene, self.opts, self.threads)?;
+        if !self.keep {
+            return Ok(KeptRun {
+                summary,
+                initial,
+                last: Vec::new(),
+                history: Vec::new(),
+            });
+        }
         let mut row = vec![model.time()];
         model.history_row(&mut row);
         let names = std::iter::once("time").chain(model.history_columns().into_iter().map(|c| c.0));

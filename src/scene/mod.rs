@@ -30,16 +30,7 @@ use crate::error::SceneError;
 /// text; a value of the wrong type or range names its key path (and its
 /// line where the parser knows it).
 pub fn parse(text: &str) -> Result<Scene, SceneError> {
-    let de = toml::Deserializer::parse(text).map_err(|e| {
-        SceneError::new(
-            "<toml>",
-            format!(
-                "not valid TOML: {} ({})",
-                e.message(),
-                location(text, e.span())
-            ),
-        )
-    })?;
+    let de = toml::Deserializer::parse(text).map_err(|e| syntax_error(text, &e))?;
     let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
@@ -62,6 +53,18 @@ pub fn parse(text: &str) -> Result<Scene, SceneError> {
         scene.reject_ignored(&raw)?;
     }
     Ok(scene)
+}
+
+/// A TOML syntax error of `text`, with its line, column and text.
+fn syntax_error(text: &str, e: &toml::de::Error) -> SceneError {
+    SceneError::new(
+        "<toml>",
+        format!(
+            "not valid TOML: {} ({})",
+            e.message(),
+            location(text, e.span())
+        ),
+    )
 }
 
 /// `line L, column C: `text`` of a byte span of `text`. Without a span (a

@@ -311,10 +311,7 @@ pub fn parse_with(text: &str, overrides: &[Override]) -> Result<super::Scene, Sc
         return super::parse(text);
     }
     // The file's own syntax errors first, located in the file.
-    let mut table: toml::Table = match toml::from_str(text) {
-        Ok(t) => t,
-        Err(_) => return super::parse(text).and(Err(SceneError::new("<toml>", "not valid TOML"))),
-    };
+    let mut table: toml::Table = toml::from_str(text).map_err(|e| super::syntax_error(text, &e))?;
     for o in overrides {
         o.apply(&mut table)?;
     }
@@ -410,6 +407,10 @@ states = [{ material = "gas", volume_fraction = 1.0, density = 0.125 }]
         assert_eq!(e.path, "grid.cells", "{e:?}");
         let e = set(&["time.end.x=1"]).unwrap_err();
         assert_eq!(e.path, "time.end", "{e:?}");
+        // The file's own syntax error is located in the file.
+        let o = [Override::parse("time.end=1").unwrap()];
+        let e = parse_with("[grid]\ndim = [1\n", &o).unwrap_err();
+        assert!(e.path == "<toml>" && e.message.contains("line 2"), "{e:?}");
         assert!(Override::parse("grid.cells").is_err());
         assert!(Override::parse("grid..cells=1").is_err());
         assert!(Override::parse("grid.cells=[1").is_err());
