@@ -9,14 +9,15 @@ fn main() {
         "linear" => ShapeKind::Linear,
         "bspline2" => ShapeKind::QuadraticBspline,
         "bspline3" => ShapeKind::CubicBspline,
+        "bspline2_gimp" => ShapeKind::QuadraticBsplineGimp,
         _ => ShapeKind::Gimp,
     };
     let amp: f64 = a.get(2).and_then(|s| s.parse().ok()).unwrap_or(0.05);
     let dim: usize = a.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
     let mms = AxisAlignedMms::standard(amp);
     let mut prev: Option<f64> = None;
-    for n in [8, 16, 32, 64, 128, 256] {
-        if dim == 2 && n > 64 {
+    for n in [8, 16, 32, 64, 128, 256, 512] {
+        if dim == 2 && n > 128 {
             break;
         }
         let m = if dim == 1 {

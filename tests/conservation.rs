@@ -77,6 +77,7 @@ fn momentum_is_conserved_to_round_off_on_a_free_grid() {
         ShapeKind::Gimp,
         ShapeKind::QuadraticBspline,
         ShapeKind::CubicBspline,
+        ShapeKind::QuadraticBsplineGimp,
     ] {
         for scheme in [UpdateScheme::Usf, UpdateScheme::Usl, UpdateScheme::Musl] {
             if shape == ShapeKind::Linear && scheme == UpdateScheme::Usl {

@@ -21,6 +21,7 @@ fn bar_mode_one_converges_at_second_order_and_conserves_energy() {
         (ShapeKind::Gimp, 1.6e-3),
         (ShapeKind::QuadraticBspline, 3.1e-3),
         (ShapeKind::CubicBspline, 3.9e-3),
+        (ShapeKind::QuadraticBsplineGimp, 3.1e-3),
     ] {
         let a = run_bar(&BAR, shape, UpdateScheme::Usl, 16, 0.2).expect("run");
         let b = run_bar(&BAR, shape, UpdateScheme::Usl, 32, 0.2).expect("run");

@@ -70,12 +70,7 @@ pub const SOD_RIGHT: (f64, f64, f64) = (0.125, 0.0, 0.1);
 /// The scene text of a York Sod run (`cases/york_sod.toml` at `s.cells`).
 pub fn york_sod_scene(s: &YorkSod) -> String {
     let h = 1.0 / s.cells as f64;
-    let shape = match s.shape {
-        ShapeKind::Linear => "linear",
-        ShapeKind::Gimp => "gimp",
-        ShapeKind::QuadraticBspline => "quadratic_bspline",
-        ShapeKind::CubicBspline => "cubic_bspline",
-    };
+    let shape = s.shape.name();
     let (g, kappa, c1, c2) = s.q;
     let (lo, hi) = s.tube;
     format!(

@@ -27,7 +27,8 @@ use crate::grid::Grid;
 use crate::material::plasticity::PlasticState;
 use crate::material::{GasInput, PointState, SolidMaterial};
 use crate::shape::{
-    CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, ShapeKind, Stencil,
+    CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, QuadraticBsplineGimp,
+    ShapeKind, Stencil,
 };
 
 /// Ordering of stress update and momentum update in an explicit step.
@@ -272,6 +273,9 @@ fn step_shape<const D: usize, const AXI: bool>(
         ShapeKind::CubicBspline => {
             step_with::<D, 4, _, AXI>(ctx, CubicBspline, particles, gs, scratch)
         }
+        ShapeKind::QuadraticBsplineGimp => {
+            step_with::<D, 4, _, AXI>(ctx, QuadraticBsplineGimp, particles, gs, scratch)
+        }
     }
 }
 
@@ -429,6 +433,7 @@ macro_rules! with_kernel {
             ShapeKind::Gimp => $f::<D, 3, _>(Gimp, $($arg),*),
             ShapeKind::QuadraticBspline => $f::<D, 3, _>(QuadraticBspline, $($arg),*),
             ShapeKind::CubicBspline => $f::<D, 4, _>(CubicBspline, $($arg),*),
+            ShapeKind::QuadraticBsplineGimp => $f::<D, 4, _>(QuadraticBsplineGimp, $($arg),*),
         }
     };
 }
@@ -450,6 +455,9 @@ macro_rules! with_kernel_axi {
             ShapeKind::Gimp => $f::<D, 3, _, $a>(Gimp, $($arg),*),
             ShapeKind::QuadraticBspline => $f::<D, 3, _, $a>(QuadraticBspline, $($arg),*),
             ShapeKind::CubicBspline => $f::<D, 4, _, $a>(CubicBspline, $($arg),*),
+            ShapeKind::QuadraticBsplineGimp => {
+                $f::<D, 4, _, $a>(QuadraticBsplineGimp, $($arg),*)
+            }
         }
     };
 }
@@ -803,7 +811,7 @@ fn prepare<const D: usize>(
             "particle position is not finite or has left the grid",
         ));
     }
-    if ctx.params.shape == ShapeKind::Gimp {
+    if ctx.params.shape.uses_particle_domain() {
         let inv_h = ctx.grid.inv_h;
         scratch.lp.resize(particles.len(), SVector::zeros());
         scratch
@@ -1363,6 +1371,9 @@ impl<const D: usize> CoupledMpm<'_, D> {
             ShapeKind::CubicBspline => {
                 run::<D, 4, _, F>(CubicBspline, g, particles, scratch, node, v)
             }
+            ShapeKind::QuadraticBsplineGimp => {
+                run::<D, 4, _, F>(QuadraticBsplineGimp, g, particles, scratch, node, v)
+            }
         }
     }
 
@@ -1420,6 +1431,9 @@ impl<const D: usize> CoupledMpm<'_, D> {
             }
             ShapeKind::CubicBspline => {
                 run::<D, 4, _, A, V, F>(CubicBspline, g, particles, scratch, out, v, f)
+            }
+            ShapeKind::QuadraticBsplineGimp => {
+                run::<D, 4, _, A, V, F>(QuadraticBsplineGimp, g, particles, scratch, out, v, f)
             }
         }
     }

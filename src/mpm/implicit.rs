@@ -81,7 +81,8 @@ use crate::error::{Error, FailureSite, Result, SceneError};
 use crate::grid::{Boundary, Grid};
 use crate::material::SolidMaterial;
 use crate::shape::{
-    CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, ShapeKind, Stencil,
+    CubicBspline, Gimp, LinearHat, ParticleWeights, QuadraticBspline, QuadraticBsplineGimp,
+    ShapeKind, Stencil,
 };
 
 /// Linear solver for the Newton systems.
@@ -911,6 +912,9 @@ impl<const D: usize> ImplicitRun<D> {
                     }
                     ShapeKind::CubicBspline => {
                         stencil::<D, 4, _>(grid, CubicBspline, &xi, &lp, nd, wd, gd)
+                    }
+                    ShapeKind::QuadraticBsplineGimp => {
+                        stencil::<D, 4, _>(grid, QuadraticBsplineGimp, &xi, &lp, nd, wd, gd)
                     }
                 }
             });

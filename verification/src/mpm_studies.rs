@@ -7,11 +7,12 @@ use mpmice::shape::ShapeKind;
 use crate::harness::{Point, Series, StudyResult};
 
 /// Shape functions in every MPM study, with short labels.
-pub const SHAPES: [(ShapeKind, &str); 4] = [
+pub const SHAPES: [(ShapeKind, &str); 5] = [
     (ShapeKind::Linear, "linear"),
     (ShapeKind::Gimp, "gimp"),
     (ShapeKind::QuadraticBspline, "bspline2"),
     (ShapeKind::CubicBspline, "bspline3"),
+    (ShapeKind::QuadraticBsplineGimp, "bspline2_gimp"),
 ];
 
 fn point(m: &Measured) -> Point {
