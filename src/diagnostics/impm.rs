@@ -173,6 +173,8 @@ pub struct Cylinder {
     pub rho: f64,
     /// Internal pressure P.
     pub pressure: f64,
+    /// Particles per cell per direction.
+    pub ppc: usize,
 }
 
 impl Cylinder {
@@ -186,6 +188,7 @@ impl Cylinder {
             shear: 43.8e9,
             rho: 8900.0,
             pressure: 19.4e6,
+            ppc: 2,
         }
     }
 
@@ -228,11 +231,11 @@ impl Cylinder {
             elastic: self.elastic(),
         };
         let (ri, ro) = (self.r_inner, self.r_outer);
-        let particles = fill_box(&grid, &grid.lower, &grid.upper, 2, self.rho, |x| {
+        let particles = fill_box(&grid, &grid.lower, &grid.upper, self.ppc, self.rho, |x| {
             let r = x.norm();
             r >= ri && r <= ro
         });
-        let spacing = dx / 2.0;
+        let spacing = dx / self.ppc as f64;
         let band: Vec<usize> = (0..particles.len())
             .filter(|&p| particles.x0[p].norm() < ri + spacing)
             .collect();
@@ -355,7 +358,7 @@ impl Cylinder {
             .collect();
         table.sort_by_key(|a| a.0);
         let band_load = BandLoad {
-            r_band: self.r_inner + dx / 2.0,
+            r_band: self.r_inner + dx / self.ppc as f64,
             table,
             ramp,
         };

@@ -113,7 +113,6 @@ pub fn impm_column(quick: bool) -> anyhow::Result<StudyResult> {
 /// `impm_cylinder`: the quasistatic pressurised cylinder, Guilkey Eq. 43 and
 /// the Lamé radial displacement error vs dx.
 pub fn impm_cylinder(quick: bool) -> anyhow::Result<StudyResult> {
-    let cy = Cylinder::guilkey();
     let dxs: &[f64] = if quick {
         &[0.05, 0.025, 0.0125]
     } else {
@@ -121,6 +120,7 @@ pub fn impm_cylinder(quick: bool) -> anyhow::Result<StudyResult> {
     };
     let mut e43 = Vec::new();
     let mut eu = Vec::new();
+    let cy = Cylinder::guilkey();
     for &dx in dxs {
         let m = cy.run_implicit(ShapeKind::Linear, dx, 1)?;
         e43.push(point(&m));
@@ -129,24 +129,54 @@ pub fn impm_cylinder(quick: bool) -> anyhow::Result<StudyResult> {
             ..m.clone()
         }));
     }
+    let mut series = vec![
+        Series::new("Eq. 43", "mean ||σr+σθ| − 2P/3| / (2P/3)", e43),
+        Series::new("u_r", "relative RMS vs Lamé", eu),
+    ];
+    // The remedies tried for the annulus's first-order Eq. 43 error: wider
+    // shape functions and more particles per cell.
+    for (shape, label, ppc) in [
+        (ShapeKind::QuadraticBspline, "quadratic_bspline", 3),
+        (ShapeKind::CubicBspline, "cubic_bspline", 3),
+        (ShapeKind::QuadraticBsplineGimp, "quadratic_bspline_gimp", 3),
+        (ShapeKind::QuadraticBsplineGimp, "quadratic_bspline_gimp", 4),
+    ] {
+        let cy = Cylinder {
+            ppc,
+            ..Cylinder::guilkey()
+        };
+        let mut pts = Vec::new();
+        for &dx in dxs {
+            pts.push(point(&cy.run_implicit(shape, dx, 1)?));
+        }
+        series.push(Series::new(
+            format!("Eq. 43 {label} {ppc}x{ppc}"),
+            "mean ||σr+σθ| − 2P/3| / (2P/3)",
+            pts,
+        ));
+    }
     Ok(StudyResult {
         study: "impm_cylinder".into(),
-        series: vec![
-            Series::new("Eq. 43", "mean ||σr+σθ| − 2P/3| / (2P/3)", e43),
-            Series::new("u_r", "relative RMS vs Lamé", eu),
-        ],
+        series,
         notes: vec![
             "Guilkey Sec. 4.1 without fluid: quarter annulus ri = 0.5, ro = 1, K = 117 GPa, \
              G = 43.8 GPa, rho = 8900, plane strain, symmetry planes x = 0 and y = 0; P = 19.4 MPa \
              applied in one quasistatic load step as a traction on the particles within one \
              particle spacing of ri (force P x the particle's share of the arc, r_i times its angular extent between the midpoints to its angular neighbours, radial)."
                 .into(),
-            "Linear hat, 2x2 particles per cell, neo-Hookean. GIMP gives identical numbers here: \
-             particles stay at their initial offsets (+-h/4), where uGIMP with lp = h/4 equals \
-             the hat."
+            "Series 'Eq. 43' and 'u_r': linear hat, 2x2 particles per cell, neo-Hookean. GIMP \
+             gives identical numbers here: particles stay at their initial offsets (+-h/4), \
+             where uGIMP with lp = h/4 equals the hat. The other series: the shape and \
+             particles per cell named."
                 .into(),
             "Error Eq. 43 = (1/N) sum_p ||sigma_r + sigma_theta| - 2P/3| / (2P/3), all particles; \
              u_r error = sqrt(sum V (u_r - u_Lame)^2 / sum V u_Lame^2)."
+                .into(),
+            "Every variant stays first order: within two cells of the inner surface the \
+             particles carry 25-40 % error at every dx (a boundary layer whose share of the \
+             mean falls as dx); B-splines with 3x3 particles cut the interior band's error \
+             about ninefold (linear 2x2: 1.17e-2, quadratic B-spline GIMP 3x3: 1.07e-3 at dx \
+             0.00625) and the total about threefold."
                 .into(),
         ],
     })
