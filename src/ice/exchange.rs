@@ -157,6 +157,18 @@ fn system(n: usize, beta: impl Fn(usize, usize) -> f64) -> Mat {
     a
 }
 
+/// `(I + B) x = b` for two materials in closed form: with
+/// `det = 1 + β₀₁ + β₁₀` and `d = (b₁ − b₀)/det`, `x₀ = b₀ + β₀₁ d` and
+/// `x₁ = b₁ − β₁₀ d` (a weighted average of `b₀` and `b₁` for any β ≥ 0, so
+/// stable at `K = 1e15`). The general path's LU gives the same to
+/// round-off; this is the exchange of every two-material cell and face
+/// without the pivot search and the triangular solves.
+#[inline(always)]
+fn solve_pair(b01: f64, b10: f64, b: [f64; 2]) -> [f64; 2] {
+    let d = (b[1] - b[0]) / (1.0 + b01 + b10);
+    [b[0] + b01 * d, b[1] - b10 * d]
+}
+
 /// Restores the conserved weighted sum `Σ w_r x_r = Σ w_r b_r`.
 fn restore_mean(n: usize, w: &[f64], b: &[f64], x: &mut [f64]) {
     let mut wsum = 0.0;
@@ -209,14 +221,28 @@ pub fn exchange_momentum_fixed<const D: usize>(
         return;
     }
     let is_fixed = |r: usize| fixed.get(r).copied().unwrap_or(false);
-    let mut a = system(n, |r, s| {
+    let beta = |r: usize, s: usize| {
         if is_fixed(r) {
             0.0
         } else {
             dt * k[r * n + s] * theta[s] * sp_vol[r]
         }
-    });
+    };
     let any_fixed = (0..n).any(is_fixed);
+    if n == 2 {
+        let (b01, b10) = (beta(0, 1), beta(1, 0));
+        for comp in 0..D {
+            let b = [vel[0][comp], vel[1][comp]];
+            let mut x = solve_pair(b01, b10, b);
+            if !any_fixed {
+                restore_mean(2, weight, &b, &mut x);
+            }
+            vel[0][comp] = x[0];
+            vel[1][comp] = x[1];
+        }
+        return;
+    }
+    let mut a = system(n, beta);
     let perm = lu(n, &mut a);
     let mut b = [0.0; MAX_MATERIALS];
     let mut x = [0.0; MAX_MATERIALS];
@@ -250,8 +276,7 @@ pub fn exchange_heat(
     if n < 2 {
         return;
     }
-    let mut a = system(n, |r, s| dt * h[r * n + s] * theta[s] * sp_vol[r] / cv[r]);
-    let perm = lu(n, &mut a);
+    let eta = |r: usize, s: usize| dt * h[r * n + s] * theta[s] * sp_vol[r] / cv[r];
     let mut b = [0.0; MAX_MATERIALS];
     let mut x = [0.0; MAX_MATERIALS];
     let mut w = [0.0; MAX_MATERIALS];
@@ -259,7 +284,13 @@ pub fn exchange_heat(
         b[r] = temp[r];
         w[r] = mass[r] * cv[r];
     }
-    lu_solve(n, &a, &perm, &b, &mut x);
+    if n == 2 {
+        [x[0], x[1]] = solve_pair(eta(0, 1), eta(1, 0), [b[0], b[1]]);
+    } else {
+        let mut a = system(n, eta);
+        let perm = lu(n, &mut a);
+        lu_solve(n, &a, &perm, &b, &mut x);
+    }
     restore_mean(n, &w[..n], &b, &mut x);
     temp[..n].copy_from_slice(&x[..n]);
 }
@@ -306,6 +337,47 @@ mod tests {
         let rel = 1.0 / (1.0 + b12 + b21);
         assert!((vel[0][0] - vel[1][0] - rel).abs() < 1e-14);
         assert!((0.4 * vel[0][0] + 1.2 * vel[1][0] - 0.4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn two_material_closed_form_matches_the_lu_solve() {
+        // β over 30 decades, both orderings, and a fixed row.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let b01 = 10f64.powf(-15.0 + 30.0 * rnd());
+            let b10 = if rnd() < 0.1 {
+                0.0
+            } else {
+                10f64.powf(-15.0 + 30.0 * rnd())
+            };
+            let b = [rnd() * 200.0 - 100.0, rnd() * 200.0 - 100.0];
+            let x = solve_pair(b01, b10, b);
+            let mut a = system(2, |r, _| if r == 0 { b01 } else { b10 });
+            let perm = lu(2, &mut a);
+            let mut y = [0.0; 2];
+            lu_solve(2, &a, &perm, &b, &mut y);
+            // The LU's own error grows with the condition number
+            // (about 1 + β₀₁ + β₁₀); the closed form is a weighted mean.
+            let scale = b[0].abs().max(b[1].abs());
+            let cond = 1.0 + b01 + b10;
+            for r in 0..2 {
+                assert!(
+                    (x[r] - y[r]).abs() <= 1e-14 * cond * scale,
+                    "β ({b01:e}, {b10:e}), b {b:?}: closed form {x:?}, LU {y:?}"
+                );
+            }
+            // The residual of (I + B) x = b.
+            let r0 = (1.0 + b01) * x[0] - b01 * x[1] - b[0];
+            let r1 = -b10 * x[0] + (1.0 + b10) * x[1] - b[1];
+            let big = (1.0 + b01.max(b10)) * scale;
+            assert!(r0.abs() <= 1e-13 * big && r1.abs() <= 1e-13 * big);
+        }
     }
 
     #[test]

@@ -110,11 +110,7 @@ pub fn cylinder_order(quick: bool) -> anyhow::Result<StudyResult> {
     Ok(StudyResult {
         study: "cylinder_order".into(),
         series: vec![
-            Series::new(
-                "MPM-ICE GIMP",
-                "Eq. 43 mean ||σr+σθ| − 2P/3| / (2P/3)",
-                pts,
-            ),
+            Series::new("MPM-ICE GIMP", "Eq. 43 mean ||σr+σθ| − 2P/3| / (2P/3)", pts),
             Series::new(
                 "MPM-ICE quadratic B-spline 3x3",
                 "Eq. 43 mean ||σr+σθ| − 2P/3| / (2P/3)",
