@@ -19,13 +19,7 @@ fn scene(shape: &str) -> mpmice::scene::Scene {
 #[test]
 fn one_and_two_threads_are_bit_identical() {
     let dir = tempfile::tempdir().expect("tmp");
-    for shape in [
-        "linear",
-        "gimp",
-        "quadratic_bspline",
-        "cubic_bspline",
-        "quadratic_bspline_gimp",
-    ] {
+    for shape in mpmice::shape::ShapeKind::ALL.map(|s| s.name()) {
         let s = scene(shape);
         let mut outputs = Vec::new();
         for threads in [1usize, 2] {

@@ -113,13 +113,7 @@ fn stays_at_rest(run: &mut SolidRun<2>, label: &str) {
 /// t = 0.1 at 100 × 1 cells).
 #[test]
 fn gas_at_rest_on_a_one_cell_strip_stays_at_rest_for_every_shape() {
-    for shape in [
-        "linear",
-        "gimp",
-        "quadratic_bspline",
-        "cubic_bspline",
-        "quadratic_bspline_gimp",
-    ] {
+    for shape in mpmice::shape::ShapeKind::ALL.map(|s| s.name()) {
         let text = gas_scene(1.0, 0.025, [40, 1], "symmetry", 0.0, 1.0, 0.0, 0.3, "")
             .replace("shape = \"gimp\"", &format!("shape = \"{shape}\""));
         stays_at_rest(&mut build(&text), shape);

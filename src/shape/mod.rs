@@ -46,6 +46,15 @@ impl ShapeKind {
         matches!(self, ShapeKind::Gimp | ShapeKind::QuadraticBsplineGimp)
     }
 
+    /// Every kind, in the order of [`Self::NAMES`].
+    pub const ALL: [ShapeKind; 5] = [
+        ShapeKind::Linear,
+        ShapeKind::Gimp,
+        ShapeKind::QuadraticBspline,
+        ShapeKind::CubicBspline,
+        ShapeKind::QuadraticBsplineGimp,
+    ];
+
     /// The name of this kind in scene files (one of [`Self::NAMES`]).
     pub const fn name(self) -> &'static str {
         match self {
@@ -412,6 +421,18 @@ mod tests {
         for lp in [1e-5, 1e-3, 0.125, 0.25, 0.5] {
             check_1d(|x| quadratic_bspline_gimp(x, lp), "quadratic gimp");
         }
+    }
+
+    /// Every kind's scene name parses back to it and is listed in `NAMES`.
+    #[test]
+    fn every_kind_has_its_scene_name() {
+        for k in ShapeKind::ALL {
+            let parsed: ShapeKind =
+                serde_json::from_str(&format!("\"{}\"", k.name())).expect("name parses");
+            assert_eq!(parsed, k);
+            assert!(ShapeKind::NAMES.split(", ").any(|n| n == k.name()));
+        }
+        assert_eq!(ShapeKind::NAMES.split(", ").count(), ShapeKind::ALL.len());
     }
 
     /// The B-spline GIMP weight is the average of the quadratic B-spline over
