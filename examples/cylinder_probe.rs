@@ -2,8 +2,10 @@
 //! shape functions, with Guilkey Eq. 43's error split by where the
 //! particles sit (first-cell layers at the inner and outer surfaces, and
 //! the rest): what limits the order.
+//! Also σ_r and σ_θ of the first particle rows at the inner surface
+//! against Lamé (mean per row of reference radius).
 //! `cargo run --release --example cylinder_probe -- SHAPE DX [DX ...]`,
-//! SHAPE one of linear, gimp, quadratic_bspline, cubic_bspline; `PPC=K`
+//! SHAPE a scene shape name (`ShapeKind::NAMES`); `PPC=K`
 //! sets K × K particles per cell (the case has 2), `END=T` the end time
 //! (the case: 8 ms), `DAMPING=A` the solid's damping (the case: 3000 1/s).
 
@@ -13,12 +15,9 @@ use mpmice::shape::ShapeKind;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let shape = match args.get(1).map(String::as_str) {
-        Some("linear") => ShapeKind::Linear,
-        Some("gimp") | None => ShapeKind::Gimp,
-        Some("quadratic_bspline") => ShapeKind::QuadraticBspline,
-        Some("cubic_bspline") => ShapeKind::CubicBspline,
-        Some(s) => anyhow::bail!("unknown shape {s}"),
+    let name = args.get(1).map_or("gimp", String::as_str);
+    let Some(shape) = ShapeKind::ALL.into_iter().find(|k| k.name() == name) else {
+        anyhow::bail!("unknown shape {name}; one of {}", ShapeKind::NAMES);
     };
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
@@ -29,6 +28,7 @@ fn main() -> anyhow::Result<()> {
         if let Ok(k) = std::env::var("PPC") {
             sc.mpm.particles_per_cell = k.parse()?;
         }
+        let ppc = sc.mpm.particles_per_cell;
         if let Ok(t) = std::env::var("END") {
             sc.time.end = t.parse()?;
         }
@@ -67,6 +67,34 @@ fn main() -> anyhow::Result<()> {
             bands[2].0 / np,
             bands[2].1
         );
+        // Rows of particles by reference radius from the inner surface.
+        let rows = 3 * ppc;
+        let mut acc = vec![(0.0, 0.0, 0.0, 0usize); rows];
+        for i in 0..p.len() {
+            let k = ((p.x0[i].norm() - 0.5) / dx * ppc as f64) as usize;
+            if k < rows {
+                let x = p.x[i];
+                let (c, s) = (x[0] / x.norm(), x[1] / x.norm());
+                let st = &p.stress[i];
+                acc[k].0 += c * c * st[(0, 0)] + 2.0 * c * s * st[(0, 1)] + s * s * st[(1, 1)];
+                acc[k].1 += s * s * st[(0, 0)] - 2.0 * c * s * st[(0, 1)] + c * c * st[(1, 1)];
+                acc[k].2 += eq43_particle_error(st, target);
+                acc[k].3 += 1;
+            }
+        }
+        let cc = m.pressure * 0.25 / 0.75;
+        for (k, a) in acc.iter().enumerate() {
+            let r = 0.5 + (k as f64 + 0.5) * dx / ppc as f64;
+            let n = a.3.max(1) as f64;
+            println!(
+                "  row {k} (r {r:.4}): sigma_r {:.3e} (Lame {:.3e}), sigma_theta {:.3e} (Lame {:.3e}), Eq.43 {:.3e}",
+                a.0 / n,
+                cc * (1.0 - 1.0 / (r * r)),
+                a.1 / n,
+                cc * (1.0 + 1.0 / (r * r)),
+                a.2 / n
+            );
+        }
     }
     Ok(())
 }

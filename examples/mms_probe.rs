@@ -1,5 +1,6 @@
 //! Prints the axis-aligned MMS error sequence for one shape function and
-//! amplitude: `cargo run --release --example mms_probe -- gimp 0.05 1`.
+//! amplitude: `cargo run --release --example mms_probe -- gimp 0.05 1`
+//! (shape, amplitude, dimension, optional Courant number, default 0.2).
 use mpmice::diagnostics::mms::{run_mms, AxisAlignedMms};
 use mpmice::mpm::UpdateScheme;
 use mpmice::shape::ShapeKind;
@@ -14,6 +15,7 @@ fn main() {
     };
     let amp: f64 = a.get(2).and_then(|s| s.parse().ok()).unwrap_or(0.05);
     let dim: usize = a.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let cfl: f64 = a.get(4).and_then(|s| s.parse().ok()).unwrap_or(0.2);
     let mms = AxisAlignedMms::standard(amp);
     let mut prev: Option<f64> = None;
     for n in [8, 16, 32, 64, 128, 256, 512] {
@@ -21,9 +23,9 @@ fn main() {
             break;
         }
         let m = if dim == 1 {
-            run_mms::<1>(&mms, shape, UpdateScheme::Usl, n, 0.2)
+            run_mms::<1>(&mms, shape, UpdateScheme::Usl, n, cfl)
         } else {
-            run_mms::<2>(&mms, shape, UpdateScheme::Usl, n, 0.2)
+            run_mms::<2>(&mms, shape, UpdateScheme::Usl, n, cfl)
         }
         .expect("run");
         let order = prev.map(|e| (e / m.error).log2());

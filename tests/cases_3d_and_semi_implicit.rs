@@ -191,16 +191,7 @@ fn sod_3d_columns_reproduce_1d_with_the_same_steps() {
 /// `mpmice run` runs it) and its number of steps.
 fn driver_l1(scene: &Scene) -> (f64, u64) {
     let dir = tempfile::tempdir().expect("tmp");
-    let kept = run_scene_keep(
-        scene,
-        &RunOptions {
-            out_dir: dir.path().to_path_buf(),
-            threads: 1,
-            progress: false,
-            ..Default::default()
-        },
-    )
-    .expect("run");
+    let kept = run_scene_keep(scene, &RunOptions::quiet(dir.path(), 1)).expect("run");
     let cells = &kept.last[0];
     let Geometry::Image {
         centres, spacing, ..
@@ -410,12 +401,7 @@ fn coupled_semi_implicit_halvings_are_counted_as_retries() {
         let dir = tempfile::tempdir().expect("tmp");
         mpmice::driver::run_scene(
             &parse(PISTON_SEMI_IMPLICIT, sets),
-            &RunOptions {
-                out_dir: dir.path().to_path_buf(),
-                threads: 1,
-                progress: false,
-                ..Default::default()
-            },
+            &RunOptions::quiet(dir.path(), 1),
         )
         .expect("run")
     };

@@ -113,16 +113,7 @@ fn colliding_disks_conserve_mass_and_momentum_and_bounce() {
     let mut s = mpmice::scene::parse(&text).expect("valid");
     s.output.interval = None;
     let dir = tempfile::tempdir().expect("tmp");
-    let sum = run_scene(
-        &s,
-        &RunOptions {
-            out_dir: dir.path().to_path_buf(),
-            threads: 1,
-            progress: false,
-            ..Default::default()
-        },
-    )
-    .expect("run");
+    let sum = run_scene(&s, &RunOptions::quiet(dir.path(), 1)).expect("run");
     assert_eq!(sum.mass_drift, 0.0);
     // Zero total momentum, kept to round-off relative to Σ m|v|.
     assert!(

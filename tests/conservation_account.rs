@@ -13,12 +13,7 @@ fn run(case: &str, set: &[&str]) -> mpmice::driver::Summary {
     let o: Vec<Override> = set.iter().map(|a| Override::parse(a).unwrap()).collect();
     let s = scene::parse_with(&text, &o).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let opts = RunOptions {
-        out_dir: dir.path().to_path_buf(),
-        threads: 1,
-        progress: false,
-        ..Default::default()
-    };
+    let opts = RunOptions::quiet(dir.path(), 1);
     run_scene(&s, &opts).unwrap()
 }
 

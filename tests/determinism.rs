@@ -24,12 +24,7 @@ fn one_and_two_threads_are_bit_identical() {
         let mut outputs = Vec::new();
         for threads in [1usize, 2] {
             let out = dir.path().join(format!("{shape}_{threads}"));
-            let opts = RunOptions {
-                out_dir: out.clone(),
-                threads,
-                progress: false,
-                ..Default::default()
-            };
+            let opts = RunOptions::quiet(out.clone(), threads);
             let sum = run_scene(&s, &opts).expect("run");
             assert_eq!(sum.threads, threads);
             assert!(sum.steps > 50);

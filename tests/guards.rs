@@ -22,12 +22,7 @@ fn case(name: &str) -> Scene {
 }
 
 fn opts(dir: &Path) -> RunOptions {
-    RunOptions {
-        out_dir: dir.to_path_buf(),
-        threads: 1,
-        progress: false,
-        ..Default::default()
-    }
+    RunOptions::quiet(dir, 1)
 }
 
 /// `text` with `from` replaced by `to` (which must occur once).

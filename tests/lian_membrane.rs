@@ -398,12 +398,7 @@ fn the_vibration_case_runs_bit_identically_on_one_and_two_threads() {
     let mut outs = Vec::new();
     for threads in [1usize, 2] {
         let out = dir.path().join(format!("t{threads}"));
-        let opts = mpmice::driver::RunOptions {
-            out_dir: out.clone(),
-            threads,
-            progress: false,
-            ..Default::default()
-        };
+        let opts = mpmice::driver::RunOptions::quiet(out.clone(), threads);
         let sum = mpmice::driver::run_scene(&s, &opts).unwrap();
         assert_eq!(sum.n_elements, 256);
         // Energy balance of the run (kinetic + strain + losses − work).

@@ -621,12 +621,7 @@ fn failures_name_the_step_time_point_and_phase() {
     let tmp = tempfile::tempdir().expect("tmp");
     let mut s = parse(&walls(2e-2)).expect("scene");
     s.time.dt = Some(1e-3);
-    let opts = mpmice::driver::RunOptions {
-        out_dir: tmp.path().join("run"),
-        threads: 1,
-        progress: false,
-        ..Default::default()
-    };
+    let opts = mpmice::driver::RunOptions::quiet(tmp.path().join("run"), 1);
     let msg = mpmice::driver::run_scene(&s, &opts)
         .expect_err("blows up")
         .to_string();

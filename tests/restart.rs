@@ -18,12 +18,7 @@ fn case(name: &str) -> Scene {
 }
 
 fn opts(dir: &Path) -> RunOptions {
-    RunOptions {
-        out_dir: dir.to_path_buf(),
-        threads: 2,
-        progress: false,
-        ..Default::default()
-    }
+    RunOptions::quiet(dir, 2)
 }
 
 /// Every output file of a run folder (checkpoints and the summary apart),

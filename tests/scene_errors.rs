@@ -346,16 +346,8 @@ fn periodic_pcg_multigrid_is_accepted() {
 fn the_fluid_scene_is_accepted_and_runs() {
     let s = mpmice::scene::parse(FLUID).expect("valid");
     let dir = tempfile::tempdir().expect("tmp");
-    let sum = mpmice::driver::run_scene(
-        &s,
-        &mpmice::driver::RunOptions {
-            out_dir: dir.path().to_path_buf(),
-            threads: 1,
-            progress: false,
-            ..Default::default()
-        },
-    )
-    .expect("run");
+    let sum = mpmice::driver::run_scene(&s, &mpmice::driver::RunOptions::quiet(dir.path(), 1))
+        .expect("run");
     // Air/water at one pressure and at rest in a closed box stays at rest
     // (no spurious flow at the material interface) and keeps its mass.
     eprintln!(

@@ -24,16 +24,7 @@ fn l1_density(file: &str, variant: &str, cells: usize) -> (f64, mpmice::driver::
     scene.grid.cells = vec![cells];
     scene.output.interval = None;
     let dir = tempfile::tempdir().expect("tmp");
-    let sum = run_scene(
-        &scene,
-        &RunOptions {
-            out_dir: dir.path().to_path_buf(),
-            threads: 1,
-            progress: false,
-            ..Default::default()
-        },
-    )
-    .expect("run");
+    let sum = run_scene(&scene, &RunOptions::quiet(dir.path(), 1)).expect("run");
     let csv = std::fs::read_to_string(dir.path().join("cells_0001.csv")).expect("snapshot");
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().expect("header").split(',').collect();

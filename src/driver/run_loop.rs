@@ -47,6 +47,18 @@ pub struct RunOptions {
     pub ignore_memory_limit: bool,
 }
 
+impl RunOptions {
+    /// Writing to `out_dir` on `threads` threads without a progress bar,
+    /// everything else as [`Default`]: how tests and scripts run a scene.
+    pub fn quiet(out_dir: impl Into<PathBuf>, threads: usize) -> Self {
+        Self {
+            out_dir: out_dir.into(),
+            threads,
+            ..Default::default()
+        }
+    }
+}
+
 /// What the run loop checks before the first step (shared by `check` and
 /// `run`): the state passes the watchdog (unless it is off), and the first
 /// Δt is positive and

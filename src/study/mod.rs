@@ -135,12 +135,7 @@ pub fn run_study(
             let dir = out_dir
                 .join(format!("series_{vi}"))
                 .join(format!("level_{k}"));
-            let opts = RunOptions {
-                out_dir: dir.clone(),
-                threads,
-                progress: false,
-                ..Default::default()
-            };
+            let opts = RunOptions::quiet(dir.clone(), threads);
             let kept = run_scene_keep(&scene, &opts)
                 .with_context(|| format!("{label}, cells {:?}", scene.grid.cells))?;
             let h = (scene.grid.upper[0] - scene.grid.lower[0]) / scene.grid.cells[0] as f64;
