@@ -1,11 +1,12 @@
-//! Probe: the Mach 3 wedge (Guilkey Sec. 4.3) over a long run on a domain
-//! twice the case's length: per 0.16 ms, the shock angle, its offset above
-//! the tip and p2/p1 (`measure_wedge`), and the mean thickness in cells of
-//! the gas layer above the face (0.05–0.15 m behind the tip) that moves
-//! within 10 % of the wedge's velocity.
+//! Probe: the Mach 3 wedge (Guilkey Sec. 4.3) over a long run on the case's
+//! domain extended upstream to [−0.8, 0.8] × [0, 0.4]: per 0.16 ms, the
+//! shock angle, its offset above the tip and p2/p1
+//! (`measure_wedge_mach3`), and the mean thickness in cells of the gas
+//! layer above the face (0.05–0.15 m behind the tip) that moves within
+//! 10 % of the wedge's velocity.
 //! `cargo run --release --example wedge_layer_probe -- FACTOR [END]`
 //! (`WEDGE_K=1e6` overrides `coupling.momentum_exchange`).
-use mpmice::diagnostics::coupled::measure_wedge;
+use mpmice::diagnostics::coupled::measure_wedge_mach3;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -14,11 +15,7 @@ fn main() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3.toml");
     let text = std::fs::read_to_string(path)
         .unwrap()
-        .replace("upper = [0.8, 0.4]", "upper = [1.6, 0.4]")
-        .replace(
-            "[0.6, 0.0], [0.8, 0.0], [0.8, 0.072794]",
-            "[1.4, 0.0], [1.6, 0.0], [1.6, 0.072794]",
-        );
+        .replace("lower = [0.0, 0.0]", "lower = [-0.8, 0.0]");
     let mut sc = mpmice::scene::parse(&text).unwrap();
     let h = 0.005 / f as f64;
     if let Ok(k) = std::env::var("WEDGE_K") {
@@ -32,15 +29,8 @@ fn main() {
     let mut t_next: f64 = 0.16e-3;
     while run.fluid.time < end * (1.0 - 1e-9) {
         run.advance_to(t_next.min(end)).unwrap();
-        let tip = 1.4 + run.rigid_displacement(0, run.fluid.time).unwrap()[0];
-        let m = measure_wedge(
-            &run.fluid,
-            tip,
-            20.0,
-            101_325.0,
-            3.771 * 101_325.0,
-            (0.05, 0.15),
-        );
+        let m = measure_wedge_mach3(&run);
+        let tip = m.tip_x;
         let lay = &run.fluid.layout;
         let (mut thick, mut cols) = (0.0, 0usize);
         for i in 0..lay.cells[0] {
