@@ -159,6 +159,11 @@ fn coupled_restarts_bit_identically() {
     let mut s = case("pressurized_cylinder.toml");
     s.time.mode = mpmice::scene::Mode::SemiImplicit;
     assert_restart_is_bit_identical("coupled cylinder (semi-implicit)", &s);
+    let s = case("pressurized_cylinder_implicit.toml");
+    assert_restart_is_bit_identical("coupled cylinder (implicit, quasistatic)", &s);
+    let mut s = case("pressurized_cylinder_implicit.toml");
+    s.implicit.dynamic = true;
+    assert_restart_is_bit_identical("coupled cylinder (implicit, Newmark)", &s);
 }
 
 #[test]

@@ -57,7 +57,8 @@ use crate::ice::{self, Frame, IceParams, IceState, IceWorkspace, StepInfo};
 use crate::material::eos::{EquationOfState, SolidEos};
 use crate::material::SolidMaterial;
 use crate::mpm::{
-    stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, Particles, StepScratch,
+    stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, ImplicitRun, Particles,
+    StepScratch,
 };
 
 /// The MPM phases of the current step, borrowing only the run's MPM fields
@@ -190,6 +191,10 @@ pub struct SolidField<const D: usize> {
     /// Per interior cell: the field's temperature from the nodes (only
     /// with a heat exchange).
     cell_temp: Vec<f64>,
+    /// Implicit MPM for this field (`time.mode = "implicit"`; `None`:
+    /// explicit). It holds no particles between steps: the field lends
+    /// them for the solve and the G2P.
+    pub implicit: Option<Box<ImplicitRun<D>>>,
 }
 
 impl<const D: usize> SolidField<D> {
@@ -207,6 +212,43 @@ impl<const D: usize> SolidField<D> {
     /// field is absent from the cell.
     fn floor_mass(&self, floor_fraction: f64, vol: f64) -> f64 {
         floor_fraction * self.eos.reference_density() * vol
+    }
+}
+
+/// What the implicit solid solves of a coupled run did, summed over its
+/// steps and fields (the time split of [`crate::mpm::StepStats`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct ImplicitTotals {
+    /// Accepted solves (steps × implicit fields).
+    pub solves: u64,
+    /// Newton iterations of the accepted solves.
+    pub newton_iterations: u64,
+    /// Most Newton iterations of one solve.
+    pub max_newton_iterations: u64,
+    /// Krylov iterations (0 with the direct solver).
+    pub linear_iterations: u64,
+    /// Coupled steps redone with a smaller Δt after a failed solve.
+    pub step_retries: u64,
+    /// Seconds in P2G, pattern, residual and tangent assembly.
+    pub assembly_s: f64,
+    /// Seconds in factorisation.
+    pub factor_s: f64,
+    /// Seconds in triangular solves or Krylov iterations.
+    pub solve_s: f64,
+    /// Seconds in the particle update.
+    pub particles_s: f64,
+}
+
+impl ImplicitTotals {
+    fn add(&mut self, st: &crate::mpm::StepStats) {
+        self.solves += 1;
+        self.newton_iterations += st.newton_iterations as u64;
+        self.max_newton_iterations = self.max_newton_iterations.max(st.newton_iterations as u64);
+        self.linear_iterations += st.linear_iterations as u64;
+        self.assembly_s += st.assembly_s;
+        self.factor_s += st.factor_s;
+        self.solve_s += st.solve_s;
+        self.particles_s += st.particles_s;
     }
 }
 
@@ -263,6 +305,15 @@ pub struct CoupledRun<const D: usize> {
     /// stage failed retryably (e.g. the outer iteration of the implicit
     /// pressure not converging); the run summary counts them as retries.
     pub last_halvings: usize,
+    /// The implicit solid solves (`time.mode = "implicit"`), summed over
+    /// the steps and fields. Not part of the state.
+    pub implicit_totals: ImplicitTotals,
+    /// Set when the last step failed in an implicit solid solve (nothing
+    /// committed: the step is retried with a smaller Δt).
+    implicit_failed: bool,
+    /// The field whose solve the last step was in when it failed (its
+    /// particle indices are the error's); `None` after a good step.
+    pub failed_field: Option<usize>,
     ws: IceWorkspace<D>,
     map: NodeCellMap<D>,
     node_pressure: Vec<f64>,
@@ -415,6 +466,7 @@ impl<const D: usize> CoupledRun<D> {
                     cell_mass: vec![0.0; n_int],
                     cell_velocity: vec![SVector::zeros(); n_int],
                     cell_temp: sized(n_int),
+                    implicit: None,
                 }
             })
             .collect();
@@ -448,6 +500,9 @@ impl<const D: usize> CoupledRun<D> {
             steps: 0,
             pressure_s: 0.0,
             last_halvings: 0,
+            implicit_totals: ImplicitTotals::default(),
+            implicit_failed: false,
+            failed_field: None,
             ws,
             reactions: Vec::new(),
             burn_scratch: reaction::BurnScratch::default(),
@@ -638,11 +693,15 @@ impl<const D: usize> CoupledRun<D> {
         // explicit through `solid_dt`.
         let fluid_dt =
             ice::timestep_with(&self.fluid, self.ice.cfl, factor, &self.ice.rigid_mask());
+        // An implicit field: the Δt its Newton control asks for next.
         let solid_dt = self
             .fields
             .iter()
             .filter(|f| f.rigid_velocity.is_none() && !f.particles.is_empty())
-            .map(|f| stable_dt(&self.grid, &self.materials, &f.particles, self.cfl))
+            .map(|f| match &f.implicit {
+                Some(imp) => imp.dt,
+                None => stable_dt(&self.grid, &self.materials, &f.particles, self.cfl),
+            })
             .fold(f64::INFINITY, f64::min);
         let burn_dt = self
             .reactions
@@ -676,9 +735,83 @@ impl<const D: usize> CoupledRun<D> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(self.fail(format!("time step is {dt}")));
         }
-        let info = self.step_inner(dt)?;
+        let info = self.step_retried(dt)?;
         self.steps += 1;
         Ok(info)
+    }
+
+    /// [`Self::step_inner`], redone with Δt cut by the implicit fields'
+    /// `dt_cut` while an implicit solid solve fails (nothing of the failed
+    /// attempt is committed), down to their `dt_min`.
+    fn step_retried(&mut self, dt: f64) -> Result<StepInfo> {
+        let mut dt = dt;
+        loop {
+            self.implicit_failed = false;
+            match self.step_inner(dt) {
+                Err(e) if self.implicit_failed => {
+                    let (cut, dt_min) = self
+                        .fields
+                        .iter()
+                        .filter_map(|f| f.implicit.as_ref())
+                        .fold((0.5f64, 0.0f64), |(c, m), imp| {
+                            (c.max(imp.params.dt_cut), m.max(imp.params.dt_min))
+                        });
+                    if dt * cut < dt_min {
+                        return Err(match e {
+                            Error::Numerical { site, what } => Error::Numerical {
+                                site,
+                                what: format!(
+                                    "{what}; the implicit solid solve failed at every Δt down \
+                                     to {dt:e}, the smallest allowed"
+                                ),
+                            },
+                            e => e,
+                        });
+                    }
+                    dt *= cut;
+                    self.implicit_totals.step_retries += 1;
+                    for imp in self.fields.iter_mut().filter_map(|f| f.implicit.as_mut()) {
+                        imp.dt = dt;
+                    }
+                }
+                r => return r,
+            }
+        }
+    }
+
+    /// Makes every deformable field implicit (Newmark/Newton or
+    /// quasistatic MPM with `params`, first Δt `dt`): Guilkey's step with
+    /// steps 7–9 and 13 solved implicitly under the same pressure terms,
+    /// the pressure of steps 2–6 (explicit or semi-implicit) unchanged.
+    /// A body force is the caller's to set on each field's run.
+    ///
+    /// # Errors
+    /// Invalid parameters; a field with a reaction (its particles change
+    /// in number).
+    pub fn make_implicit(&mut self, params: crate::mpm::ImplicitParams, dt: f64) -> Result<()> {
+        if let Some(r) = self.reactions.first() {
+            return Err(self.fail(format!(
+                "field {} reacts: implicit MPM needs a fixed particle set",
+                r.field
+            )));
+        }
+        for f in self
+            .fields
+            .iter_mut()
+            .filter(|f| f.rigid_velocity.is_none())
+        {
+            let mut imp = ImplicitRun::new(
+                self.grid.clone(),
+                self.materials.clone(),
+                f.particles.clone(),
+                params,
+                f64::INFINITY,
+                dt,
+            )?;
+            imp.particles = Particles::default();
+            f.implicit = Some(Box::new(imp));
+        }
+        Ok(())
     }
 
     /// One step of exactly `dt` (a fixed time step, no stability limit; the
@@ -690,7 +823,7 @@ impl<const D: usize> CoupledRun<D> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(self.fail(format!("time step is {dt}")));
         }
-        let info = self.step_inner(dt)?;
+        let info = self.step_retried(dt)?;
         self.steps += 1;
         Ok(info)
     }
@@ -769,7 +902,9 @@ impl<const D: usize> CoupledRun<D> {
                 });
         }
         let phases = phases!(self, dt);
-        for f in &mut self.fields {
+        let nf = self.num_fluids();
+        for (fi, f) in self.fields.iter_mut().enumerate() {
+            self.failed_field = Some(fi);
             let r = f.ice_material;
             // Step 8: the pressure force −V θ_s ∇p* of each cell on this
             // field, to the nodes, shared among the cell's corners by their
@@ -782,11 +917,25 @@ impl<const D: usize> CoupledRun<D> {
             // surface (a momentum leak of 3.8e-6 of Σ m|v| in the two-body
             // collision test, and less load on the surface than the cells
             // carry).
+            //
+            // A quasistatic implicit field has no inertia to take the
+            // exchange's velocity change, so the fluids that the exchange
+            // locks to it in a cell load it at once: it gets their part of
+            // the cell's force too, `−V (θ_s + Σ_f λ_f θ_f) ∇p*` with the
+            // locked fraction λ_f = β/(1 + β), β = Δt K_fs θ_s v_f (the
+            // two-material exchange against a solid that does not yield).
+            // Without it the steel of the pressurised cylinder carried 60 %
+            // of the gas load at Δt = 1e-5 s; the same force lagged by a
+            // step (the exchange's m dv/Δt) went unstable.
             {
                 let pstar = self.ws.face_pressure();
-                let theta = &self.fluid.cells[r].vol_frac;
+                let cells = &self.fluid.cells;
+                let theta = &cells[r].vol_frac;
                 let out = &mut self.cell_vec;
                 let m_floor = f.floor_mass(ff, vol);
+                let locked = f.implicit.as_ref().is_some_and(|imp| !imp.params.dynamic);
+                let nm = cells.len();
+                let kmom = self.ice.exchange.as_ref().map(|e| &e.momentum[..]);
                 for (k, &c) in layout.interior.iter().enumerate() {
                     let m = f.cell_mass[k];
                     out[c] = if m > m_floor {
@@ -794,7 +943,14 @@ impl<const D: usize> CoupledRun<D> {
                         for d in 0..D {
                             g[d] = (pstar[d][c + layout.strides[d]] - pstar[d][c]) / layout.h[d];
                         }
-                        -g * (vol * theta[c] / m)
+                        let mut th = theta[c];
+                        if let (true, Some(kk)) = (locked, kmom) {
+                            for (fl, mc) in cells.iter().enumerate().take(nf) {
+                                let beta = dt * kk[fl * nm + r] * theta[c] * mc.sp_vol[c];
+                                th += mc.vol_frac[c] * beta / (1.0 + beta);
+                            }
+                        }
+                        -g * (vol * th / m)
                     } else {
                         SVector::zeros()
                     };
@@ -816,6 +972,26 @@ impl<const D: usize> CoupledRun<D> {
                     gs.velocity_new[i] = u;
                     gs.accel[i] = SVector::zeros();
                 }
+            } else if let Some(imp) = f.implicit.as_deref_mut() {
+                // Implicit MPM (Newmark/Newton or quasistatic) under the
+                // same two pressure terms: the cells' force −V θ_s ∇p* as
+                // an external nodal force and σ + (p − p_ref) I inside.
+                let load = imp.fluid_load.get_or_insert_with(Default::default);
+                load.node_force.clone_from(&self.node_force);
+                load.node_pressure.clone_from(&self.node_pressure);
+                load.p_ref = self.coupling.p_ref;
+                imp.t = self.fluid.time;
+                imp.steps = self.steps;
+                std::mem::swap(&mut f.particles, &mut imp.particles);
+                let res = imp.solve_pending(dt).map(|st| {
+                    self.implicit_totals.add(st);
+                });
+                std::mem::swap(&mut f.particles, &mut imp.particles);
+                if let Err(e) = res {
+                    self.implicit_failed = true;
+                    return Err(e);
+                }
+                imp.pending_node_velocity(&mut f.gs.velocity_new);
             } else {
                 phases.solve(
                     &mut f.particles,
@@ -860,6 +1036,7 @@ impl<const D: usize> CoupledRun<D> {
                 };
             }
         }
+        self.failed_field = None;
         // Steps 8–11 at the cells (fluid sources, exchange among all
         // materials — Eqs. 38–39 —, specific volume).
         ice::stage_lagrangian(
@@ -926,6 +1103,13 @@ impl<const D: usize> CoupledRun<D> {
             if let Some(v) = f.rigid_now {
                 f.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
                 f.particles.v.par_iter_mut().for_each(|u| *u = v);
+            } else if let Some(imp) = f.implicit.as_deref_mut() {
+                // The pending solve to the particles, with the exchange's
+                // velocity change (still in `node_force`).
+                std::mem::swap(&mut f.particles, &mut imp.particles);
+                let res = imp.commit_pending(&self.node_force);
+                std::mem::swap(&mut f.particles, &mut imp.particles);
+                self.implicit_totals.particles_s += res?.particles_s;
             } else {
                 phases.g2p(&mut f.particles, &f.gs, &mut f.scratch, &[])?;
             }

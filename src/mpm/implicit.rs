@@ -426,8 +426,13 @@ pub struct ImplicitRun<const D: usize> {
     pub accel: Vec<SVector<f64, D>>,
     /// Grips: particle sets with a prescribed (ramped) displacement.
     pub prescribed: Vec<PrescribedDisplacement<D>>,
+    /// The fluid's load in a coupled MPM-ICE step (set by the coupling
+    /// before each solve; `None` for a solid alone).
+    pub fluid_load: Option<FluidLoad<D>>,
     /// Load factor up to which the prescribed displacements are applied.
     prescribed_applied: f64,
+    /// A converged coupled solve awaiting [`Self::commit_pending`].
+    pending: Option<Pending<D>>,
     map_target: Vec<usize>,
     map_sign: Vec<SVector<f64, D>>,
     node_fixed: Vec<[bool; D]>,
@@ -447,6 +452,29 @@ pub struct ImplicitCarried {
     pub initialised: bool,
     /// Whether a failed Cholesky switched the matrix to full storage (LU).
     pub full_storage: bool,
+}
+
+/// The fluid's load on a solid field in a coupled MPM-ICE step (Guilkey
+/// Sec. 3.3 steps 7–8), on the full grid (ghost nodes included, as the
+/// explicit coupled step holds them).
+#[derive(Debug, Clone, Default)]
+pub struct FluidLoad<const D: usize> {
+    /// The cells' pressure force −V θ_s ∇p* on the field's nodes, folded
+    /// at walls (an external force of the step).
+    pub node_force: Vec<SVector<f64, D>>,
+    /// Cell pressure averaged to the nodes; interpolated to each particle
+    /// at xⁿ, it enters the internal force as σ + (p − p_ref) I.
+    pub node_pressure: Vec<f64>,
+    /// Reference pressure p_ref.
+    pub p_ref: f64,
+}
+
+/// A converged solve of a coupled step, not yet applied to the particles.
+struct Pending<const D: usize> {
+    sd: StepData<D>,
+    u: Vec<f64>,
+    dt: f64,
+    stats: StepStats,
 }
 
 /// Per-step grid data (stencils, dofs, nodal fields).
@@ -472,6 +500,17 @@ struct StepData<const D: usize> {
     a0: Vec<f64>,
     /// External force per dof at tⁿ⁺¹.
     fext: Vec<f64>,
+    /// Per particle: the fluid pressure p − p_ref added to the stress in the
+    /// internal force (empty without a [`FluidLoad`]).
+    pp: Vec<f64>,
+    /// A residual norm that counts as converged whatever the relative test
+    /// says (0 without a [`FluidLoad`]): 1e-10 of the force that the larger
+    /// of p_ref and max |p − p_ref| exerts on the particles' domains,
+    /// √Σ_p (p V_p / h)². The fluid's pressure carries the rounding of
+    /// p − p_ref and the solver's tolerance, which Newton cannot reduce;
+    /// near the rest state (a solid at p_ref) the relative test waited for
+    /// 7.7e-12 N to shrink (the pressurised cylinder, step 0).
+    force_floor: f64,
     /// Compact active-node numbering: node of each block row, and the inverse.
     active: Vec<usize>,
     compact: Vec<usize>,
@@ -535,7 +574,9 @@ impl<const D: usize> ImplicitRun<D> {
             stats: Vec::new(),
             accel: vec![SVector::zeros(); np],
             prescribed: Vec::new(),
+            fluid_load: None,
             prescribed_applied: 0.0,
+            pending: None,
             map_target,
             map_sign,
             node_fixed,
@@ -664,12 +705,162 @@ impl<const D: usize> ImplicitRun<D> {
     /// it succeeds.
     fn attempt(&mut self, dt: f64) -> std::result::Result<StepStats, Failure> {
         let mut ev = std::mem::take(&mut self.eval);
-        let res = self.attempt_with(dt, &mut ev);
+        let res = self.attempt_with(dt, &mut ev).and_then(|(mut st, sd, u)| {
+            let clock = Instant::now();
+            self.g2p(&sd, &u, &ev, dt, &[])?;
+            st.particles_s += clock.elapsed().as_secs_f64();
+            Ok(st)
+        });
         self.eval = ev;
         res
     }
 
-    fn attempt_with(&mut self, dt: f64, ev: &mut Eval) -> std::result::Result<StepStats, Failure> {
+    /// Coupled MPM-ICE: solves a step of `dt` under [`Self::fluid_load`]
+    /// (redone on a switch of the linear solver) and keeps the solution
+    /// pending; the particles do not change until [`Self::commit_pending`].
+    /// The caller owns the time step: a failure here leaves everything as
+    /// it was, to be retried with a smaller Δt.
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] naming the step, time and worst particle when
+    /// Newton fails or a particle would move more than `max_cell_fraction`
+    /// of a cell; a scene error for inconsistent grips.
+    pub fn solve_pending(&mut self, dt: f64) -> Result<&StepStats> {
+        let start = Instant::now();
+        self.pending = None;
+        if self.params.dynamic && !self.initialised {
+            self.initial_acceleration()?;
+        }
+        self.initialised = true;
+        let mut retries = 0;
+        loop {
+            let mut ev = std::mem::take(&mut self.eval);
+            let res = self
+                .attempt_with(dt, &mut ev)
+                .and_then(|(st, sd, u)| self.check_move(&sd, &u).map(|()| (st, sd, u)));
+            self.eval = ev;
+            match res {
+                Ok((mut stats, sd, u)) => {
+                    stats.retries = retries;
+                    stats.wall_s = start.elapsed().as_secs_f64();
+                    let p = self.pending.insert(Pending { sd, u, dt, stats });
+                    return Ok(&p.stats);
+                }
+                Err(f) if f.redo && f.fatal.is_none() && retries < 2 => retries += 1,
+                Err(f) => return Err(self.fail(f)),
+            }
+        }
+    }
+
+    /// The pending step's grid velocity at every node of the full grid
+    /// (a ghost node by its mirror image, 0 where no particle reaches):
+    /// vⁿ⁺¹ = vⁿ + Δt/2 (aⁿ + aⁿ⁺¹) = 2u/Δt − vⁿ (Newmark), u/Δt when
+    /// quasistatic. Zero without a pending step.
+    pub fn pending_node_velocity(&self, out: &mut [SVector<f64, D>]) {
+        let Some(pd) = &self.pending else {
+            out.iter_mut().for_each(|v| *v = SVector::zeros());
+            return;
+        };
+        let (sd, inv_dt) = (&pd.sd, 1.0 / pd.dt);
+        let dynamic = self.params.dynamic;
+        for (n, v) in out.iter_mut().enumerate() {
+            let (r, s) = (self.map_target[n], self.map_sign[n]);
+            *v = SVector::from_fn(|a, _| {
+                let d = sd.dof[r * D + a];
+                if d == usize::MAX {
+                    0.0
+                } else if dynamic {
+                    s[a] * (2.0 * pd.u[d] * inv_dt - sd.v0[d])
+                } else {
+                    s[a] * pd.u[d] * inv_dt
+                }
+            });
+        }
+    }
+
+    /// Applies the pending step to the particles (G2P) with `dv`, a grid
+    /// velocity increment on the full grid's nodes (the coupling's
+    /// momentum exchange, folded at walls; empty for none), added to vⁿ⁺¹
+    /// as an end-of-step acceleration 2 dv/Δt (trapezoidal rule; dropped
+    /// when quasistatic). Advances the time and sets the next Δt (grown
+    /// after an easy step, at most `dt_max`).
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] without a pending step.
+    pub fn commit_pending(&mut self, dv: &[SVector<f64, D>]) -> Result<StepStats> {
+        let Some(pd) = self.pending.take() else {
+            return Err(self.fail(Failure::new("no solved step to apply", None)));
+        };
+        let mut extra = vec![0.0; pd.u.len()];
+        if !dv.is_empty() {
+            for (n, x) in dv.iter().enumerate() {
+                if self.map_target[n] != n {
+                    continue;
+                }
+                for a in 0..D {
+                    let d = pd.sd.dof[n * D + a];
+                    if d != usize::MAX {
+                        extra[d] = x[a];
+                    }
+                }
+            }
+        }
+        let clock = Instant::now();
+        let ev = std::mem::take(&mut self.eval);
+        let res = self.g2p(&pd.sd, &pd.u, &ev, pd.dt, &extra);
+        self.eval = ev;
+        res.map_err(|f| self.fail(f))?;
+        let mut st = pd.stats;
+        st.particles_s += clock.elapsed().as_secs_f64();
+        self.t += pd.dt;
+        st.t = self.t;
+        self.steps += 1;
+        let grow = if st.newton_iterations <= self.params.easy_newton {
+            self.params.dt_grow
+        } else {
+            1.0
+        };
+        self.dt = (pd.dt * grow).min(self.params.dt_max);
+        self.stats.push(st.clone());
+        Ok(st)
+    }
+
+    /// Whether any particle would move more than `max_cell_fraction` of a
+    /// cell with the grid displacement `u`.
+    fn check_move(&self, sd: &StepData<D>, u: &[f64]) -> std::result::Result<(), Failure> {
+        let hmin = self.grid.h.min();
+        let mut worst = (0.0, 0);
+        for p in 0..self.particles.len() {
+            let mut dx = SVector::<f64, D>::zeros();
+            for k in p * sd.nst..(p + 1) * sd.nst {
+                dx += gather(sd, u, k) * sd.w[k];
+            }
+            let m = dx.norm();
+            if m > worst.0 {
+                worst = (m, p);
+            }
+        }
+        if worst.0 > self.params.max_cell_fraction * hmin {
+            return Err(Failure::new(
+                format!(
+                    "particle moved {:.3} cells in one step (limit {})",
+                    worst.0 / hmin,
+                    self.params.max_cell_fraction
+                ),
+                Some(worst.1),
+            ));
+        }
+        Ok(())
+    }
+
+    /// One Newton solve of a step of `dt`: its statistics, grid data and
+    /// converged displacement (the particles do not change).
+    #[allow(clippy::type_complexity)]
+    fn attempt_with(
+        &mut self,
+        dt: f64,
+        ev: &mut Eval,
+    ) -> std::result::Result<(StepStats, StepData<D>, Vec<f64>), Failure> {
         let mut st = StepStats {
             dt,
             reactions: vec![vec![0.0; D]; self.prescribed.len()],
@@ -750,7 +941,7 @@ impl<const D: usize> ImplicitRun<D> {
                 r0 = rn;
             }
             fscale = fscale.max(r0);
-            if converged || (!lift && rn <= 1e-14 * fscale) || ndof == 0 {
+            if converged || (!lift && rn <= (1e-14 * fscale).max(sd.force_floor)) || ndof == 0 {
                 break;
             }
             if k >= self.params.max_newton {
@@ -815,9 +1006,7 @@ impl<const D: usize> ImplicitRun<D> {
             st.reactions[grip][a] -= r[d];
         }
         st.assembly_s += lap(&mut clock);
-        self.g2p(&sd, &u, ev, dt)?;
-        st.particles_s += lap(&mut clock);
-        Ok(st)
+        Ok((st, sd, u))
     }
 
     /// Bins the particles into slabs for the coloured parallel evaluation.
@@ -931,6 +1120,34 @@ impl<const D: usize> ImplicitRun<D> {
         reps.sort_unstable();
         reps.dedup_by_key(|e| e.0);
         let reps: Vec<usize> = reps.into_iter().map(|e| e.1).collect();
+        // The fluid pressure at each particle (Guilkey Sec. 3.3 step 7), from
+        // the full-grid node values, fixed over the step.
+        let pp: Vec<f64> = match &self.fluid_load {
+            Some(fl) => (0..np)
+                .map(|p| {
+                    (p * nst..(p + 1) * nst)
+                        .map(|k| w[k] * fl.node_pressure[node[k]])
+                        .sum::<f64>()
+                        - fl.p_ref
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        let force_floor = match &self.fluid_load {
+            Some(fl) => {
+                let p_scale = pp.iter().fold(fl.p_ref.abs(), |m, v| m.max(v.abs()));
+                let h = grid.h.min();
+                1e-10
+                    * p_scale
+                    * parts
+                        .vol
+                        .iter()
+                        .map(|v| (v / h).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+            }
+            None => 0.0,
+        };
         // Map full nodes to reduced nodes with signs.
         let mut sign = vec![SVector::<f64, D>::zeros(); np * nst];
         for k in 0..np * nst {
@@ -1004,6 +1221,32 @@ impl<const D: usize> ImplicitRun<D> {
                 }
             }
         }
+        if let Some(fl) = &self.fluid_load {
+            // The cells' pressure force is already folded onto the interior
+            // nodes (each its own reduced node). The fold doubles a node on
+            // a mirror face, whose reduced row here is half the folded row
+            // (see *Walls*): halved once per such face.
+            for (n, f) in fl.node_force.iter().enumerate() {
+                if self.map_target[n] != n {
+                    continue;
+                }
+                let c = grid.node_coords(n);
+                let mut share = 1.0;
+                for d in 0..D {
+                    let [lo, hi] = grid.bc[d];
+                    let mirror = |bc| matches!(bc, Boundary::Fixed | Boundary::Symmetry);
+                    if (c[d] == 0 && mirror(lo)) || (c[d] == grid.cells[d] as isize && mirror(hi)) {
+                        share *= 0.5;
+                    }
+                }
+                for a in 0..D {
+                    let d = dof[n * D + a];
+                    if d != usize::MAX {
+                        fext[d] += share * f[a];
+                    }
+                }
+            }
+        }
         for d in 0..ndof {
             v0[d] /= mass[d];
             a0[d] /= mass[d];
@@ -1064,6 +1307,8 @@ impl<const D: usize> ImplicitRun<D> {
             v0,
             a0,
             fext,
+            pp,
+            force_floor,
             active,
             compact,
             bptr: Vec::new(),
@@ -1254,7 +1499,12 @@ impl<const D: usize> ImplicitRun<D> {
                 return;
             };
             let inv = SMatrix::<f64, D, D>::from_fn(|a, b| inv3[(a, b)]);
-            let s = SMatrix::<f64, D, D>::from_fn(|a, b| sigma[(a, b)]);
+            // σ + (p − p_ref) I in a coupled step: ICE applies −θ∇p to the
+            // solid, so the pressure is not counted twice (Guilkey Sec. 3.3
+            // step 7, as in the explicit step).
+            let pf = sd.pp.get(p).copied().unwrap_or(0.0);
+            let s =
+                SMatrix::<f64, D, D>::from_fn(|a, b| sigma[(a, b)] + if a == b { pf } else { 0.0 });
             // At most 4³ stencil entries (cubic B-spline in 3D).
             let mut gx = [SVector::<f64, D>::zeros(); 64];
             let mut ci = [usize::MAX; 64];
@@ -1440,12 +1690,16 @@ impl<const D: usize> ImplicitRun<D> {
     /// G2P: positions, F, σ, volume, and (dynamic) velocity and acceleration
     /// from the converged increment. Rejects the step when a particle moved
     /// more than the allowed fraction of a cell.
+    /// G2P of a converged step; `extra` (per dof, empty for none) is a
+    /// velocity increment added at the end of the step (see
+    /// [`Self::commit_pending`]).
     fn g2p(
         &mut self,
         sd: &StepData<D>,
         u: &[f64],
         ev: &Eval,
         dt: f64,
+        extra: &[f64],
     ) -> std::result::Result<(), Failure> {
         let np = self.particles.len();
         let nst = sd.nst;
@@ -1457,33 +1711,20 @@ impl<const D: usize> ImplicitRun<D> {
             for d in 0..ndof {
                 a1[d] = c_mass * (u[d] - dt * sd.v0[d]) - sd.a0[d];
                 dv[d] = 0.5 * dt * (sd.a0[d] + a1[d]);
+                if let Some(&e) = extra.get(d) {
+                    dv[d] += e;
+                    a1[d] += 2.0 * e / dt;
+                }
             }
         }
-        let hmin = self.grid.h.min();
-        let mut dx = vec![SVector::<f64, D>::zeros(); np];
-        let mut worst = (0.0, 0);
-        for p in 0..np {
-            for k in p * nst..(p + 1) * nst {
-                dx[p] += gather(sd, u, k) * sd.w[k];
-            }
-            let m = dx[p].norm();
-            if m > worst.0 {
-                worst = (m, p);
-            }
-        }
-        if worst.0 > self.params.max_cell_fraction * hmin {
-            return Err(Failure::new(
-                format!(
-                    "particle moved {:.3} cells in one step (limit {})",
-                    worst.0 / hmin,
-                    self.params.max_cell_fraction
-                ),
-                Some(worst.1),
-            ));
-        }
+        self.check_move(sd, u)?;
         let parts = &mut self.particles;
         for p in 0..np {
-            parts.x[p] += dx[p];
+            let mut dx = SVector::<f64, D>::zeros();
+            for k in p * nst..(p + 1) * nst {
+                dx += gather(sd, u, k) * sd.w[k];
+            }
+            parts.x[p] += dx;
             let mat = &self.materials[parts.material[p] as usize];
             let old = parts.stress[p];
             parts.f[p] = ev.df[p] * parts.f[p];
@@ -1503,6 +1744,12 @@ impl<const D: usize> ImplicitRun<D> {
                 }
                 parts.v[p] += dvp;
                 self.accel[p] = ap;
+            } else if self.fluid_load.is_some() {
+                // Coupled: the velocity of the load step, which the cells
+                // see in the next step's P2G (a solid held at zero velocity
+                // lets the fluid's pressure solve treat it as a resting
+                // fluid, and its pressure relaxes to the gas's).
+                parts.v[p] = dx / dt;
             } else {
                 parts.v[p] = SVector::zeros();
             }

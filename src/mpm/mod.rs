@@ -12,6 +12,6 @@ pub use explicit::{
     StepScratch, UpdateScheme,
 };
 pub use implicit::{
-    ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad,
+    FluidLoad, ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad,
 };
 pub use particles::Particles;

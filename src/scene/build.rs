@@ -382,27 +382,10 @@ pub fn build_implicit_run<const D: usize>(
         .collect();
     let (particles, ranges) = fill_objects(scene, &grid, &materials)?;
     let min_mass = particles.mass.iter().cloned().fold(f64::INFINITY, f64::min);
-    let im = &scene.implicit;
-    let mut params = ImplicitParams::new(scene.mpm.shape, im.dynamic, 1e-12 * min_mass);
-    params.tol_displacement = im.tolerance_displacement;
-    params.tol_energy = im.tolerance_energy;
-    params.max_newton = im.max_newton_iterations;
-    params.linear = match im.linear_solver {
-        NewtonSolverKind::Cholesky => ImplicitLinear::Cholesky,
-        NewtonSolverKind::PcgJacobi => ImplicitLinear::PcgJacobi {
-            rel_tol: 1e-12,
-            max_iter: 10_000,
-        },
-    };
-    if let Some(d) = im.dt_max {
-        params.dt_max = d;
-    }
-    if let Some(f) = im.max_cell_fraction {
-        params.max_cell_fraction = f;
-    }
+    let params = implicit_params(scene, min_mass);
     let dt = scene.time.dt.unwrap_or(scene.time.end);
     let mut run = ImplicitRun::new(grid, materials, particles, params, scene.time.end, dt)?;
-    run.load_ramp = im.load_ramp;
+    run.load_ramp = scene.implicit.load_ramp;
     if let Some(g) = &scene.gravity {
         let g = to_vec::<D>(g);
         if g.norm() > 0.0 {
@@ -521,7 +504,7 @@ pub fn build_implicit_run<const D: usize>(
     };
     // Grips: the object's particles whose reference position lies in the
     // region (all of them without one).
-    for (k, pr) in im.prescribed.iter().enumerate() {
+    for (k, pr) in scene.implicit.prescribed.iter().enumerate() {
         let particle: Vec<usize> = ranges[pr.object]
             .clone()
             .filter(|&p| {
@@ -552,6 +535,30 @@ pub fn build_implicit_run<const D: usize>(
         });
     }
     Ok(run)
+}
+
+/// The implicit MPM parameters of `[implicit]` (`min_mass`: the lightest
+/// particle, which sets the node mass floor).
+fn implicit_params(scene: &Scene, min_mass: f64) -> ImplicitParams {
+    let im = &scene.implicit;
+    let mut params = ImplicitParams::new(scene.mpm.shape, im.dynamic, 1e-12 * min_mass);
+    params.tol_displacement = im.tolerance_displacement;
+    params.tol_energy = im.tolerance_energy;
+    params.max_newton = im.max_newton_iterations;
+    params.linear = match im.linear_solver {
+        NewtonSolverKind::Cholesky => ImplicitLinear::Cholesky,
+        NewtonSolverKind::PcgJacobi => ImplicitLinear::PcgJacobi {
+            rel_tol: 1e-12,
+            max_iter: 10_000,
+        },
+    };
+    if let Some(d) = im.dt_max {
+        params.dt_max = d;
+    }
+    if let Some(f) = im.max_cell_fraction {
+        params.max_cell_fraction = f;
+    }
+    params
 }
 
 /// Builds the solid-only explicit run of a validated scene with `D == dim`.
@@ -818,7 +825,9 @@ pub fn build_fluid_run<const D: usize>(
     if let Some(g) = &scene.gravity {
         params.gravity = to_vec::<D>(g);
     }
-    if scene.time.mode == Mode::SemiImplicit {
+    // The implicit pressure: semi-implicit ICE, and the fluid half of a
+    // coupled implicit scene (implicit MPM with the implicit pressure).
+    if matches!(scene.time.mode, Mode::SemiImplicit | Mode::Implicit) {
         let ps = &scene.fluid.pressure;
         params.implicit = Some(SemiImplicit {
             linear_solver: match ps.solver {
@@ -959,6 +968,27 @@ pub fn build_coupled_run<const D: usize>(
     .map_err(|e| SceneError::new("materials", e.to_string()))?;
     run.body = body;
     run.rigid_ramp = cs.rigid_ramp;
+    if scene.time.mode == Mode::Implicit {
+        // Implicit MPM for every deformable field with the implicit
+        // pressure (time.dt: the step, cut on a failed solve).
+        let min_mass = run
+            .fields
+            .iter()
+            .flat_map(|f| f.particles.mass.iter().copied())
+            .fold(f64::INFINITY, f64::min);
+        let mut params = implicit_params(scene, min_mass);
+        let dt = scene.time.dt.unwrap_or(scene.time.end);
+        params.dt_max = params.dt_max.min(dt);
+        run.make_implicit(params, dt)
+            .map_err(|e| SceneError::new("implicit", e.to_string()))?;
+        if let Some(g) = scene.gravity.as_deref().map(to_vec::<D>) {
+            for imp in run.fields.iter_mut().filter_map(|f| f.implicit.as_mut()) {
+                if g.norm() > 0.0 {
+                    imp.body = Some(Box::new(Uniform(g)));
+                }
+            }
+        }
+    }
     // Reactions: the reactant's field is its solid material's (one field
     // per solid material, in order), the product its fluid index.
     let solid_names: Vec<&MaterialSpec> = scene

@@ -39,8 +39,8 @@ impl Scene {
             return err(
                 "coupling",
                 format!(
-                    "[coupling] is read only by coupled scenes (solid and fluid materials, \
-                     time.mode = explicit or semi_implicit); this is {what}: remove it"
+                    "[coupling] is read only by coupled scenes (solid and fluid materials); \
+                     this is {what}: remove it"
                 ),
             );
         }
@@ -55,14 +55,15 @@ impl Scene {
             );
         }
         let fluid = raw.get("fluid").and_then(|v| v.as_table());
-        if fluid.is_some_and(|f| f.contains_key("pressure")) && self.time.mode != Mode::SemiImplicit
-        {
+        let implicit_pressure =
+            self.time.mode == Mode::SemiImplicit || (self.time.mode == Mode::Implicit && coupled);
+        if fluid.is_some_and(|f| f.contains_key("pressure")) && !implicit_pressure {
             return err(
                 "fluid.pressure",
                 format!(
-                    "[fluid.pressure] is read only with time.mode = \"semi_implicit\" (the \
-                     implicit pressure solve); this scene runs time.mode = \"{mode}\": remove \
-                     it or change the mode"
+                    "[fluid.pressure] is read only with the implicit pressure solve \
+                     (time.mode = \"semi_implicit\", or \"implicit\" in a coupled scene); \
+                     this is {what} with time.mode = \"{mode}\": remove it or change the mode"
                 ),
             );
         }

@@ -3329,11 +3329,11 @@ impl Scene {
                      solids alone: explicit, implicit",
                 ))
             }
-            (Mode::Implicit, true) if has_fluid => {
+            (Mode::Implicit, true) if has_fluid && !self.reactions.is_empty() => {
                 return Err(err(
-                    "time.mode",
-                    "implicit MPM is for solid-only scenes; allowed for coupled scenes: \
-                     explicit, semi_implicit",
+                    "reactions",
+                    "implicit MPM needs a fixed set of particles, and a reaction burns them \
+                     away; allowed with reactions: time.mode = explicit, semi_implicit",
                 ))
             }
             (Mode::Implicit, false) => {

@@ -13,7 +13,7 @@ use crate::harness::{
 };
 use crate::impm_studies::plot_dir;
 
-fn repo_root() -> PathBuf {
+pub(crate) fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
@@ -33,7 +33,19 @@ pub fn cylinder_at(
         sc.mpm.shape = shape;
         sc.mpm.particles_per_cell = ppc;
     }
+    cylinder_scene_at(sc, dx)
+}
+
+/// [`cylinder_at`] for any cylinder scene `sc` (e.g. the implicit case):
+/// the Eq. 43 point at cell size `dx` (with the steps, particles, cells,
+/// measured P and, for implicit solids, the Newton iterations and the
+/// time split), the Fig. 3a row and P.
+pub fn cylinder_scene_at(
+    sc: scene::Scene,
+    dx: f64,
+) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
     let (run, m, wall) = run_cylinder_scene(sc, dx)?;
+    let it = run.implicit_totals;
     let np = run.fields[0].particles.len();
     let nc = run.fluid.layout.num_interior();
     let point = Point::new(
@@ -46,6 +58,19 @@ pub fn cylinder_at(
     .with_extra("particles", np as f64)
     .with_extra("cells", nc as f64)
     .with_extra("inner_pressure", m.pressure);
+    let point = if it.solves > 0 {
+        point
+            .with_extra("newton_iterations", it.newton_iterations as f64)
+            .with_extra("max_newton_iterations", it.max_newton_iterations as f64)
+            .with_extra("step_retries", it.step_retries as f64)
+            .with_extra("pressure_s", run.pressure_s)
+            .with_extra("newton_assembly_s", it.assembly_s)
+            .with_extra("newton_factor_s", it.factor_s)
+            .with_extra("newton_solve_s", it.solve_s)
+            .with_extra("particles_s", it.particles_s)
+    } else {
+        point
+    };
     Ok((point, m.row, m.pressure))
 }
 

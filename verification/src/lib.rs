@@ -9,6 +9,7 @@ pub mod formulation_studies;
 /// command writes its results with the same code).
 pub use mpmice::study::harness;
 pub mod ice_studies;
+pub mod implicit_coupled_studies;
 pub mod impm_studies;
 pub mod lian_studies;
 pub mod mpm_studies;
@@ -57,6 +58,11 @@ pub const STUDIES: &[Study] = &[
         "cylinder_order",
         "Guilkey 4.1 pressurised cylinder, MPM-ICE, Eq. 43 vs dx and Fig. 3a",
         coupled_studies::cylinder_order,
+    ),
+    (
+        "cylinder_implicit",
+        "Guilkey 4.1 pressurised cylinder, implicit MPM-ICE at large steps: Eq. 43 and wall time vs dx beside explicit, and vs dt",
+        implicit_coupled_studies::cylinder_implicit,
     ),
     (
         "piston_adiabatic",

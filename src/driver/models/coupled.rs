@@ -8,7 +8,8 @@ use crate::driver::model::{
 };
 use crate::driver::models::arrays::{
     cell_energies, cell_fields, cell_material_totals, cell_watchdog, load_cells, load_particles,
-    particle_fields, particle_material_totals, particle_watchdog, save_cells, save_particles,
+    name_particle_material, particle_fields, particle_material_totals, particle_watchdog,
+    put_vectors, save_cells, save_particles, take_vectors,
 };
 use crate::driver::models::fluid::{
     cell_momentum_scale, fluid_history_row, load_carried, save_carried, FLUID_HISTORY,
@@ -80,7 +81,10 @@ impl<const D: usize> Model for Coupled<D> {
     }
 
     fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error> {
-        let info = if dt.exact {
+        // Implicit solids: `time.dt` is the largest step, cut on a failed
+        // solve (the implicit solid run's meaning of it).
+        let implicit = self.run.fields.iter().any(|f| f.implicit.is_some());
+        let info = if dt.exact && !implicit {
             self.run.step_exact(dt.value)?
         } else {
             self.run.step(dt.value)?
@@ -92,6 +96,14 @@ impl<const D: usize> Model for Coupled<D> {
             retries: self.run.last_halvings,
             boundary: None,
         })
+    }
+
+    fn annotate(&self, e: Error) -> Error {
+        // A particle failure names the field's material.
+        match self.run.failed_field.and_then(|i| self.run.fields.get(i)) {
+            Some(f) => name_particle_material(e, &f.particles, &self.run.materials),
+            None => e,
+        }
     }
 
     fn retry_dt(&self, _e: &Error) -> Option<f64> {
@@ -174,6 +186,17 @@ impl<const D: usize> Model for Coupled<D> {
         save_cells(ck, "cells", &run.fluid);
         for (i, f) in run.fields.iter().enumerate() {
             save_particles(ck, &format!("field{i}"), &f.particles);
+            if let Some(imp) = &f.implicit {
+                // The Newmark state and the Newton Δt control.
+                put_vectors(ck, &format!("field{i}.accel"), &imp.accel);
+                let c = imp.carried();
+                ck.put_f64(&format!("field{i}.implicit_dt"), vec![1], vec![imp.dt]);
+                ck.put_u64(
+                    &format!("field{i}.implicit_flags"),
+                    vec![2],
+                    vec![c.initialised as u64, c.full_storage as u64],
+                );
+            }
         }
         save_carried(ck, "workspace", run.ice_workspace());
         if !run.reactions.is_empty() {
@@ -195,6 +218,16 @@ impl<const D: usize> Model for Coupled<D> {
         let n_materials = run.materials.len();
         for i in 0..run.fields.len() {
             run.fields[i].particles = load_particles(ck, &format!("field{i}"), n_materials)?;
+            let n = run.fields[i].particles.len();
+            if let Some(imp) = run.fields[i].implicit.as_mut() {
+                imp.accel = take_vectors(ck, &format!("field{i}.accel"), n)?;
+                imp.dt = ck.take_f64(&format!("field{i}.implicit_dt"), Some(&[1]))?[0];
+                let flags = ck.take_u64(&format!("field{i}.implicit_flags"), Some(&[2]))?;
+                let mut c = imp.carried();
+                c.initialised = flags[0] != 0;
+                c.full_storage = flags[1] != 0;
+                imp.restore_carried(c);
+            }
         }
         let cells = run.fluid.layout.len();
         load_carried(ck, "workspace", run.ice_workspace_mut(), cells)?;

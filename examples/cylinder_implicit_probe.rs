@@ -1,0 +1,43 @@
+//! The coupled pressurised cylinder (Guilkey 4.1) explicit against
+//! implicit at one cell size: Eq. 43 error, measured inner pressure,
+//! steps and wall time of each.
+//!
+//! `cargo run --release --example cylinder_implicit_probe -- DX [DT]`
+//! (DT: the implicit step, default the case's `time.dt`).
+
+use mpmice::diagnostics::coupled::run_cylinder_scene;
+use mpmice::scene;
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let dx: f64 = args.get(1).map_or(Ok(0.05), |s| s.parse())?;
+    let dt: Option<f64> = args.get(2).map(|s| s.parse()).transpose()?;
+    let explicit = std::env::var("SKIP_EXPLICIT").is_err();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let mut cases = vec![("implicit", "cases/pressurized_cylinder_implicit.toml")];
+    if explicit {
+        cases.push(("explicit", "cases/pressurized_cylinder.toml"));
+    }
+    for (name, path) in cases {
+        let mut sc = scene::load(&std::path::Path::new(root).join(path))?;
+        if name == "implicit" {
+            if let Some(dt) = dt {
+                sc.time.dt = Some(dt);
+            }
+        }
+        let (run, m, wall) = run_cylinder_scene(sc, dx)?;
+        let it = run.implicit_totals;
+        println!(
+            "{name:8} dx {dx}: Eq.43 {:.4e}  P {:.4e} Pa  steps {}  wall {:.3} s  \
+             newton {} (max {}) retries {}",
+            m.error43,
+            m.pressure,
+            run.steps,
+            wall,
+            it.newton_iterations,
+            it.max_newton_iterations,
+            it.step_retries
+        );
+    }
+    Ok(())
+}
