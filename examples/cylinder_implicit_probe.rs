@@ -14,7 +14,9 @@ fn main() -> anyhow::Result<()> {
     let dt: Option<f64> = args.get(2).map(|s| s.parse()).transpose()?;
     let explicit = std::env::var("SKIP_EXPLICIT").is_err();
     let root = env!("CARGO_MANIFEST_DIR");
-    let mut cases = vec![("implicit", "cases/pressurized_cylinder_implicit.toml")];
+    let implicit_case =
+        std::env::var("CASE").unwrap_or("cases/pressurized_cylinder_implicit.toml".into());
+    let mut cases = vec![("implicit", implicit_case.as_str())];
     if explicit {
         cases.push(("explicit", "cases/pressurized_cylinder.toml"));
     }
@@ -29,14 +31,20 @@ fn main() -> anyhow::Result<()> {
         let it = run.implicit_totals;
         println!(
             "{name:8} dx {dx}: Eq.43 {:.4e}  P {:.4e} Pa  steps {}  wall {:.3} s  \
-             newton {} (max {}) retries {}",
+             newton {} (max {}) retries {}; s: pressure {:.2} assembly {:.2} factor {:.2} \
+             solve {:.2} particles {:.2}",
             m.error43,
             m.pressure,
             run.steps,
             wall,
             it.newton_iterations,
             it.max_newton_iterations,
-            it.step_retries
+            it.step_retries,
+            run.pressure_s,
+            it.assembly_s,
+            it.factor_s,
+            it.solve_s,
+            it.particles_s
         );
     }
     Ok(())
