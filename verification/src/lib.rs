@@ -65,6 +65,11 @@ pub const STUDIES: &[Study] = &[
         implicit_coupled_studies::cylinder_implicit,
     ),
     (
+        "piston_implicit",
+        "Guilkey 4.2 adiabatic piston, implicit pressure at steps set by the piston's motion: closed-end pressure at ratio 5 vs dt and h, beside explicit",
+        implicit_coupled_studies::piston_implicit,
+    ),
+    (
         "piston_adiabatic",
         "Guilkey 4.2 adiabatic piston, MPM-ICE, closed-end pressure vs P1 (V1/V2)^gamma",
         coupled_studies::piston_adiabatic,
