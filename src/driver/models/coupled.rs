@@ -277,7 +277,11 @@ impl<const D: usize> Model for Coupled<D> {
             // coupled system.
             momentum_conserved: false,
             phase_times: run.phase_times(),
-            implicit_split: None,
+            // Implicit solid fields: their Newton solves' time split.
+            implicit_split: run.fields.iter().any(|f| f.implicit.is_some()).then(|| {
+                let t = &run.implicit_totals;
+                [t.assembly_s, t.factor_s, t.solve_s, t.particles_s]
+            }),
         }
     }
 }
