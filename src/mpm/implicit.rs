@@ -473,6 +473,8 @@ pub struct FluidLoad<const D: usize> {
 struct Pending<const D: usize> {
     sd: StepData<D>,
     u: Vec<f64>,
+    /// The particles' displacements (checked against the per-step limit).
+    dx: Vec<SVector<f64, D>>,
     dt: f64,
     stats: StepStats,
 }
@@ -707,7 +709,8 @@ impl<const D: usize> ImplicitRun<D> {
         let mut ev = std::mem::take(&mut self.eval);
         let res = self.attempt_with(dt, &mut ev).and_then(|(mut st, sd, u)| {
             let clock = Instant::now();
-            self.g2p(&sd, &u, &ev, dt, &[])?;
+            let dx = self.particle_moves(&sd, &u)?;
+            self.g2p(&sd, &u, &dx, &ev, dt, &[])?;
             st.particles_s += clock.elapsed().as_secs_f64();
             Ok(st)
         });
@@ -737,13 +740,19 @@ impl<const D: usize> ImplicitRun<D> {
             let mut ev = std::mem::take(&mut self.eval);
             let res = self
                 .attempt_with(dt, &mut ev)
-                .and_then(|(st, sd, u)| self.check_move(&sd, &u).map(|()| (st, sd, u)));
+                .and_then(|(st, sd, u)| self.particle_moves(&sd, &u).map(|dx| (st, sd, u, dx)));
             self.eval = ev;
             match res {
-                Ok((mut stats, sd, u)) => {
+                Ok((mut stats, sd, u, dx)) => {
                     stats.retries = retries;
                     stats.wall_s = start.elapsed().as_secs_f64();
-                    let p = self.pending.insert(Pending { sd, u, dt, stats });
+                    let p = self.pending.insert(Pending {
+                        sd,
+                        u,
+                        dx,
+                        dt,
+                        stats,
+                    });
                     return Ok(&p.stats);
                 }
                 Err(f) if f.redo && f.fatal.is_none() && retries < 2 => retries += 1,
@@ -792,22 +801,10 @@ impl<const D: usize> ImplicitRun<D> {
             return Err(self.fail(Failure::new("no solved step to apply", None)));
         };
         let mut extra = vec![0.0; pd.u.len()];
-        if !dv.is_empty() {
-            for (n, x) in dv.iter().enumerate() {
-                if self.map_target[n] != n {
-                    continue;
-                }
-                for a in 0..D {
-                    let d = pd.sd.dof[n * D + a];
-                    if d != usize::MAX {
-                        extra[d] = x[a];
-                    }
-                }
-            }
-        }
+        add_interior(&self.map_target, &pd.sd.dof, dv, |_| 1.0, &mut extra);
         let clock = Instant::now();
         let ev = std::mem::take(&mut self.eval);
-        let res = self.g2p(&pd.sd, &pd.u, &ev, pd.dt, &extra);
+        let res = self.g2p(&pd.sd, &pd.u, &pd.dx, &ev, pd.dt, &extra);
         self.eval = ev;
         res.map_err(|f| self.fail(f))?;
         let mut st = pd.stats;
@@ -825,17 +822,21 @@ impl<const D: usize> ImplicitRun<D> {
         Ok(st)
     }
 
-    /// Whether any particle would move more than `max_cell_fraction` of a
-    /// cell with the grid displacement `u`.
-    fn check_move(&self, sd: &StepData<D>, u: &[f64]) -> std::result::Result<(), Failure> {
+    /// Every particle's displacement Σ Nᵢ uᵢ for the grid displacement `u`;
+    /// an error when one moves more than `max_cell_fraction` of a cell.
+    fn particle_moves(
+        &self,
+        sd: &StepData<D>,
+        u: &[f64],
+    ) -> std::result::Result<Vec<SVector<f64, D>>, Failure> {
         let hmin = self.grid.h.min();
         let mut worst = (0.0, 0);
-        for p in 0..self.particles.len() {
-            let mut dx = SVector::<f64, D>::zeros();
+        let mut dx = vec![SVector::<f64, D>::zeros(); self.particles.len()];
+        for (p, x) in dx.iter_mut().enumerate() {
             for k in p * sd.nst..(p + 1) * sd.nst {
-                dx += gather(sd, u, k) * sd.w[k];
+                *x += gather(sd, u, k) * sd.w[k];
             }
-            let m = dx.norm();
+            let m = x.norm();
             if m > worst.0 {
                 worst = (m, p);
             }
@@ -850,7 +851,7 @@ impl<const D: usize> ImplicitRun<D> {
                 Some(worst.1),
             ));
         }
-        Ok(())
+        Ok(dx)
     }
 
     /// One Newton solve of a step of `dt`: its statistics, grid data and
@@ -1226,26 +1227,17 @@ impl<const D: usize> ImplicitRun<D> {
             // nodes (each its own reduced node). The fold doubles a node on
             // a mirror face, whose reduced row here is half the folded row
             // (see *Walls*): halved once per such face.
-            for (n, f) in fl.node_force.iter().enumerate() {
-                if self.map_target[n] != n {
-                    continue;
-                }
+            let mirror = |bc| matches!(bc, Boundary::Fixed | Boundary::Symmetry);
+            let share = |n: usize| {
                 let c = grid.node_coords(n);
-                let mut share = 1.0;
-                for d in 0..D {
-                    let [lo, hi] = grid.bc[d];
-                    let mirror = |bc| matches!(bc, Boundary::Fixed | Boundary::Symmetry);
-                    if (c[d] == 0 && mirror(lo)) || (c[d] == grid.cells[d] as isize && mirror(hi)) {
-                        share *= 0.5;
-                    }
-                }
-                for a in 0..D {
-                    let d = dof[n * D + a];
-                    if d != usize::MAX {
-                        fext[d] += share * f[a];
-                    }
-                }
-            }
+                (0..D)
+                    .filter(|&d| {
+                        let [lo, hi] = grid.bc[d];
+                        (c[d] == 0 && mirror(lo)) || (c[d] == grid.cells[d] as isize && mirror(hi))
+                    })
+                    .fold(1.0, |s, _| 0.5 * s)
+            };
+            add_interior(&self.map_target, &dof, &fl.node_force, share, &mut fext);
         }
         for d in 0..ndof {
             v0[d] /= mass[d];
@@ -1687,16 +1679,16 @@ impl<const D: usize> ImplicitRun<D> {
         }
     }
 
-    /// G2P: positions, F, σ, volume, and (dynamic) velocity and acceleration
-    /// from the converged increment. Rejects the step when a particle moved
-    /// more than the allowed fraction of a cell.
-    /// G2P of a converged step; `extra` (per dof, empty for none) is a
-    /// velocity increment added at the end of the step (see
+    /// G2P: positions (by the displacements `dx` of
+    /// [`Self::particle_moves`]), F, σ, volume, and (dynamic) velocity and
+    /// acceleration from the converged increment; `extra` (per dof, empty
+    /// for none) is a velocity increment added at the end of the step (see
     /// [`Self::commit_pending`]).
     fn g2p(
         &mut self,
         sd: &StepData<D>,
         u: &[f64],
+        dx: &[SVector<f64, D>],
         ev: &Eval,
         dt: f64,
         extra: &[f64],
@@ -1717,14 +1709,9 @@ impl<const D: usize> ImplicitRun<D> {
                 }
             }
         }
-        self.check_move(sd, u)?;
         let parts = &mut self.particles;
         for p in 0..np {
-            let mut dx = SVector::<f64, D>::zeros();
-            for k in p * nst..(p + 1) * nst {
-                dx += gather(sd, u, k) * sd.w[k];
-            }
-            parts.x[p] += dx;
+            parts.x[p] += dx[p];
             let mat = &self.materials[parts.material[p] as usize];
             let old = parts.stress[p];
             parts.f[p] = ev.df[p] * parts.f[p];
@@ -1749,7 +1736,7 @@ impl<const D: usize> ImplicitRun<D> {
                 // see in the next step's P2G (a solid held at zero velocity
                 // lets the fluid's pressure solve treat it as a resting
                 // fluid, and its pressure relaxes to the gas's).
-                parts.v[p] = dx / dt;
+                parts.v[p] = dx[p] / dt;
             } else {
                 parts.v[p] = SVector::zeros();
             }
@@ -1759,6 +1746,29 @@ impl<const D: usize> ImplicitRun<D> {
 }
 
 /// The particle with the smallest Jacobian of the last Newton iterate.
+/// Adds `scale(n) values[n]` of every interior node `n` (its own reduced
+/// node) to its free dofs in `out` (`dof`: the step's dof map).
+fn add_interior<const D: usize>(
+    map_target: &[usize],
+    dof: &[usize],
+    values: &[SVector<f64, D>],
+    scale: impl Fn(usize) -> f64,
+    out: &mut [f64],
+) {
+    for (n, v) in values.iter().enumerate() {
+        if map_target[n] != n {
+            continue;
+        }
+        let s = scale(n);
+        for a in 0..D {
+            let d = dof[n * D + a];
+            if d != usize::MAX {
+                out[d] += s * v[a];
+            }
+        }
+    }
+}
+
 fn worst_particle(ev: &Eval) -> Option<usize> {
     ev.j.iter()
         .enumerate()
