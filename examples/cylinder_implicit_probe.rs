@@ -3,7 +3,9 @@
 //! steps and wall time of each.
 //!
 //! `cargo run --release --example cylinder_implicit_probe -- DX [DT]`
-//! (DT: the implicit step, default the case's `time.dt`).
+//! (DT: the implicit step, default the case's `time.dt`). `PASSES=N` sets
+//! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
+//! and `OMEGA=w` its relaxation, `TOL=t` its tolerance.
 
 use mpmice::diagnostics::coupled::run_cylinder_scene;
 use mpmice::scene;
@@ -26,12 +28,25 @@ fn main() -> anyhow::Result<()> {
             if let Some(dt) = dt {
                 sc.time.dt = Some(dt);
             }
+            let ci = &mut sc.implicit.coupling;
+            if let Ok(n) = std::env::var("PASSES") {
+                ci.max_iterations = n.parse()?;
+            }
+            if let Ok(t) = std::env::var("TOL") {
+                ci.tolerance = t.parse()?;
+            }
+            if let Ok(w) = std::env::var("OMEGA") {
+                ci.omega = w.parse()?;
+            }
+            if std::env::var("RELAX").is_ok_and(|r| r == "constant") {
+                ci.relaxation = scene::RelaxationKind::Constant;
+            }
         }
         let (run, m, wall) = run_cylinder_scene(sc, dx)?;
         let it = run.implicit_totals;
         println!(
             "{name:8} dx {dx}: Eq.43 {:.4e}  P {:.4e} Pa  steps {}  wall {:.3} s  \
-             newton {} (max {}) retries {}; s: pressure {:.2} assembly {:.2} factor {:.2} \
+             newton {} (max {}) passes {} (max {}) retries {}; s: pressure {:.2} assembly {:.2} factor {:.2} \
              solve {:.2} particles {:.2}",
             m.error43,
             m.pressure,
@@ -39,6 +54,8 @@ fn main() -> anyhow::Result<()> {
             wall,
             it.newton_iterations,
             it.max_newton_iterations,
+            it.coupling_iterations,
+            it.max_coupling_iterations,
             it.step_retries,
             run.pressure_s,
             it.assembly_s,

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use mpmice::diagnostics::coupled::run_cylinder_scene;
+use mpmice::diagnostics::coupled::{measure_cylinder, run_cylinder_scene};
 use mpmice::driver::{run_scene, RunOptions};
 use mpmice::scene::{self, Scene};
 
@@ -62,26 +62,37 @@ fn implicit_cylinder_converges_to_lame_at_large_steps() {
 }
 
 /// The Newmark (dynamic) solid under the same load: undamped, it rings
-/// about the Lamé state, and its mean hoop load still matches the gas's.
+/// about the Lamé state (radial mode ≈ 0.8 ms), and its mean hoop load,
+/// averaged over the 2 ms after the heating stops (steady gas pressure),
+/// matches the gas's: measured +0.12 %. (A snapshot at 4 ms caught the
+/// ring at −25 %.)
 #[test]
 fn implicit_newmark_cylinder_carries_the_gas_load() {
     let mut sc = case("pressurized_cylinder_implicit.toml");
     sc.implicit.dynamic = true;
     sc.time.dt = Some(2.5e-5);
-    let (run, m, _) = run_cylinder_scene(sc, 0.05).expect("Newmark cylinder runs");
-    let p = &run.fields[0].particles;
+    sc.grid.cells = vec![24, 24];
+    let mut run = scene::build_coupled_run::<2>(&sc).expect("builds");
+    run.advance_to(3e-3).expect("heating");
     // Plane-strain Lamé: the mean in-plane stress (σr + σθ)/2 is P/3
-    // everywhere in the wall; averaged over the particles it must be
-    // within the ringing of an undamped wall.
-    let mean: f64 = p
-        .stress
-        .iter()
-        .map(|s| 0.5 * (s[(0, 0)] + s[(1, 1)]))
-        .sum::<f64>()
-        / p.len() as f64;
-    let target = m.pressure / 3.0;
-    println!("mean in-plane stress {mean:.4e} against P/3 = {target:.4e}");
-    assert!((mean / target - 1.0).abs() < 0.25, "{mean} vs {target}");
+    // everywhere in the wall.
+    let (mut mean, mut target, mut n) = (0.0, 0.0, 0.0);
+    while run.fluid.time < 5e-3 - 1e-12 {
+        run.step(2.5e-5).expect("steps");
+        let p = &run.fields[0].particles;
+        mean += p
+            .stress
+            .iter()
+            .map(|s| 0.5 * (s[(0, 0)] + s[(1, 1)]))
+            .sum::<f64>()
+            / p.len() as f64;
+        let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
+        target += m.pressure / 3.0;
+        n += 1.0;
+    }
+    let (mean, target) = (mean / n, target / n);
+    println!("mean in-plane stress over 3–5 ms {mean:.4e} against P/3 = {target:.4e}");
+    assert!((mean / target - 1.0).abs() < 0.02, "{mean} vs {target}");
 }
 
 /// Scene checks of the mode: reactions are refused (their particles burn
@@ -124,4 +135,148 @@ fn tempdir(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("mpmice_{name}_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
+}
+
+/// The steel slab of `cases/slab_in_gas_implicit.toml` on its two air
+/// springs, Newmark at steps 60–500× the steel's explicit limit: its
+/// displacement after a quarter period against the gas-spring model
+/// `x = (v₀/ω) sin ωt`, `ω² = 2γp₀/(ρ_s t L)` (3.487 mm; the explicit
+/// coupled run at this h reaches 3.407 mm, 2.3 % below the model, which
+/// ignores the slab's spread over the cells). Measured 3.486 / 3.447 mm at
+/// Δt = 2.5e-3 / 3.125e-4 s; with the exchange's velocity change counted
+/// twice (once as an impulse, again through the end-of-step acceleration
+/// in the next step's trapezoidal update) the slab came out at 3.201 /
+/// 2.876 mm, and worse the smaller the step. The coupling iteration gives
+/// the same within 0.1 % in at most 4 passes a step.
+#[test]
+fn newmark_slab_on_gas_springs() {
+    for (dt, passes) in [(2.5e-3, 1), (3.125e-4, 1), (2.5e-3, 30)] {
+        let mut sc = case("slab_in_gas_implicit.toml");
+        sc.time.dt = Some(dt);
+        sc.implicit.coupling.max_iterations = passes;
+        let mut run = scene::build_coupled_run::<2>(&sc).expect("builds");
+        let x0 = slab_x(&run);
+        let end = sc.time.end;
+        while run.fluid.time < end * (1.0 - 1e-9) {
+            run.step_exact(dt.min(end - run.fluid.time)).expect("steps");
+        }
+        let x = slab_x(&run) - x0;
+        let model = slab_model(end);
+        let it = run.implicit_totals;
+        println!(
+            "Δt {dt:e}, {passes} passes allowed: x {x:.5e} m against {model:.5e} \
+             ({:+.2} %), {} steps, {} passes (max {})",
+            100.0 * (x / model - 1.0),
+            run.steps,
+            it.coupling_iterations,
+            it.max_coupling_iterations
+        );
+        assert!((x / model - 1.0).abs() < 0.03, "Δt {dt}: {x} vs {model}");
+        assert!(it.max_coupling_iterations <= 4, "{it:?}");
+        assert_eq!(it.step_retries, 0);
+    }
+}
+
+/// The slab's mean x.
+fn slab_x(run: &mpmice::coupling::CoupledRun<2>) -> f64 {
+    let p = &run.fields[0].particles;
+    p.x.iter().map(|x| x[0]).sum::<f64>() / p.len() as f64
+}
+
+/// The gas-spring model of the slab case at time `t`: 0.1 m of steel
+/// (7850 kg/m³) between two 0.45 m columns of air at 101325 Pa, γ 1.4,
+/// starting at 0.1 m/s.
+fn slab_model(t: f64) -> f64 {
+    let omega = (2.0 * 1.4 * 101_325.0 / (7850.0 * 0.1 * 0.45_f64)).sqrt();
+    0.1 / omega * (omega * t).sin()
+}
+
+/// The iteration's keys are checked with the key named, and an iteration
+/// that cannot converge cuts Δt down to the smallest allowed, then stops
+/// naming the step, time and the last residuals.
+#[test]
+fn coupling_iteration_checks_and_failure() {
+    let base = std::fs::read_to_string(format!(
+        "{}/cases/pressurized_cylinder_implicit.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("case");
+    for (extra, key) in [
+        ("max_iterations = 0", "implicit.coupling.max_iterations"),
+        ("tolerance = -1.0", "implicit.coupling.tolerance"),
+        ("omega = 2.5", "implicit.coupling.omega"),
+        ("relaxation = \"anderson\"", "relaxation"),
+        ("passes = 3", "passes"),
+    ] {
+        let text = base.replace(
+            "[implicit]\ndynamic = false",
+            &format!("[implicit]\ndynamic = true\ncoupling = {{ {extra} }}"),
+        );
+        assert_ne!(text, base);
+        let err = scene::parse(&text).expect_err(extra).to_string();
+        assert!(err.contains(key), "{extra}: {err}");
+    }
+    // A quasistatic solid is refused (the iteration diverged on it).
+    let text = base.replace(
+        "[implicit]\ndynamic = false",
+        "[implicit]\ndynamic = false\ncoupling = { max_iterations = 5 }",
+    );
+    let err = scene::parse(&text).expect_err("quasistatic").to_string();
+    assert!(err.contains("implicit.coupling.max_iterations"), "{err}");
+    assert!(err.contains("dynamic"), "{err}");
+
+    let mut sc = case("pressurized_cylinder_implicit.toml");
+    sc.implicit.dynamic = true;
+    sc.implicit.coupling.max_iterations = 2;
+    sc.implicit.coupling.tolerance = 1e-14;
+    sc.grid.cells = vec![24, 24];
+    let mut run = scene::build_coupled_run::<2>(&sc).expect("builds");
+    // Two cuts at most: the iteration would reach 1e-14 at a Δt small
+    // enough for round-off to be all that changes.
+    for f in &mut run.fields {
+        if let Some(imp) = f.implicit.as_mut() {
+            imp.params.dt_min = 2e-5;
+        }
+    }
+    let mut err = None;
+    for _ in 0..3 {
+        if let Err(e) = run.step_exact(1e-4) {
+            err = Some(e.to_string());
+            break;
+        }
+    }
+    let err = err.expect("two passes cannot reach 1e-14 once the gas is heated");
+    println!("{err}");
+    assert!(err.contains("step "), "{err}");
+    assert!(err.contains("coupling iteration"), "{err}");
+    assert!(err.contains("relative residuals"), "{err}");
+    assert!(err.contains("smallest allowed"), "{err}");
+}
+
+/// `summary.json` of a coupled implicit run reports the coupling
+/// iteration's passes and each implicit field's Newton iterations per
+/// step: every pass solves the field at least once, so its mean Newton
+/// count is at least the mean number of passes.
+#[test]
+fn coupled_implicit_summary_reports_passes_and_newton_per_field() {
+    let mut sc = case("slab_in_gas_implicit.toml");
+    sc.time.end = 0.01;
+    sc.implicit.coupling.max_iterations = 30;
+    let dir = tempdir("coupled_implicit_summary");
+    run_scene(&sc, &RunOptions::quiet(&dir, 1)).expect("slab runs");
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let c = &v["iterations"]["coupled"];
+    println!("{c}");
+    let passes = c["passes_mean"].as_f64().expect("passes_mean");
+    assert!((1.0..=4.0).contains(&passes), "{c}");
+    assert!(c["passes_max"].as_u64().expect("passes_max") <= 4, "{c}");
+    assert!(c["cells_s"].as_f64().expect("cells_s") > 0.0, "{c}");
+    let f = &c["fields"][0];
+    assert_eq!(f["material"], "steel");
+    assert!(
+        f["newton_mean"].as_f64().expect("newton_mean") >= passes,
+        "{c}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -18,7 +18,7 @@ pub mod summary;
 
 pub use limiter::DtLimiter;
 pub use memory::MemoryEstimate;
-pub use model::{DtRequest, Model, StepStats};
+pub use model::{CoupledIterations, DtRequest, FieldIterations, Model, StepStats};
 pub use run_loop::{preflight, run_model, scene_hash, Preflight, RunOptions, MAX_RETRIES};
 pub use summary::{IterationStats, Summary};
 

@@ -244,6 +244,34 @@ pub struct Counts {
     pub elements: usize,
 }
 
+/// What the steps of a coupled implicit run did (since this run started:
+/// a restart counts from the restart).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct CoupledIterations {
+    /// Mean passes (pressure stage + implicit solves) per step; 1 for the
+    /// staggered step.
+    pub passes_mean: f64,
+    /// Most passes of one step.
+    pub passes_max: u64,
+    /// Seconds in the pressure stages (the cells' part of the time split).
+    pub cells_s: f64,
+    /// Per implicit solid field.
+    pub fields: Vec<FieldIterations>,
+}
+
+/// One implicit solid field's Newton solves in a coupled run.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FieldIterations {
+    /// The field's material (scene name).
+    pub material: String,
+    /// Mean Newton iterations per step (over all passes of the step).
+    pub newton_mean: f64,
+    /// Most Newton iterations of one solve.
+    pub newton_max: u64,
+    /// Mean Krylov iterations per step (0 with the direct solver).
+    pub linear_mean: f64,
+}
+
 /// How a model describes itself in the run summary.
 #[derive(Debug, Clone, Default)]
 pub struct Description {
@@ -263,6 +291,9 @@ pub struct Description {
     /// Implicit MPM: seconds in assembly, factorisation, solves and particle
     /// updates.
     pub implicit_split: Option<[f64; 4]>,
+    /// Coupled implicit MPM-ICE: passes, pressure-stage time and Newton
+    /// iterations per field.
+    pub coupled_iterations: Option<CoupledIterations>,
 }
 
 /// A system the run loop drives.

@@ -896,6 +896,7 @@ fn summarise<M: Model>(
         if let Some([a, f, s, p]) = desc.implicit_split {
             (it.assembly_s, it.factor_s, it.solve_s, it.particles_s) = (a, f, s, p);
         }
+        it.coupled = desc.coupled_iterations.clone();
         // Sums over all steps of a restarted chain: means over all steps.
         it.finish(steps)
     });

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::driver::model::MaterialTotals;
+use crate::driver::model::{CoupledIterations, MaterialTotals};
 use crate::error::{Error, Result};
 use crate::output::atomic_write;
 use crate::stepper::Energies;
@@ -200,6 +200,11 @@ pub struct IterationStats {
     pub solve_s: f64,
     /// Seconds in particle updates (implicit MPM).
     pub particles_s: f64,
+    /// Coupled implicit MPM-ICE: the coupling iteration's passes, the
+    /// pressure stages' time and each implicit field's Newton solves
+    /// (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coupled: Option<CoupledIterations>,
 }
 
 impl IterationStats {

@@ -4,8 +4,9 @@ use nalgebra::SVector;
 
 use super::schema::{
     FluidVariant, Geometry, LimiterKind, MaterialKind, MaterialSpec, Mode, NewtonSolverKind,
-    PressureSolverKind, Scene,
+    PressureSolverKind, RelaxationKind, Scene,
 };
+use crate::coupling::iteration::{CouplingIteration, Relaxation};
 use crate::error::SceneError;
 use crate::grid::{Boundary, Grid};
 use crate::ice::implicit::{LinearSolver as PressureSolver, SemiImplicit};
@@ -981,6 +982,15 @@ pub fn build_coupled_run<const D: usize>(
         params.dt_max = params.dt_max.min(dt);
         run.make_implicit(params, dt)
             .map_err(|e| SceneError::new("implicit", e.to_string()))?;
+        let ci = &scene.implicit.coupling;
+        run.iteration = CouplingIteration {
+            max_iterations: ci.max_iterations,
+            tolerance: ci.tolerance,
+            relaxation: match ci.relaxation {
+                RelaxationKind::Aitken => Relaxation::Aitken(ci.omega),
+                RelaxationKind::Constant => Relaxation::Constant(ci.omega),
+            },
+        };
         if let Some(g) = scene.gravity.as_deref().map(to_vec::<D>) {
             for imp in run.fields.iter_mut().filter_map(|f| f.implicit.as_mut()) {
                 if g.norm() > 0.0 {

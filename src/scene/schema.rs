@@ -1392,6 +1392,67 @@ pub struct ImplicitSpec {
     /// `load_ramp` (`[[implicit.prescribed]]`).
     #[serde(default)]
     pub prescribed: Vec<PrescribedSpec>,
+    /// The coupling iteration between the implicit solids and the fluid
+    /// pressure of a coupled scene (`[implicit.coupling]`).
+    #[serde(default)]
+    pub coupling: CouplingIterationSpec,
+}
+
+/// Relaxation of the coupling iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RelaxationKind {
+    /// Aitken's dynamic relaxation, starting from `omega`.
+    Aitken,
+    /// A constant `omega`.
+    Constant,
+}
+
+/// `[implicit.coupling]`: the fixed-point iteration of a coupled implicit
+/// step between the solids' implicit solve and the fluid pressure
+/// ([`crate::coupling::iteration`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingIterationSpec {
+    /// Most passes (pressure stage + implicit solve) per step (≥ 1; 1: the
+    /// staggered step without iteration). A step that does not converge
+    /// in them is retried with a smaller Δt.
+    #[serde(default = "default_coupling_max_iterations")]
+    pub max_iterations: usize,
+    /// Relative tolerance on the change of the solid cells' velocity
+    /// between passes (> 0).
+    #[serde(default = "default_coupling_tolerance")]
+    pub tolerance: f64,
+    /// `aitken` (default) or `constant`.
+    #[serde(default = "default_relaxation")]
+    pub relaxation: RelaxationKind,
+    /// The (first) relaxation factor, in (0, 2) (default 1).
+    #[serde(default = "default_omega")]
+    pub omega: f64,
+}
+
+fn default_coupling_max_iterations() -> usize {
+    crate::coupling::iteration::CouplingIteration::default().max_iterations
+}
+fn default_coupling_tolerance() -> f64 {
+    crate::coupling::iteration::CouplingIteration::default().tolerance
+}
+fn default_relaxation() -> RelaxationKind {
+    RelaxationKind::Aitken
+}
+fn default_omega() -> f64 {
+    1.0
+}
+
+impl Default for CouplingIterationSpec {
+    fn default() -> Self {
+        Self {
+            max_iterations: default_coupling_max_iterations(),
+            tolerance: default_coupling_tolerance(),
+            relaxation: default_relaxation(),
+            omega: default_omega(),
+        }
+    }
 }
 
 /// A prescribed displacement (implicit mode): the particles of one object,
@@ -1442,6 +1503,7 @@ impl Default for ImplicitSpec {
             dt_max: None,
             max_cell_fraction: None,
             prescribed: Vec::new(),
+            coupling: CouplingIterationSpec::default(),
         }
     }
 }
@@ -2343,6 +2405,35 @@ impl Scene {
         }
         if let Some(f) = im.max_cell_fraction {
             positive("implicit.max_cell_fraction", f)?;
+        }
+        let ci = &im.coupling;
+        if ci.max_iterations == 0 {
+            return Err(err(
+                "implicit.coupling.max_iterations",
+                "must be ≥ 1 (got 0; 1 is the staggered step)",
+            ));
+        }
+        if ci.max_iterations > 1 && !im.dynamic {
+            // The quasistatic solid's velocity u/Δt answers the step's
+            // pressure at once: the fixed point's gain is the ratio of the
+            // gas's and the solid's stiffness in the mixed cells, and on
+            // the pressurised cylinder it diverged (dx 0.025, Δt 1e-4:
+            // J ≤ 0 at step 119 after Δt was cut to 1.7e-12).
+            return Err(err(
+                "implicit.coupling.max_iterations",
+                format!(
+                    "the coupling iteration needs implicit.dynamic = true (got {} passes \
+                     with a quasistatic solid); allowed here: 1",
+                    ci.max_iterations
+                ),
+            ));
+        }
+        positive("implicit.coupling.tolerance", ci.tolerance)?;
+        if !(ci.omega > 0.0 && ci.omega < 2.0) {
+            return Err(err(
+                "implicit.coupling.omega",
+                format!("must be in (0, 2) (got {})", ci.omega),
+            ));
         }
         for (i, o) in self.objects.iter().enumerate() {
             if let Some(p) = o.inner_pressure {

@@ -230,3 +230,122 @@ pub fn piston_implicit(quick: bool) -> anyhow::Result<StudyResult> {
         ],
     })
 }
+
+/// The slab of `cases/slab_in_gas_implicit.toml` (steel on two air
+/// springs) in `mode` with the fixed step `dt` (`None`: the explicit
+/// stable step) and at most `passes` of the coupling iteration: the slab's
+/// mean displacement and velocity at `time.end`, steps, passes and wall
+/// time.
+fn slab_at(
+    mode: scene::Mode,
+    dt: Option<f64>,
+    passes: usize,
+) -> anyhow::Result<(f64, f64, u64, u64, f64)> {
+    let mut sc = scene::load(&repo_root().join("cases/slab_in_gas_implicit.toml"))?;
+    sc.time.mode = mode;
+    sc.time.dt = dt;
+    sc.implicit.coupling.max_iterations = passes;
+    let mut run = scene::build_coupled_run::<2>(&sc)?;
+    let mean = |run: &mpmice::coupling::CoupledRun<2>, k: usize| {
+        let p = &run.fields[0].particles;
+        let q: f64 = if k == 0 {
+            p.x.iter().map(|x| x[0]).sum()
+        } else {
+            p.v.iter().map(|v| v[0]).sum()
+        };
+        q / p.len() as f64
+    };
+    let x0 = mean(&run, 0);
+    let start = Instant::now();
+    let end = sc.time.end;
+    match dt {
+        Some(dt) => {
+            while run.fluid.time < end * (1.0 - 1e-9) {
+                run.step_exact(dt.min(end - run.fluid.time))?;
+            }
+        }
+        None => run.advance_to(end)?,
+    }
+    Ok((
+        mean(&run, 0) - x0,
+        mean(&run, 1),
+        run.steps,
+        run.implicit_totals.coupling_iterations,
+        start.elapsed().as_secs_f64(),
+    ))
+}
+
+/// `slab_temporal_order`: the temporal order of the implicit coupled step
+/// on a smooth problem, a steel slab oscillating on two air springs with
+/// small amplitude (`cases/slab_in_gas_implicit.toml`), at a fixed grid
+/// and Δt halving from 1e-2 s (2000× the steel's explicit step, 8× the
+/// air's acoustic time) to 7.8e-5 s: the slab's displacement after a
+/// quarter period against the explicit coupled run on the same grid (Δt →
+/// 0 at this h), staggered and with the coupling iteration. Quick: three
+/// of the steps.
+pub fn slab_temporal_order(quick: bool) -> anyhow::Result<StudyResult> {
+    let dts: &[f64] = if quick {
+        &[2.5e-3, 6.25e-4, 1.5625e-4]
+    } else {
+        &[
+            1e-2, 5e-3, 2.5e-3, 1.25e-3, 6.25e-4, 3.125e-4, 1.5625e-4, 7.8125e-5,
+        ]
+    };
+    let mut notes = Vec::new();
+    let (x_ref, v_ref, ref_steps, _, ref_wall) = slab_at(scene::Mode::Explicit, None, 1)?;
+    notes.push(format!(
+        "Reference: the explicit coupled run on the same grid, x = {x_ref:.6e} m, \
+         v = {v_ref:.4e} m/s at t = 0.05 s in {ref_steps} steps ({ref_wall:.1} s)."
+    ));
+    let reference = "the explicit coupled run at this h";
+    let norm = format!("|x_slab(0.05 s) − x_ref| [m], x_ref {reference}");
+    let mut series = Vec::new();
+    for (label, passes) in [
+        ("implicit, staggered", 1),
+        ("implicit, coupling iteration", 30),
+    ] {
+        let mut pts = Vec::new();
+        for &dt in dts {
+            let (x, v, steps, pass, wall) = slab_at(scene::Mode::Implicit, Some(dt), passes)?;
+            pts.push(
+                Point::new(dt, (x - x_ref).abs(), wall, 160.0 * steps as f64 / wall)
+                    .with_extra("x", x)
+                    .with_extra("v", v)
+                    .with_extra("steps", steps as f64)
+                    .with_extra("passes", pass as f64),
+            );
+        }
+        // The order between successive halvings (the fit over all Δt
+        // mixes the filtered-acoustics plateau with the asymptotic range).
+        let local: Vec<String> = pts
+            .windows(2)
+            .map(|w| {
+                format!(
+                    "{:.2}",
+                    (w[0].error / w[1].error).ln() / (w[0].h / w[1].h).ln()
+                )
+            })
+            .collect();
+        notes.push(format!(
+            "{label}: order between successive Δt: {}",
+            local.join(", ")
+        ));
+        series.push(Series::new(format!("{label} (h = Δt)"), norm.clone(), pts));
+    }
+    notes.push(
+        "Steel slab 0.1 m thick (7850 kg/m³) between two 0.45 m air columns at 1 atm, 0.1 m/s \
+         initial velocity, 40 × 4 cells of 0.025 m, GIMP, Newmark solid, K = 1e15. The slab \
+         moves as a mass on two adiabatic gas springs (ω ≈ 28.3 rad/s; amplitude 3.5 mm). \
+         The local order rises toward one as Δt falls and has not reached it at 7.8e-5 s: \
+         the pressure stage and the exchange are backward Euler in Guilkey's splitting, \
+         which caps the trapezoidal Newmark solve at first order; above the air's acoustic \
+         time (1.3 ms) the implicit pressure filters the acoustics and the error levels off \
+         (a pre-asymptotic range, which the fit over all Δt includes)."
+            .into(),
+    );
+    Ok(StudyResult {
+        study: "slab_temporal_order".into(),
+        series,
+        notes,
+    })
+}

@@ -70,6 +70,11 @@ pub const STUDIES: &[Study] = &[
         implicit_coupled_studies::piston_implicit,
     ),
     (
+        "slab_temporal_order",
+        "Steel slab on two air springs, implicit MPM-ICE: temporal order at fixed h, staggered and with the coupling iteration",
+        implicit_coupled_studies::slab_temporal_order,
+    ),
+    (
         "piston_adiabatic",
         "Guilkey 4.2 adiabatic piston, MPM-ICE, closed-end pressure vs P1 (V1/V2)^gamma",
         coupled_studies::piston_adiabatic,

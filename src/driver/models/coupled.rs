@@ -15,6 +15,7 @@ use crate::driver::models::fluid::{
     cell_momentum_scale, fluid_history_row, load_carried, save_carried, FLUID_HISTORY,
 };
 use crate::driver::models::solid_explicit::scene_name;
+use crate::driver::{CoupledIterations, FieldIterations};
 use crate::error::Error;
 use crate::material::eos::EquationOfState;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
@@ -282,6 +283,38 @@ impl<const D: usize> Model for Coupled<D> {
                 let t = &run.implicit_totals;
                 [t.assembly_s, t.factor_s, t.solve_s, t.particles_s]
             }),
+            coupled_iterations: coupled_iterations(run),
         }
     }
+}
+
+/// The coupled implicit step's iteration report for the run summary
+/// (`None` without implicit fields): passes per step, the pressure stages'
+/// time, each implicit field's Newton and Krylov iterations per step (a
+/// field is named by its particles' first material).
+fn coupled_iterations<const D: usize>(run: &CoupledRun<D>) -> Option<CoupledIterations> {
+    let t = &run.implicit_totals;
+    let n = t.steps.max(1) as f64;
+    let fields: Vec<FieldIterations> = run
+        .fields
+        .iter()
+        .filter(|f| f.implicit.is_some())
+        .map(|f| FieldIterations {
+            material: f
+                .particles
+                .material
+                .first()
+                .and_then(|&m| run.materials.get(usize::from(m)))
+                .map_or_else(String::new, |m| m.name.clone()),
+            newton_mean: f.implicit_totals.newton_iterations as f64 / n,
+            newton_max: f.implicit_totals.max_newton_iterations,
+            linear_mean: f.implicit_totals.linear_iterations as f64 / n,
+        })
+        .collect();
+    (!fields.is_empty()).then(|| CoupledIterations {
+        passes_mean: t.coupling_iterations as f64 / n,
+        passes_max: t.max_coupling_iterations,
+        cells_s: run.pressure_s,
+        fields,
+    })
 }

@@ -218,6 +218,7 @@ impl<const D: usize> Model for Multiphase<D> {
             momentum_conserved: !self.run.grid.axisymmetric,
             phase_times: self.run.phase_times(),
             implicit_split: None,
+            coupled_iterations: None,
         }
     }
 

@@ -153,6 +153,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
                 sum(|s| s.solve_s),
                 sum(|s| s.particles_s),
             ]),
+            coupled_iterations: None,
         }
     }
 }
