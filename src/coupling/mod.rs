@@ -319,6 +319,9 @@ pub struct CoupledRun<const D: usize> {
     /// The implicit solid solves (`time.mode = "implicit"`), summed over
     /// the steps and fields. Not part of the state.
     pub implicit_totals: ImplicitTotals,
+    /// How many times the last step was redone with a smaller Δt after a
+    /// failed implicit solve or coupling iteration.
+    pub last_implicit_retries: usize,
     /// Set when the last step failed in an implicit solid solve (nothing
     /// committed: the step is retried with a smaller Δt).
     implicit_failed: bool,
@@ -524,6 +527,7 @@ impl<const D: usize> CoupledRun<D> {
             pressure_s: 0.0,
             last_halvings: 0,
             implicit_totals: ImplicitTotals::default(),
+            last_implicit_retries: 0,
             implicit_failed: false,
             failed_field: None,
             iteration: iteration::CouplingIteration::default(),
@@ -774,6 +778,7 @@ impl<const D: usize> CoupledRun<D> {
     /// attempt is committed), down to their `dt_min`.
     fn step_retried(&mut self, dt: f64) -> Result<StepInfo> {
         let mut dt = dt;
+        self.last_implicit_retries = 0;
         loop {
             self.implicit_failed = false;
             match self.step_inner(dt) {
@@ -799,6 +804,7 @@ impl<const D: usize> CoupledRun<D> {
                     }
                     dt *= cut;
                     self.implicit_totals.step_retries += 1;
+                    self.last_implicit_retries += 1;
                     for imp in self.fields.iter_mut().filter_map(|f| f.implicit.as_mut()) {
                         imp.dt = dt;
                     }

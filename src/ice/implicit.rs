@@ -139,29 +139,50 @@ pub(super) fn implicit_pressure<const D: usize>(
     ws.implicit.0 = Some(iw);
     let (outer, linear, res_max) = res?;
     // Guilkey Eq. 30: p = p_eq + Δp (the sources use p_eq + w Δp).
-    let iw = ws
+    let p_min = min_pressure_all(state);
+    let mut iw = ws
         .implicit
         .0
-        .as_ref()
+        .take()
         .ok_or_else(|| invalid("implicit", "workspace missing"))?;
-    let p_min = min_pressure_all(state);
-    for &c in &layout.interior {
-        let p = state.p_eq[c] + iw.dp[c];
-        if !(p.is_finite() && p > p_min) {
-            return Err(IceError::PressureSolve {
-                site: site_at(state, c),
-                reason: format!("non-physical pressure p = {p:e}"),
-                outer,
-                residual: res_max,
-                dt,
-                retryable: true,
+    let mut finish = || -> Result<(), IceError> {
+        for &c in &layout.interior {
+            let mut p = state.p_eq[c] + iw.dp[c];
+            if p <= p_min && p.is_finite() {
+                // The linearised balance (κ at p_eq) overshoots below the
+                // admissible range: a strong expansion, or a solid pulled into
+                // tension on its threshold EOS (Guilkey Fig. 1), whose κ grows
+                // without bound as p falls to 0 (two halves of a steel bar
+                // separating at 2 m/s in air asked for −1.6 MPa at Δt = 1e-4 s
+                // and halved Δt 166 times in 2 ms). As the explicit Eq. 29
+                // does, the cell's volume balance is solved exactly instead.
+                if let Some(q) =
+                    super::pressure::expanded_pressure(state, c, dt * ws.div_sum[c], p_min)
+                {
+                    p = q;
+                    iw.dp[c] = q - state.p_eq[c];
+                }
+            }
+            if !(p.is_finite() && p > p_min) {
+                return Err(IceError::PressureSolve {
+                    site: site_at(state, c),
+                    reason: format!("non-physical pressure p = {p:e}"),
+                    outer,
+                    residual: res_max,
+                    dt,
+                    retryable: true,
+                });
+            }
+            let w = params.source_weight(iw.dp[c], state.p_eq[c], || {
+                cell_shock_sensor(layout, &state.p_eq, c)
             });
+            ws.press[c] = state.p_eq[c] + w * iw.dp[c];
         }
-        let w = params.source_weight(iw.dp[c], state.p_eq[c], || {
-            cell_shock_sensor(layout, &state.p_eq, c)
-        });
-        ws.press[c] = state.p_eq[c] + w * iw.dp[c];
-    }
+        Ok(())
+    };
+    let r = finish();
+    ws.implicit.0 = Some(iw);
+    r?;
     Ok((outer, linear))
 }
 

@@ -604,7 +604,7 @@ fn face_pressures<const D: usize>(
 /// `Σ_r θ_r (v_r(p)/v_r(p_eq) − 1) = dv`, the balance that Guilkey Eq. 29
 /// linearises. Bisection in `ln(p − p_min)`; `None` when no admissible
 /// pressure satisfies it.
-fn expanded_pressure<const D: usize>(
+pub(super) fn expanded_pressure<const D: usize>(
     st: &IceState<D>,
     c: usize,
     dv: f64,

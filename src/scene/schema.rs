@@ -2455,6 +2455,13 @@ impl Scene {
                         "surface pressure loads are applied in implicit mode only (for now)",
                     ));
                 }
+                if self.materials.iter().any(|m| m.in_cells()) {
+                    return Err(err(
+                        format!("objects[{i}].inner_pressure"),
+                        "surface pressure loads act on solid-only implicit scenes; in a \
+                         coupled scene the fluid's pressure loads the solid",
+                    ));
+                }
             }
         }
         self.validate_prescribed()
@@ -2470,6 +2477,13 @@ impl Scene {
                 return Err(err(
                     format!("implicit.prescribed[{k}]"),
                     "prescribed displacements are applied in implicit mode only",
+                ));
+            }
+            if self.materials.iter().any(|m| m.in_cells()) {
+                return Err(err(
+                    format!("implicit.prescribed[{k}]"),
+                    "prescribed displacements act on solid-only implicit scenes; a coupled \
+                     scene (fluid materials in the cells) does not apply them",
                 ));
             }
             if pr.object >= self.objects.len() {

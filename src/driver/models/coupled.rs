@@ -94,7 +94,7 @@ impl<const D: usize> Model for Coupled<D> {
             dt: info.dt,
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
-            retries: self.run.last_halvings,
+            retries: self.run.last_halvings + self.run.last_implicit_retries,
             boundary: None,
         })
     }
