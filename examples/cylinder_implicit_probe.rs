@@ -5,7 +5,8 @@
 //! `cargo run --release --example cylinder_implicit_probe -- DX [DT]`
 //! (DT: the implicit step, default the case's `time.dt`). `PASSES=N` sets
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
-//! and `OMEGA=w` its relaxation, `TOL=t` its tolerance.
+//! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
+//! steel Newmark instead of quasistatic.
 
 use mpmice::diagnostics::coupled::run_cylinder_scene;
 use mpmice::scene;
@@ -27,6 +28,9 @@ fn main() -> anyhow::Result<()> {
         if name == "implicit" {
             if let Some(dt) = dt {
                 sc.time.dt = Some(dt);
+            }
+            if std::env::var("DYNAMIC").is_ok() {
+                sc.implicit.dynamic = true;
             }
             let ci = &mut sc.implicit.coupling;
             if let Ok(n) = std::env::var("PASSES") {

@@ -1142,9 +1142,18 @@ impl<const D: usize> ImplicitRun<D> {
         let force_floor = match &self.fluid_load {
             Some(fl) => {
                 let p_scale = pp.iter().fold(fl.p_ref.abs(), |m, v| m.max(v.abs()));
+                // The stress of a stiff solid near its reference state
+                // carries the round-off of its modulus, ε (λ + 2μ): steel
+                // (265 GPa) pushed by a 2 kPa difference of air pressure
+                // stalled at a residual of 8.8e-7 N, above the fluid-only
+                // floor of 5e-7 N, and Δt collapsed to 2e-7 s.
+                let stiff = self
+                    .materials
+                    .iter()
+                    .map(|m| m.elastic.p_wave())
+                    .fold(0.0, f64::max);
                 let h = grid.h.min();
-                1e-10
-                    * p_scale
+                (1e-10 * p_scale).max(16.0 * f64::EPSILON * stiff)
                     * parts
                         .vol
                         .iter()
