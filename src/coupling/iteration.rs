@@ -33,10 +33,11 @@ use nalgebra::SVector;
 /// EOS (bulk modulus 117 GPa for steel), and that pressure is already in
 /// the solid's stress (σ + (p − p_ref) I): iterating there fed the solid's
 /// own volumetric response back twice. On the Newmark pressurised
-/// cylinder (dx 0.05, Δt 1e-4) every cell above the trace needed up to 7
-/// passes, 109 retries and 349 steps and ended at Eq. 43 error 0.43; the
-/// cells below 0.99 diverged at step 2 of the quasistatic one; below 0.5:
-/// at most 3 passes, no retry, 40 steps, error 0.16 (staggered 0.21).
+/// cylinder (dx 0.05, Δt 1e-4; measured before the exchange impulse was
+/// counted once, commit ff56b27) every cell above the trace needed up to 7
+/// passes, 109 retries and 349 steps and ended at Eq. 43 error 0.43, below
+/// 0.5 at most 3 passes, no retry, 40 steps; on the quasistatic one the
+/// cells below 0.99 diverged at step 2.
 pub const ITERATED_FILL: f64 = 0.5;
 
 /// How the coupling iteration relaxes its update.

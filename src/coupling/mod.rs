@@ -332,7 +332,8 @@ pub struct CoupledRun<const D: usize> {
     pub iteration: iteration::CouplingIteration,
     fixed_point: iteration::FixedPoint<D>,
     /// The cells the iteration acts on: (field, interior cell index) of
-    /// every implicit field's cells above its trace mass.
+    /// every implicit field's cells above its trace mass and below
+    /// [`iteration::ITERATED_FILL`] of the cell.
     fp_cells: Vec<(usize, usize)>,
     /// Per node: a field's `vⁿ⁺¹ − Δt F_p/m`; per interior cell its
     /// node → cell mass and velocity.
