@@ -157,7 +157,7 @@ pub(super) fn implicit_pressure<const D: usize>(
                 // and halved Δt 166 times in 2 ms). As the explicit Eq. 29
                 // does, the cell's volume balance is solved exactly instead.
                 if let Some(q) =
-                    super::pressure::expanded_pressure(state, c, dt * ws.div_sum[c], p_min)
+                    super::equilibration::expanded_pressure(state, c, dt * ws.div_sum[c], p_min)
                 {
                     p = q;
                     iw.dp[c] = q - state.p_eq[c];

@@ -11,7 +11,8 @@ use rayon::prelude::*;
 
 use super::boundary::{fill_scalar, fill_vector, zero_wall_faces, Boundaries};
 use super::equilibration::{
-    equilibrate_cell, min_pressure, min_pressure_all, EquilibrationFailure, EquilibrationSettings,
+    equilibrate_cell, expanded_pressure, min_pressure, min_pressure_all, EquilibrationFailure,
+    EquilibrationSettings,
 };
 use super::faces::{face_exchange, face_pressure, face_velocities, face_viscosity, FacePredictor};
 use super::implicit::{implicit_pressure, save_pre_exchange};
@@ -596,53 +597,6 @@ fn face_pressures<const D: usize>(
             );
         }
     }
-}
-
-/// The pressure `p ∈ (p_min, p_eq)` at which the materials of cell `c`,
-/// each following its EOS at its own temperature, fill the relative volume
-/// change `dv = Δt Σ ∇·(θu*)` (> 0: net volume outflow, an expansion):
-/// `Σ_r θ_r (v_r(p)/v_r(p_eq) − 1) = dv`, the balance that Guilkey Eq. 29
-/// linearises. Bisection in `ln(p − p_min)`; `None` when no admissible
-/// pressure satisfies it.
-pub(super) fn expanded_pressure<const D: usize>(
-    st: &IceState<D>,
-    c: usize,
-    dv: f64,
-    p_min: f64,
-) -> Option<f64> {
-    let p_eq = st.p_eq[c];
-    if !(dv > 0.0 && p_eq > p_min) {
-        return None;
-    }
-    let excess = |p: f64| -> Option<f64> {
-        let mut sum = 0.0;
-        for (mat, mc) in st.materials.iter().zip(&st.cells) {
-            let t = mc.temperature[c];
-            let v0 = mc.sp_vol[c];
-            let v = 1.0 / mat.eos.density(p, t).ok()?;
-            sum += mc.vol_frac[c] * (v / v0 - 1.0);
-        }
-        Some(sum - dv)
-    };
-    // excess decreases with p; at p_eq it is −dv < 0.
-    let (mut lo, mut hi) = ((1e-300f64).ln(), (p_eq - p_min).ln());
-    let at = |s: f64| p_min + s.exp();
-    if excess(at(lo)).is_none_or(|e| e < 0.0) {
-        return None;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        match excess(at(mid)) {
-            Some(e) if e > 0.0 => lo = mid,
-            Some(_) => hi = mid,
-            None => lo = mid,
-        }
-        if hi - lo < 1e-12 {
-            break;
-        }
-    }
-    let p = at(hi);
-    (p > p_min).then_some(p)
 }
 
 /// Returns [`IceError::TimestepTooLarge`] when the face velocities would
