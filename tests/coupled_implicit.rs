@@ -202,8 +202,7 @@ fn newmark_slab_from_a_pressure_difference() {
         run.step_exact(6.25e-4).expect("steps");
     }
     let x = slab_x(&run) - x0;
-    let omega = (2.0 * 1.4 * 101_325.0 / (7850.0 * 0.1 * 0.45_f64)).sqrt();
-    let model = 1e3 * 0.45 / (1.4 * 101_325.0) * (1.0 - (omega * sc.time.end).cos());
+    let model = 1e3 * 0.45 / (1.4 * 101_325.0) * (1.0 - (slab_omega() * sc.time.end).cos());
     println!(
         "x {x:.5e} against {model:.5e}, {} steps, {} retries",
         run.steps, run.implicit_totals.step_retries
@@ -219,11 +218,17 @@ fn slab_x(run: &mpmice::coupling::CoupledRun<2>) -> f64 {
     p.x.iter().map(|x| x[0]).sum::<f64>() / p.len() as f64
 }
 
-/// The gas-spring model of the slab case at time `t`: 0.1 m of steel
-/// (7850 kg/m³) between two 0.45 m columns of air at 101325 Pa, γ 1.4,
-/// starting at 0.1 m/s.
+/// The slab cases' gas-spring frequency: 0.1 m of steel (7850 kg/m³)
+/// between two 0.45 m columns of air at 101325 Pa, γ 1.4,
+/// `ω² = 2γp₀/(ρ_s t L)`.
+fn slab_omega() -> f64 {
+    (2.0 * 1.4 * 101_325.0 / (7850.0 * 0.1 * 0.45_f64)).sqrt()
+}
+
+/// The gas-spring model of the impulsive slab case at time `t` (starting
+/// at 0.1 m/s).
 fn slab_model(t: f64) -> f64 {
-    let omega = (2.0 * 1.4 * 101_325.0 / (7850.0 * 0.1 * 0.45_f64)).sqrt();
+    let omega = slab_omega();
     0.1 / omega * (omega * t).sin()
 }
 

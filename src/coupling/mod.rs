@@ -954,7 +954,6 @@ impl<const D: usize> CoupledRun<D> {
         let vol = layout.cell_volume();
         let ff = self.coupling.floor_fraction;
         let phases = phases!(self, dt);
-        self.failed_field = None;
         // Steps 8–11 at the cells (fluid sources, exchange among all
         // materials — Eqs. 38–39 —, specific volume).
         ice::stage_lagrangian(
