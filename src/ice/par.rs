@@ -1,6 +1,7 @@
 //! Deterministic row-parallel loops over cells and faces (rayon).
 //!
-//! Work is split into x-rows of the layout (contiguous flat indices). Every
+//! Work is split into x-rows of the layout (contiguous flat indices; a
+//! single long row, 1D, into fixed pieces). Every
 //! kernel computes the value of a cell or face from read-only inputs and
 //! writes it to that cell's or face's own index only, so the result does not
 //! depend on the number of threads or on the scheduling (bit-identical for
@@ -82,36 +83,67 @@ impl<'a, T> Out<'a, T> {
     }
 }
 
-/// Runs `f` on every interior x-row (a range of flat cell indices) in
-/// parallel; returns the first error in row order. A layout with one row
-/// (1D) runs on the calling thread (every helper here does).
+/// Cells (or faces) per task when a layout has a single row (1D): the row
+/// is cut into pieces of this length, so a long 1D grid is shared between
+/// threads while a short one (up to one piece) runs on the calling thread
+/// without a hand-off to the pool. Every kernel here writes only its own
+/// index, so how a row is cut does not change the result.
+pub(crate) const ROW_PIECE: usize = 4096;
+
+/// The ranges a loop over `rows` (each `n` long, starting at the listed
+/// flat index) hands to its tasks: one per row, or a single row cut into
+/// [`ROW_PIECE`]-long pieces, in increasing index order.
+fn pieces(rows: &[usize], n: usize) -> impl IndexedParallelIterator<Item = Range<usize>> + '_ {
+    let single = rows.len() == 1;
+    let per_row = if single {
+        n.div_ceil(ROW_PIECE).max(1)
+    } else {
+        1
+    };
+    let len = if single { per_row } else { rows.len() };
+    (0..len).into_par_iter().map(move |k| {
+        if single {
+            let s = rows[0];
+            s + k * ROW_PIECE..s + ((k + 1) * ROW_PIECE).min(n)
+        } else {
+            rows[k]..rows[k] + n
+        }
+    })
+}
+
+/// Whether the loop over `rows` fits in one task (a single row no longer
+/// than a piece): it then runs on the calling thread.
+fn one_task(rows: &[usize], n: usize) -> bool {
+    rows.len() == 1 && n <= ROW_PIECE
+}
+
+/// Runs `f` on every interior x-row (a range of flat cell indices; a long
+/// 1D row in pieces) in parallel; returns the first error in index order.
 pub(crate) fn try_rows<const D: usize>(
     layout: &CellLayout<D>,
     f: impl Fn(Range<usize>) -> Result<(), IceError> + Sync + Send,
 ) -> Result<(), IceError> {
     let n = layout.cells[0];
-    if let [s] = layout.rows[..] {
-        // One row (1D): no work to share; running it here avoids the
-        // hand-off to the thread pool (the result is the same).
+    if one_task(&layout.rows, n) {
+        let s = layout.rows[0];
         return f(s..s + n);
     }
-    layout
-        .rows
-        .par_iter()
-        .map(|&s| f(s..s + n))
+    pieces(&layout.rows, n)
+        .map(f)
         .reduce(|| Ok(()), |a, b| a.and(b))
 }
 
-/// Runs `f` on every interior x-row in parallel.
+/// Runs `f` on every interior x-row (a long 1D row in pieces) in parallel.
 pub(crate) fn par_rows<const D: usize>(
     layout: &CellLayout<D>,
     f: impl Fn(Range<usize>) + Sync + Send,
 ) {
     let n = layout.cells[0];
-    if let [s] = layout.rows[..] {
+    if one_task(&layout.rows, n) {
+        let s = layout.rows[0];
         return f(s..s + n);
     }
-    layout.rows.par_iter().for_each(|&s| f(s..s + n));
+    pieces(&layout.rows, n).for_each(f);
 }
 
 /// Maximum of `f` over the interior x-rows (exact, so order-independent).
@@ -120,26 +152,25 @@ pub(crate) fn max_rows<const D: usize>(
     f: impl Fn(Range<usize>) -> f64 + Sync + Send,
 ) -> f64 {
     let n = layout.cells[0];
-    if let [s] = layout.rows[..] {
+    if one_task(&layout.rows, n) {
+        let s = layout.rows[0];
         return f(s..s + n).max(0.0);
     }
-    layout
-        .rows
-        .par_iter()
-        .map(|&s| f(s..s + n))
-        .reduce(|| 0.0, f64::max)
+    pieces(&layout.rows, n).map(f).reduce(|| 0.0, f64::max)
 }
 
 /// Runs `f` on every x-row of the faces normal to `d` (the faces of
-/// [`CellLayout::faces`]`[d]`) in parallel.
+/// [`CellLayout::faces`]`[d]`; a long 1D row in pieces) in parallel.
 pub(crate) fn par_face_rows<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
     f: impl Fn(Range<usize>) + Sync + Send,
 ) {
     let n = layout.cells[0] + usize::from(d == 0);
-    if let [s] = layout.face_rows[d][..] {
+    let rows = &layout.face_rows[d];
+    if one_task(rows, n) {
+        let s = rows[0];
         return f(s..s + n);
     }
-    layout.face_rows[d].par_iter().for_each(|&s| f(s..s + n));
+    pieces(rows, n).for_each(f);
 }
