@@ -26,6 +26,9 @@
 //!   `pre_smooth == post_smooth` is a symmetric positive definite
 //!   preconditioner for [`crate::pcg`]. The two colours of a sweep are fused
 //!   into one pass over memory (the second colour trails by one row/plane).
+//! * Large levels run on the threads of the calling rayon pool, with results
+//!   identical to the bit to one thread's (see `rb_sweep_blocks`,
+//!   `restrict_residual`).
 //!
 //! Measured (see `tests/multigrid.rs` and `examples/mg_factors.rs`): V(3,3)
 //! stationary convergence factors ≈ 0.11 (2D) and ≈ 0.15 (3D) on Poisson
@@ -357,6 +360,10 @@ struct Work {
     f: Vec<f64>,
     /// One row of residual values.
     row: Vec<f64>,
+    /// The residual on the padded layout, when rows are done in parallel.
+    r: Vec<f64>,
+    /// One value per padded row (squared residual norms of parallel rows).
+    partial: Vec<f64>,
 }
 
 #[derive(Debug)]
@@ -368,7 +375,11 @@ struct State {
 
 /// Geometric multigrid hierarchy for a [`CellStencil`]; implements
 /// [`Preconditioner`] (one cycle from a zero initial guess) and a
-/// standalone iterative [`Multigrid::solve`]. Single-threaded.
+/// standalone iterative [`Multigrid::solve`]. Levels of at least 32k cells
+/// are shared between the threads of the calling rayon pool (red–black
+/// sweeps in blocks of rows or planes, residuals, restriction and
+/// prolongation by rows); every result is the same to the bit for any
+/// number of threads (`tests/threads.rs`).
 #[derive(Debug)]
 pub struct Multigrid {
     opts: MgOptions,
@@ -727,42 +738,65 @@ fn fold_ghosts(lv: &Level, v: &mut [f64]) {
     }
 }
 
-/// Disjoint views of the padded array `u` around interior row `(j, k)`:
-/// the current row including its two ghost ends (mutable), and the rows
-/// south (j-1), north (j+1), bottom (k-1) and top (k+1) (`nx` entries each;
-/// bottom/top empty in 2D).
-#[inline(always)]
-#[allow(clippy::type_complexity)]
-fn row_views<'a>(
-    lv: &Level,
-    u: &'a mut [f64],
-    p0: usize,
-) -> (&'a mut [f64], &'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
-    let nx = lv.n[0];
-    let (sy, sz) = (lv.sy, lv.sz);
-    let (lo, rest) = u.split_at_mut(p0 - 1);
-    let (cur, hi) = rest.split_at_mut(nx + 2);
-    let lo: &'a [f64] = lo;
-    let hi: &'a [f64] = hi;
-    let hb = p0 + nx + 1;
-    let south = &lo[p0 - sy..p0 - sy + nx];
-    let north = &hi[p0 + sy - hb..p0 + sy - hb + nx];
-    let (bottom, top): (&[f64], &[f64]) = if lv.d3 {
-        (
-            &lo[p0 - sz..p0 - sz + nx],
-            &hi[p0 + sz - hb..p0 + sz - hb + nx],
-        )
-    } else {
-        (&[], &[])
-    };
-    (cur, south, north, bottom, top)
+/// A padded level array shared by the tasks of a red–black sweep. Tasks
+/// update different cells of the same rows (one colour each, and each row
+/// by one task), so the array is read and written element by element
+/// through a raw pointer, never through overlapping slices.
+#[derive(Clone, Copy)]
+struct Cells {
+    ptr: *mut f64,
+    len: usize,
+}
+
+// SAFETY: the callers (`rb_sweep`, `rb_sweep_blocks`) give every element to
+// at most one writing task at a time, and no task reads an element another
+// task writes in the same phase (red–black independence).
+unsafe impl Send for Cells {}
+// SAFETY: as above.
+unsafe impl Sync for Cells {}
+
+impl Cells {
+    fn new(u: &mut [f64]) -> Self {
+        Self {
+            ptr: u.as_mut_ptr(),
+            len: u.len(),
+        }
+    }
+
+    /// Reads element `i`.
+    ///
+    /// # Safety
+    /// No other task writes `i` during the phase.
+    #[inline(always)]
+    unsafe fn get(self, i: usize) -> f64 {
+        debug_assert!(i < self.len);
+        // SAFETY: in bounds (the padded layout), no concurrent writer.
+        unsafe { *self.ptr.add(i) }
+    }
+
+    /// Writes element `i`.
+    ///
+    /// # Safety
+    /// No other task reads or writes `i` during the phase.
+    #[inline(always)]
+    unsafe fn set(self, i: usize, v: f64) {
+        debug_assert!(i < self.len);
+        // SAFETY: in bounds, exclusive.
+        unsafe { *self.ptr.add(i) = v }
+    }
 }
 
 /// Gauss–Seidel/SOR update of the cells of one colour on row `(j, k)`.
+///
+/// # Safety
+/// During the call no other task writes this row's cells of the other
+/// colour or the other-colour cells of the four (six) neighbouring rows, nor
+/// reads this row's cells of `color` or its ghost ends.
 #[inline(always)]
-fn gs_row<const D3: bool>(
+#[allow(clippy::too_many_arguments)]
+unsafe fn gs_row<const D3: bool>(
     lv: &Level,
-    u: &mut [f64],
+    u: Cells,
     f: &[f64],
     j: usize,
     k: usize,
@@ -772,83 +806,120 @@ fn gs_row<const D3: bool>(
     let nx = lv.n[0];
     let p0 = lv.pidx(0, j, k);
     let (sy, sz) = (lv.sy, lv.sz);
-    let (cur, south, north, bottom, top) = row_views(lv, u, p0);
-    if lv.periodic[0] {
-        // The colour being updated reads only the other colour, whose
-        // values at the row ends are current.
-        cur[0] = cur[nx];
-        cur[nx + 1] = cur[1];
-    }
-    let ax = &lv.a[0][p0..p0 + nx + 1];
-    let ays = &lv.a[1][p0..p0 + nx];
-    let ayn = &lv.a[1][p0 + sy..p0 + sy + nx];
-    let (azb, azt): (&[f64], &[f64]) = if D3 {
-        (&lv.a[2][p0..p0 + nx], &lv.a[2][p0 + sz..p0 + sz + nx])
-    } else {
-        (&[], &[])
-    };
-    let inv = &lv.inv_diag[p0..p0 + nx];
-    let fr = &f[p0..p0 + nx];
-    let mut i = (j + k + color) & 1;
-    while i < nx {
-        let mut s =
-            fr[i] + ax[i] * cur[i] + ax[i + 1] * cur[i + 2] + ays[i] * south[i] + ayn[i] * north[i];
-        if D3 {
-            s += azb[i] * bottom[i] + azt[i] * top[i];
+    // SAFETY (all accesses below): the padded layout keeps every index in
+    // bounds, and the caller's contract excludes concurrent conflicting
+    // access.
+    unsafe {
+        if lv.periodic[0] {
+            // The colour being updated reads only the other colour, whose
+            // values at the row ends are current.
+            u.set(p0 - 1, u.get(p0 + nx - 1));
+            u.set(p0 + nx, u.get(p0));
         }
-        let old = cur[i + 1];
-        cur[i + 1] = old + omega * (s * inv[i] - old);
-        i += 2;
+        let ax = &lv.a[0][p0..p0 + nx + 1];
+        let ays = &lv.a[1][p0..p0 + nx];
+        let ayn = &lv.a[1][p0 + sy..p0 + sy + nx];
+        let (azb, azt): (&[f64], &[f64]) = if D3 {
+            (&lv.a[2][p0..p0 + nx], &lv.a[2][p0 + sz..p0 + sz + nx])
+        } else {
+            (&[], &[])
+        };
+        let inv = &lv.inv_diag[p0..p0 + nx];
+        let fr = &f[p0..p0 + nx];
+        let mut i = (j + k + color) & 1;
+        while i < nx {
+            let c = p0 + i;
+            let mut s = fr[i]
+                + ax[i] * u.get(c - 1)
+                + ax[i + 1] * u.get(c + 1)
+                + ays[i] * u.get(c - sy)
+                + ayn[i] * u.get(c + sy);
+            if D3 {
+                s += azb[i] * u.get(c - sz) + azt[i] * u.get(c + sz);
+            }
+            let old = u.get(c);
+            u.set(c, old + omega * (s * inv[i] - old));
+            i += 2;
+        }
     }
 }
 
 /// First half-sweep from a zero initial guess on row `(j, k)`: cells of
 /// `color` get `omega f / d`, the others 0.
+///
+/// # Safety
+/// No other task reads or writes this row's interior cells during the call.
 #[inline(always)]
-fn zero_row(lv: &Level, u: &mut [f64], f: &[f64], j: usize, k: usize, color: usize, omega: f64) {
+#[allow(clippy::too_many_arguments)]
+unsafe fn zero_row(lv: &Level, u: Cells, f: &[f64], j: usize, k: usize, color: usize, omega: f64) {
     let nx = lv.n[0];
     let p0 = lv.pidx(0, j, k);
-    let ur = &mut u[p0..p0 + nx];
     let inv = &lv.inv_diag[p0..p0 + nx];
     let fr = &f[p0..p0 + nx];
     let first = (j + k + color) & 1;
-    for (i, ((ui, fi), di)) in ur.iter_mut().zip(fr).zip(inv).enumerate() {
-        *ui = if (i & 1) == first {
+    for (i, (fi, di)) in fr.iter().zip(inv).enumerate() {
+        let v = if (i & 1) == first {
             omega * fi * di
         } else {
             0.0
         };
+        // SAFETY: in bounds; exclusive per the contract.
+        unsafe { u.set(p0 + i, v) };
+    }
+}
+
+/// Periodic y ghost rows of plane `k` (whole padded rows), on shared cells.
+///
+/// # Safety
+/// No other task writes plane `k`'s first or last interior row or reads its
+/// ghost rows during the call.
+#[inline]
+unsafe fn fill_ghost_rows_shared(lv: &Level, u: Cells, k: usize) {
+    let (sy, ny) = (lv.sy, lv.n[1]);
+    let base = (k + 1) * lv.sz;
+    for t in 0..sy {
+        // SAFETY: in bounds; per the contract.
+        unsafe {
+            u.set(base + t, u.get(base + ny * sy + t));
+            u.set(base + (ny + 1) * sy + t, u.get(base + sy + t));
+        }
     }
 }
 
 /// One colour pass over "unit" `t` of the outermost axis (row `t` in 2D,
 /// plane `t` in 3D, whose periodic y ghost rows are refreshed first).
+///
+/// # Safety
+/// As [`gs_row`] (or [`zero_row`] with `zero`) for every row of the unit.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn colour_pass<const D3: bool>(
+unsafe fn colour_pass<const D3: bool>(
     lv: &Level,
-    u: &mut [f64],
+    u: Cells,
     f: &[f64],
     t: usize,
     color: usize,
     omega: f64,
     zero: bool,
 ) {
-    if D3 {
-        if lv.periodic[1] {
-            fill_ghost_rows(lv, u, t);
-        }
-        for j in 0..lv.n[1] {
-            if zero {
-                zero_row(lv, u, f, j, t, color, omega);
-            } else {
-                gs_row::<true>(lv, u, f, j, t, color, omega);
+    // SAFETY: forwarded contract.
+    unsafe {
+        if D3 {
+            if lv.periodic[1] {
+                fill_ghost_rows_shared(lv, u, t);
             }
+            for j in 0..lv.n[1] {
+                if zero {
+                    zero_row(lv, u, f, j, t, color, omega);
+                } else {
+                    gs_row::<true>(lv, u, f, j, t, color, omega);
+                }
+            }
+        } else if zero {
+            zero_row(lv, u, f, t, 0, color, omega);
+        } else {
+            gs_row::<false>(lv, u, f, t, 0, color, omega);
         }
-    } else if zero {
-        zero_row(lv, u, f, t, 0, color, omega);
-    } else {
-        gs_row::<false>(lv, u, f, t, 0, color, omega);
     }
 }
 
@@ -862,6 +933,18 @@ fn fill_outer_ghosts<const D3: bool>(lv: &Level, u: &mut [f64]) {
     }
 }
 
+/// Units (rows in 2D, planes in 3D) per task below which a sweep is not
+/// shared between threads, and cells below which a level is done on one.
+const PAR_MIN_UNITS: usize = 8;
+const PAR_MIN_CELLS: usize = 32 * 1024;
+
+/// Whether work on `lv` is shared between threads: the pool has more than
+/// one and the level is large enough to pay for the hand-off. The result of
+/// every kernel is the same to the bit either way.
+fn parallel(lv: &Level) -> bool {
+    lv.cells() >= PAR_MIN_CELLS && rayon::current_num_threads() > 1
+}
+
 /// One red–black sweep (`first` colour, then the other), fused so that the
 /// second colour trails the first by one row (2D) or one plane (3D); this is
 /// exactly equivalent to two full half-sweeps but reads the data once. With
@@ -873,6 +956,10 @@ fn fill_outer_ghosts<const D3: bool>(lv: &Level, u: &mut [f64]) {
 /// units `m − 2` and 0, not yet updated); the ghost units are refreshed
 /// around it and before the last unit's second colour. The order is still
 /// exactly red–black.
+///
+/// On a large level with more than one thread (and a non-periodic outermost
+/// axis) the units are cut into blocks swept in parallel, see
+/// [`rb_sweep_blocks`]; the result is the same to the bit.
 fn rb_sweep<const D3: bool>(
     lv: &Level,
     u: &mut [f64],
@@ -884,22 +971,85 @@ fn rb_sweep<const D3: bool>(
     let second = 1 - first;
     let m = if D3 { lv.n[2] } else { lv.n[1] };
     let outer_periodic = lv.periodic[if D3 { 2 } else { 1 }];
+    if !outer_periodic && m >= 2 * PAR_MIN_UNITS && parallel(lv) {
+        rb_sweep_blocks::<D3>(lv, Cells::new(u), f, first, omega, from_zero);
+        return;
+    }
     if outer_periodic {
         fill_outer_ghosts::<D3>(lv, u);
-        colour_pass::<D3>(lv, u, f, m - 1, first, omega, from_zero);
+    }
+    let cells = Cells::new(u);
+    // SAFETY (every `colour_pass` below): one task, so no concurrent access;
+    // the exclusive borrow of `u` is not used while `cells` is.
+    unsafe {
+        if outer_periodic {
+            colour_pass::<D3>(lv, cells, f, m - 1, first, omega, from_zero);
+        }
+    }
+    if outer_periodic {
         fill_outer_ghosts::<D3>(lv, u);
     }
     for t in 0..=m {
         if t < m && !(outer_periodic && t == m - 1) {
-            colour_pass::<D3>(lv, u, f, t, first, omega, from_zero);
+            // SAFETY: as above.
+            unsafe { colour_pass::<D3>(lv, cells, f, t, first, omega, from_zero) };
         }
         if t >= 1 {
             if outer_periodic && t == m {
                 fill_outer_ghosts::<D3>(lv, u);
             }
-            colour_pass::<D3>(lv, u, f, t - 1, second, omega, false);
+            // SAFETY: as above.
+            unsafe { colour_pass::<D3>(lv, cells, f, t - 1, second, omega, false) };
         }
     }
+}
+
+/// [`rb_sweep`] on contiguous blocks of units in parallel (non-periodic
+/// outermost axis). The second colour of unit `t` needs the first colour of
+/// units `t − 1 … t + 1` done, so:
+/// 1. each block runs the fused sweep over its own units, leaving the second
+///    colour of its first and last unit undone (those read the first colour
+///    of the neighbouring blocks);
+/// 2. then every block does the second colour of those two units.
+///
+/// Within a phase, a task writes one colour of its own units and reads the
+/// other colour (or, for the zero guess, nothing) of its neighbours' edge
+/// units, so no element is read and written by two tasks at once, and the
+/// result is exactly red–black, as the serial sweep.
+fn rb_sweep_blocks<const D3: bool>(
+    lv: &Level,
+    u: Cells,
+    f: &[f64],
+    first: usize,
+    omega: f64,
+    from_zero: bool,
+) {
+    use rayon::prelude::*;
+    let second = 1 - first;
+    let m = if D3 { lv.n[2] } else { lv.n[1] };
+    let blocks = (m / PAR_MIN_UNITS).min(4 * rayon::current_num_threads());
+    let bounds = |b: usize| (b * m / blocks, (b + 1) * m / blocks);
+    (0..blocks).into_par_iter().for_each(|b| {
+        let (lo, hi) = bounds(b);
+        for t in lo..hi {
+            // SAFETY: see the function docs (phase 1).
+            unsafe {
+                colour_pass::<D3>(lv, u, f, t, first, omega, from_zero);
+                if t >= lo + 2 {
+                    colour_pass::<D3>(lv, u, f, t - 1, second, omega, false);
+                }
+            }
+        }
+    });
+    (0..blocks).into_par_iter().for_each(|b| {
+        let (lo, hi) = bounds(b);
+        // SAFETY: see the function docs (phase 2); a block has at least
+        // `PAR_MIN_UNITS` ≥ 2 units, so `lo` and `hi − 1` differ.
+        unsafe {
+            colour_pass::<D3>(lv, u, f, lo, second, omega, false);
+            colour_pass::<D3>(lv, u, f, hi - 1, second, omega, false);
+        }
+    });
 }
 
 /// Residual `r = f - A u` of interior row `(j, k)` into `out` (length nx);
@@ -951,19 +1101,73 @@ fn residual_row<const D3: bool>(
     acc
 }
 
-/// `||f - A u||^2` over the interior (the residual itself is not stored).
-fn residual_norm2<const D3: bool>(lv: &Level, u: &[f64], f: &[f64], row: &mut [f64]) -> f64 {
+/// Runs `f(j, k, row, slot)` on every interior row `(j, k)` of `lv`, with
+/// `row` the row's `nx` interior entries in the padded array `buf` and
+/// `slot` the row's entry of `slots` (one per padded row), in parallel when
+/// `par`. Every call touches only its own row, so the result does not depend
+/// on `par`.
+fn rows_mut(
+    lv: &Level,
+    buf: &mut [f64],
+    slots: &mut [f64],
+    par: bool,
+    f: impl Fn(usize, usize, &mut [f64], &mut f64) + Sync + Send,
+) {
+    use rayon::prelude::*;
+    let (nx, ny, nz) = (lv.n[0], lv.n[1], lv.n[2]);
+    let body = |(q, (chunk, slot)): (usize, (&mut [f64], &mut f64))| {
+        let (jp, kp) = (q % (ny + 2), q / (ny + 2));
+        if jp == 0 || jp == ny + 1 || (lv.d3 && (kp == 0 || kp == nz + 1)) {
+            return;
+        }
+        let k = if lv.d3 { kp - 1 } else { 0 };
+        f(jp - 1, k, &mut chunk[1..1 + nx], slot);
+    };
+    if par {
+        buf.par_chunks_mut(lv.sy)
+            .zip(slots.par_iter_mut())
+            .enumerate()
+            .with_min_len(PAR_MIN_UNITS)
+            .for_each(body);
+    } else {
+        buf.chunks_mut(lv.sy)
+            .zip(slots.iter_mut())
+            .enumerate()
+            .for_each(body);
+    }
+}
+
+/// `||f - A u||^2` over the interior. Serially the residual is not stored;
+/// in parallel each row's residual goes to its place in `w.r` and its
+/// squared norm to `w.partial`, summed afterwards in row order, so the sum
+/// is the serial one to the bit.
+fn residual_norm2<const D3: bool>(lv: &Level, w: &mut Work) -> f64 {
     let [_, ny, nz] = lv.n;
+    if parallel(lv) {
+        let (u, f) = (&w.u, &w.f);
+        rows_mut(lv, &mut w.r, &mut w.partial, true, |j, k, row, slot| {
+            *slot = residual_row::<D3>(lv, u, f, j, k, row);
+        });
+        let mut acc = 0.0;
+        for k in 0..nz {
+            for j in 0..ny {
+                let q = (j + 1) + (k + usize::from(lv.d3)) * (ny + 2);
+                acc += w.partial[q];
+            }
+        }
+        return acc;
+    }
     let mut acc = 0.0;
     for k in 0..nz {
         for j in 0..ny {
-            acc += residual_row::<D3>(lv, u, f, j, k, row);
+            acc += residual_row::<D3>(lv, &w.u, &w.f, j, k, &mut w.row);
         }
     }
     acc
 }
 
-/// Scatters `P^T` of one fine row `rrow` (row `(j, k)`) into `fc`.
+/// Scatters `P^T` of one fine row `rrow` (row `(j, k)`) through
+/// `add(coarse padded index, value)`, in a fixed order.
 #[inline(always)]
 fn restrict_row(
     tr: &Transfer,
@@ -972,7 +1176,7 @@ fn restrict_row(
     j: usize,
     k: usize,
     rrow: &[f64],
-    fc: &mut [f64],
+    mut add: impl FnMut(usize, f64),
 ) {
     let nx = fine.n[0];
     let (sy, sz) = (coarse.sy, coarse.sz);
@@ -1013,43 +1217,107 @@ fn restrict_row(
             let b1 = zoff + yn;
             let f0 = wzz * (1.0 - wyi);
             let f1 = wzz * wyi;
-            fc[b0 + xo] += f0 * vx0;
-            fc[b0 + xn] += f0 * vx1;
+            add(b0 + xo, f0 * vx0);
+            add(b0 + xn, f0 * vx1);
             if f1 != 0.0 {
-                fc[b1 + xo] += f1 * vx0;
-                fc[b1 + xn] += f1 * vx1;
+                add(b1 + xo, f1 * vx0);
+                add(b1 + xn, f1 * vx1);
             }
         }
     }
 }
 
-/// `fc = P^T (f - A u)`, computing the residual row by row without storing
-/// it (`u`'s periodic ghosts must be current; ghost entries of `fc` along
-/// non-periodic axes receive contributions that are never read, those along
-/// periodic axes are folded back).
+/// `fc = P^T (f - A u)` (`u`'s periodic ghosts must be current; ghost
+/// entries of `fc` along non-periodic axes receive contributions that are
+/// never read, those along periodic axes are folded back).
+///
+/// Serially the residual is computed row by row and scattered at once,
+/// without being stored. In parallel the residual rows are computed into
+/// `w.r` first; then the coarse array is cut into blocks of units (rows in
+/// 2D, planes in 3D) and each task scatters every fine row that reaches
+/// its block, keeping only its block's entries. Every coarse entry thus
+/// receives its contributions in the serial order, and the result is the
+/// same to the bit.
 fn restrict_residual<const D3: bool>(
     tr: &Transfer,
     fine: &Level,
     coarse: &Level,
-    u: &[f64],
-    f: &[f64],
-    row: &mut [f64],
+    w: &mut Work,
     fc: &mut [f64],
 ) {
+    use rayon::prelude::*;
     fc.fill(0.0);
     let [_, ny, nz] = fine.n;
-    for k in 0..nz {
-        for j in 0..ny {
-            residual_row::<D3>(fine, u, f, j, k, row);
-            restrict_row(tr, fine, coarse, j, k, row, fc);
+    if !parallel(fine) {
+        for k in 0..nz {
+            for j in 0..ny {
+                residual_row::<D3>(fine, &w.u, &w.f, j, k, &mut w.row);
+                restrict_row(tr, fine, coarse, j, k, &w.row, |i, v| fc[i] += v);
+            }
         }
+        fold_ghosts(coarse, fc);
+        return;
     }
+    {
+        let (u, f) = (&w.u, &w.f);
+        rows_mut(fine, &mut w.r, &mut w.partial, true, |j, k, row, _| {
+            residual_row::<D3>(fine, u, f, j, k, row);
+        });
+    }
+    // Coarse units along the outermost axis, their stride, and the fine
+    // units' targets there.
+    let (units, stride, targets) = if D3 {
+        (coarse.n[2] + 2, coarse.sz, &tr.tab[2])
+    } else {
+        (coarse.n[1] + 2, coarse.sy, &tr.tab[1])
+    };
+    let per_block = units
+        .div_ceil(4 * rayon::current_num_threads())
+        .max(PAR_MIN_UNITS / 2);
+    let r = &w.r;
+    let nx = fine.n[0];
+    fc.par_chunks_mut(per_block * stride)
+        .enumerate()
+        .for_each(|(b, chunk)| {
+            let (lo, hi) = (b * per_block, b * per_block + chunk.len() / stride);
+            let base = lo * stride;
+            let (first, last) = (base, base + chunk.len());
+            for (t, &(own, nb)) in targets.iter().enumerate() {
+                if !(lo..hi).contains(&own) && !(lo..hi).contains(&nb) {
+                    continue;
+                }
+                let mut row = |j: usize, k: usize| {
+                    let p0 = fine.pidx(0, j, k);
+                    restrict_row(tr, fine, coarse, j, k, &r[p0..p0 + nx], |i, v| {
+                        if (first..last).contains(&i) {
+                            chunk[i - base] += v;
+                        }
+                    });
+                };
+                if D3 {
+                    for j in 0..ny {
+                        row(j, t);
+                    }
+                } else {
+                    row(t, 0);
+                }
+            }
+        });
     fold_ghosts(coarse, fc);
 }
 
-/// `u += P uc` (`uc`'s periodic ghosts must be current).
-fn prolong_add(tr: &Transfer, fine: &Level, coarse: &Level, uc: &[f64], u: &mut [f64]) {
-    let [nx, ny, nz] = fine.n;
+/// `u += P uc` (`uc`'s periodic ghosts must be current), row by row (in
+/// parallel on a large level; each fine cell is written once, so the
+/// result is the same either way). `slots` is scratch with one entry per
+/// padded fine row.
+fn prolong_add(
+    tr: &Transfer,
+    fine: &Level,
+    coarse: &Level,
+    uc: &[f64],
+    u: &mut [f64],
+    slots: &mut [f64],
+) {
     let (sy, sz) = (coarse.sy, coarse.sz);
     let (tx, ty, tz) = (&tr.tab[0], &tr.tab[1], &tr.tab[2]);
     let zero: &[f64] = &[];
@@ -1058,31 +1326,29 @@ fn prolong_add(tr: &Transfer, fine: &Level, coarse: &Level, uc: &[f64], u: &mut 
     } else {
         &tr.w[2][..]
     };
-    for (k, tzk) in tz.iter().enumerate().take(nz) {
-        let (zo, zn) = (tzk.0 * sz, tzk.1 * sz);
-        for (j, tyj) in ty.iter().enumerate().take(ny) {
-            let (yo, yn) = (tyj.0 * sy, tyj.1 * sy);
-            let row = fine.pidx(0, j, k);
-            for (i, &(xo, xn)) in tx.iter().enumerate().take(nx) {
-                let p = row + i;
-                let wx = if tr.w[0].is_empty() { 0.0 } else { tr.w[0][p] };
-                let wy = if tr.w[1].is_empty() { 0.0 } else { tr.w[1][p] };
-                let plane = |zoff: usize| {
-                    let b0 = zoff + yo;
-                    let b1 = zoff + yn;
-                    (1.0 - wy) * ((1.0 - wx) * uc[b0 + xo] + wx * uc[b0 + xn])
-                        + wy * ((1.0 - wx) * uc[b1 + xo] + wx * uc[b1 + xn])
-                };
-                let s = if wz.is_empty() {
-                    plane(zo)
-                } else {
-                    let w = wz[p];
-                    (1.0 - w) * plane(zo) + w * plane(zn)
-                };
-                u[p] += s;
-            }
+    rows_mut(fine, u, slots, parallel(fine), |j, k, urow, _| {
+        let (zo, zn) = (tz[k].0 * sz, tz[k].1 * sz);
+        let (yo, yn) = (ty[j].0 * sy, ty[j].1 * sy);
+        let row = fine.pidx(0, j, k);
+        for (i, (&(xo, xn), ui)) in tx.iter().zip(urow.iter_mut()).enumerate() {
+            let p = row + i;
+            let wx = if tr.w[0].is_empty() { 0.0 } else { tr.w[0][p] };
+            let wy = if tr.w[1].is_empty() { 0.0 } else { tr.w[1][p] };
+            let plane = |zoff: usize| {
+                let b0 = zoff + yo;
+                let b1 = zoff + yn;
+                (1.0 - wy) * ((1.0 - wx) * uc[b0 + xo] + wx * uc[b0 + xn])
+                    + wy * ((1.0 - wx) * uc[b1 + xo] + wx * uc[b1 + xn])
+            };
+            let s = if wz.is_empty() {
+                plane(zo)
+            } else {
+                let w = wz[p];
+                (1.0 - w) * plane(zo) + w * plane(zn)
+            };
+            *ui += s;
         }
-    }
+    });
 }
 
 /// Names the coarsest level in a failed factorisation (e.g. an all-periodic
@@ -1164,6 +1430,8 @@ impl Multigrid {
                 u: vec![0.0; l.len],
                 f: vec![0.0; l.len],
                 row: vec![0.0; l.n[0]],
+                r: vec![0.0; l.len],
+                partial: vec![0.0; l.len / l.sy],
             })
             .collect();
         let cbuf = vec![0.0; last.cells()];
@@ -1285,9 +1553,9 @@ impl Multigrid {
         let lv = &self.levels[l];
         fill_ghosts(lv, &mut w.u);
         let n2 = if lv.d3 {
-            residual_norm2::<true>(lv, &w.u, &w.f, &mut w.row)
+            residual_norm2::<true>(lv, w)
         } else {
-            residual_norm2::<false>(lv, &w.u, &w.f, &mut w.row)
+            residual_norm2::<false>(lv, w)
         };
         n2.sqrt()
     }
@@ -1331,25 +1599,9 @@ impl Multigrid {
             self.smooth(l, &mut w.u, &w.f, self.opts.pre_smooth, false, zero_guess);
             fill_ghosts(fine, &mut w.u);
             if fine.d3 {
-                restrict_residual::<true>(
-                    &self.transfers[l],
-                    fine,
-                    coarse,
-                    &w.u,
-                    &w.f,
-                    &mut w.row,
-                    &mut b[0].f,
-                );
+                restrict_residual::<true>(&self.transfers[l], fine, coarse, w, &mut b[0].f);
             } else {
-                restrict_residual::<false>(
-                    &self.transfers[l],
-                    fine,
-                    coarse,
-                    &w.u,
-                    &w.f,
-                    &mut w.row,
-                    &mut b[0].f,
-                );
+                restrict_residual::<false>(&self.transfers[l], fine, coarse, w, &mut b[0].f);
             }
         }
         let visits = match self.opts.cycle {
@@ -1361,40 +1613,45 @@ impl Multigrid {
         }
         let (a, b) = st.work.split_at_mut(l + 1);
         fill_ghosts(&self.levels[l + 1], &mut b[0].u);
+        let w = &mut a[l];
         prolong_add(
             &self.transfers[l],
             &self.levels[l],
             &self.levels[l + 1],
             &b[0].u,
-            &mut a[l].u,
+            &mut w.u,
+            &mut w.partial,
         );
-        let w = &mut a[l];
         self.smooth(l, &mut w.u, &w.f, self.opts.post_smooth, true, false);
     }
 
-    fn load(&self, src: &[f64], dst: &mut [f64]) {
+    /// Copies the compact vector `src` into the finest level's padded
+    /// array `dst` (`slots`: scratch, one entry per padded row).
+    fn load(&self, src: &[f64], dst: &mut [f64], slots: &mut [f64]) {
         let lv = &self.levels[0];
-        let [nx, ny, nz] = lv.n;
-        let mut t = 0;
-        for k in 0..nz {
-            for j in 0..ny {
-                let row = lv.pidx(0, j, k);
-                dst[row..row + nx].copy_from_slice(&src[t..t + nx]);
-                t += nx;
-            }
-        }
+        let [nx, ny, _] = lv.n;
+        rows_mut(lv, dst, slots, parallel(lv), |j, k, row, _| {
+            let t = nx * (j + ny * k);
+            row.copy_from_slice(&src[t..t + nx]);
+        });
     }
 
+    /// Copies the finest level's padded array `src` into the compact `dst`.
     fn store(&self, src: &[f64], dst: &mut [f64]) {
+        use rayon::prelude::*;
         let lv = &self.levels[0];
-        let [nx, ny, nz] = lv.n;
-        let mut t = 0;
-        for k in 0..nz {
-            for j in 0..ny {
-                let row = lv.pidx(0, j, k);
-                dst[t..t + nx].copy_from_slice(&src[row..row + nx]);
-                t += nx;
-            }
+        let [nx, ny, _] = lv.n;
+        let copy = |(r, row): (usize, &mut [f64])| {
+            let p0 = lv.pidx(0, r % ny, r / ny);
+            row.copy_from_slice(&src[p0..p0 + nx]);
+        };
+        if parallel(lv) {
+            dst.par_chunks_mut(nx)
+                .enumerate()
+                .with_min_len(PAR_MIN_UNITS)
+                .for_each(copy);
+        } else {
+            dst.chunks_mut(nx).enumerate().for_each(copy);
         }
     }
 
@@ -1448,8 +1705,8 @@ impl Multigrid {
         {
             let w = &mut st.work[0];
             w.u.fill(0.0);
-            self.load(b, &mut w.f);
-            self.load(x, &mut w.u);
+            self.load(b, &mut w.f, &mut w.partial);
+            self.load(x, &mut w.u, &mut w.partial);
         }
         let mut rel = self.residual_norm(0, &mut st.work[0]) / bnorm;
         if let Some(h) = history.as_deref_mut() {
@@ -1488,7 +1745,8 @@ impl Preconditioner for Multigrid {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let mut guard = self.lock();
         let st = &mut *guard;
-        self.load(r, &mut st.work[0].f);
+        let w = &mut st.work[0];
+        self.load(r, &mut w.f, &mut w.partial);
         self.cycle(0, st, true);
         self.store(&st.work[0].u, z);
     }

@@ -710,65 +710,90 @@ impl CellStencil {
         Ok(())
     }
 
+    /// `y = A x`, one x-row at a time (rows in parallel when the grid is
+    /// large and the pool has more than one thread; the result is the same
+    /// to the bit either way, see [`CellStencil::apply_row`]).
     fn apply_impl(&self, x: &[f64], y: &mut [f64]) {
+        use rayon::prelude::*;
+        let [nx, ny, _] = self.dims;
+        let row = |(r, yr): (usize, &mut [f64])| self.apply_row(x, yr, r % ny, r / ny);
+        if y.len() >= PAR_MIN_CELLS && rayon::current_num_threads() > 1 {
+            y.par_chunks_mut(nx)
+                .enumerate()
+                .with_min_len(PAR_MIN_CELLS / 8 / nx.max(1) + 1)
+                .for_each(row);
+        } else {
+            y.chunks_mut(nx).enumerate().for_each(row);
+        }
+    }
+
+    /// `y = A x` on x-row `(j, k)` (`yr`: its `nx` entries), gathered: each
+    /// cell starts from `diag_extra x` and adds the flux `c (x_low − x_high)`
+    /// of each of its faces (minus on its high side of the face), axis by
+    /// axis, the low face before the high one, and the boundary or periodic
+    /// face after the interior ones.
+    fn apply_row(&self, x: &[f64], yr: &mut [f64], j: usize, k: usize) {
         let [nx, ny, nz] = self.dims;
-        for ((yi, xi), d) in y.iter_mut().zip(x).zip(&self.diag_extra) {
+        let b = nx * (j + ny * k);
+        let xr = &x[b..b + nx];
+        for ((yi, xi), d) in yr.iter_mut().zip(xr).zip(&self.diag_extra[b..b + nx]) {
             *yi = d * xi;
         }
-        // Axis 0: faces inside each x-row, plus boundary faces.
-        let fx = &self.face[0];
-        for k in 0..nz {
-            for j in 0..ny {
-                let b = nx * (j + ny * k);
-                let fb = (nx + 1) * (j + ny * k);
-                let xr = &x[b..b + nx];
-                let yr = &mut y[b..b + nx];
-                let cr = &fx[fb..fb + nx + 1];
-                for i in 1..nx {
-                    let flux = cr[i] * (xr[i - 1] - xr[i]);
-                    yr[i - 1] += flux;
-                    yr[i] -= flux;
-                }
-                if self.wraps(0) {
-                    let flux = cr[0] * (xr[nx - 1] - xr[0]);
-                    yr[nx - 1] += flux;
-                    yr[0] -= flux;
+        // Axis 0: the faces inside the row, then its two ends.
+        let fb = (nx + 1) * (j + ny * k);
+        let cr = &self.face[0][fb..fb + nx + 1];
+        for i in 0..nx {
+            let mut v = yr[i];
+            if i >= 1 {
+                v -= cr[i] * (xr[i - 1] - xr[i]);
+            }
+            if i + 1 < nx {
+                v += cr[i + 1] * (xr[i] - xr[i + 1]);
+            }
+            yr[i] = v;
+        }
+        if self.wraps(0) {
+            let flux = cr[0] * (xr[nx - 1] - xr[0]);
+            yr[nx - 1] += flux;
+            yr[0] -= flux;
+        } else {
+            yr[0] += self.boundary_coeff(0, 0, [0, j, k]) * xr[0];
+            yr[nx - 1] += self.boundary_coeff(0, 1, [nx - 1, j, k]) * xr[nx - 1];
+        }
+        // Axis 1: the faces below and above the row, then the boundary.
+        let fy = &self.face[1];
+        let (plane, fplane) = (nx * ny * k, nx * (ny + 1) * k);
+        if j >= 1 {
+            let c = &fy[fplane + nx * j..fplane + nx * (j + 1)];
+            let xlo = &x[plane + nx * (j - 1)..plane + nx * j];
+            for i in 0..nx {
+                yr[i] -= c[i] * (xlo[i] - xr[i]);
+            }
+        }
+        if j + 1 < ny {
+            let c = &fy[fplane + nx * (j + 1)..fplane + nx * (j + 2)];
+            let xhi = &x[plane + nx * (j + 1)..plane + nx * (j + 2)];
+            for i in 0..nx {
+                yr[i] += c[i] * (xr[i] - xhi[i]);
+            }
+        }
+        let wraps = self.wraps(1);
+        if j == 0 {
+            let last = plane + nx * (ny - 1);
+            for i in 0..nx {
+                if wraps {
+                    yr[i] -= fy[fplane + i] * (x[last + i] - xr[i]);
                 } else {
-                    let c = [0, j, k];
-                    yr[0] += self.boundary_coeff(0, 0, c) * xr[0];
-                    let c = [nx - 1, j, k];
-                    yr[nx - 1] += self.boundary_coeff(0, 1, c) * xr[nx - 1];
+                    yr[i] += self.boundary_coeff(1, 0, [i, 0, k]) * xr[i];
                 }
             }
         }
-        // Axis 1.
-        let fy = &self.face[1];
-        for k in 0..nz {
-            let plane = nx * ny * k;
-            let fplane = nx * (ny + 1) * k;
-            for j in 1..ny {
-                let lo = plane + nx * (j - 1);
-                let hi = plane + nx * j;
-                let cr = &fy[fplane + nx * j..fplane + nx * j + nx];
-                let (ylo, yhi) = y[lo..hi + nx].split_at_mut(nx);
-                let (xlo, xhi) = (&x[lo..lo + nx], &x[hi..hi + nx]);
-                for i in 0..nx {
-                    let flux = cr[i] * (xlo[i] - xhi[i]);
-                    ylo[i] += flux;
-                    yhi[i] -= flux;
-                }
-            }
-            let wraps = self.wraps(1);
+        if j + 1 == ny {
             for i in 0..nx {
-                let p0 = plane + i;
-                let p1 = plane + nx * (ny - 1) + i;
                 if wraps {
-                    let flux = fy[fplane + i] * (x[p1] - x[p0]);
-                    y[p1] += flux;
-                    y[p0] -= flux;
+                    yr[i] += fy[fplane + i] * (xr[i] - x[plane + i]);
                 } else {
-                    y[p0] += self.boundary_coeff(1, 0, [i, 0, k]) * x[p0];
-                    y[p1] += self.boundary_coeff(1, 1, [i, ny - 1, k]) * x[p1];
+                    yr[i] += self.boundary_coeff(1, 1, [i, ny - 1, k]) * xr[i];
                 }
             }
         }
@@ -776,34 +801,47 @@ impl CellStencil {
         if self.ndim == 3 {
             let fz = &self.face[2];
             let pl = nx * ny;
-            for k in 1..nz {
-                let lo = pl * (k - 1);
-                let hi = pl * k;
-                let cr = &fz[pl * k..pl * k + pl];
-                let (ylo, yhi) = y[lo..hi + pl].split_at_mut(pl);
-                let (xlo, xhi) = (&x[lo..lo + pl], &x[hi..hi + pl]);
-                for t in 0..pl {
-                    let flux = cr[t] * (xlo[t] - xhi[t]);
-                    ylo[t] += flux;
-                    yhi[t] -= flux;
+            let t0 = nx * j;
+            if k >= 1 {
+                let c = &fz[pl * k + t0..pl * k + t0 + nx];
+                let xlo = &x[pl * (k - 1) + t0..pl * (k - 1) + t0 + nx];
+                for i in 0..nx {
+                    yr[i] -= c[i] * (xlo[i] - xr[i]);
+                }
+            }
+            if k + 1 < nz {
+                let c = &fz[pl * (k + 1) + t0..pl * (k + 1) + t0 + nx];
+                let xhi = &x[pl * (k + 1) + t0..pl * (k + 1) + t0 + nx];
+                for i in 0..nx {
+                    yr[i] += c[i] * (xr[i] - xhi[i]);
                 }
             }
             let wraps = self.wraps(2);
-            for t in 0..pl {
-                let (i, j) = (t % nx, t / nx);
-                let p1 = pl * (nz - 1) + t;
-                if wraps {
-                    let flux = fz[t] * (x[p1] - x[t]);
-                    y[p1] += flux;
-                    y[t] -= flux;
-                } else {
-                    y[t] += self.boundary_coeff(2, 0, [i, j, 0]) * x[t];
-                    y[p1] += self.boundary_coeff(2, 1, [i, j, nz - 1]) * x[p1];
+            if k == 0 {
+                let last = pl * (nz - 1) + t0;
+                for i in 0..nx {
+                    if wraps {
+                        yr[i] -= fz[t0 + i] * (x[last + i] - xr[i]);
+                    } else {
+                        yr[i] += self.boundary_coeff(2, 0, [i, j, 0]) * xr[i];
+                    }
+                }
+            }
+            if k + 1 == nz {
+                for i in 0..nx {
+                    if wraps {
+                        yr[i] += fz[t0 + i] * (xr[i] - x[t0 + i]);
+                    } else {
+                        yr[i] += self.boundary_coeff(2, 1, [i, j, nz - 1]) * xr[i];
+                    }
                 }
             }
         }
     }
 }
+
+/// Cells below which [`CellStencil::apply`] runs on one thread.
+const PAR_MIN_CELLS: usize = 32 * 1024;
 
 impl LinearOperator for CellStencil {
     fn dim(&self) -> usize {
