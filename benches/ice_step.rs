@@ -2,6 +2,13 @@
 //! (air with a helium bubble and a Mach 1.2 shock), per thread count.
 //! Throughput is reported in cells × materials per step, so criterion's
 //! "elem/s" is cell-steps per second per material.
+//!
+//! `ice_step_1d_sod`: Sod's shock tube (`cases/sod.toml`, one material,
+//! high-resolution variant, CFL 0.4) at 3 200 cells on one thread and at
+//! 204 800 cells on 1 and 2 threads; throughput in cells, so "elem/s" is
+//! cell-steps per second. The state keeps evolving over the iterations
+//! (past the case's end time, the waves leaving through the free ends):
+//! the cost of a step hardly depends on where the waves are.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use mpmice::ice::{step, Advection, CellLayout, Limiter};
@@ -9,6 +16,7 @@ use mpmice::ice::{
     ExchangeCoefficients, IceBoundary, IceMaterial, IceParams, IceState, IceWorkspace, MaterialInit,
 };
 use mpmice::material::eos::IdealGas;
+use mpmice::scene;
 use nalgebra::SVector;
 
 const N: usize = 500;
@@ -82,6 +90,36 @@ fn bench(c: &mut Criterion) {
                 })
             });
         }
+    }
+    g.finish();
+    sod_1d(c);
+}
+
+/// The 1D Sod bench (module notes).
+fn sod_1d(c: &mut Criterion) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/sod.toml");
+    let mut sc = scene::load(&path).expect("case");
+    let mut g = c.benchmark_group("ice_step_1d_sod");
+    g.sample_size(10);
+    for (cells, threads) in [(3200usize, 1usize), (204_800, 1), (204_800, 2)] {
+        sc.grid.cells = vec![cells];
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let (mut state, params) = scene::build_fluid_run::<1>(&sc).expect("fluid");
+        mpmice::ice::equilibrate(&mut state, &params).expect("equilibrate");
+        let mut ws = IceWorkspace::new(&state);
+        g.throughput(Throughput::Elements(cells as u64));
+        g.bench_with_input(
+            BenchmarkId::new(format!("cells_{cells}"), threads),
+            &threads,
+            |b, _| {
+                pool.install(|| {
+                    b.iter(|| step(&mut state, &params, &mut ws, f64::INFINITY).expect("step"))
+                })
+            },
+        );
     }
     g.finish();
 }

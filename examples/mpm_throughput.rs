@@ -1,23 +1,39 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile]`
+//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [3d] [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile]`
 //! (`gas`: the same block as gas points, York Sec. 3.3; `jc`: hypo-elastic
 //! with Johnson–Cook plasticity; `hypo`: hypo-elastic, no plasticity;
 //! `jcf`: `jc` with Johnson–Cook failure; `tensile`: hypo-elastic with a
 //! spall strength).
-use mpmice::diagnostics::bench_cases::{rotating_block_of, BlockMaterial};
+//! A leading `3d` (or `MPM_THROUGHPUT_3D=1` in the environment) runs the 3D
+//! block instead (`rotating_block_3d`: 52³ = 140 608 neo-Hookean particles
+//! on a 32³ grid, the `mpm_step_3d_141k` bench); it has no material choice,
+//! so a material other than `solid` is an error there, and the default
+//! step count is 30.
+use mpmice::diagnostics::bench_cases::{rotating_block_3d, rotating_block_of, BlockMaterial};
 use mpmice::shape::ShapeKind;
+use mpmice::stepper::SolidRun;
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let shape = match args.get(1).map(String::as_str).unwrap_or("bspline2") {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let three_d = if args.first().map(String::as_str) == Some("3d") {
+        args.remove(0);
+        true
+    } else {
+        std::env::var("MPM_THROUGHPUT_3D").is_ok_and(|v| !v.is_empty() && v != "0")
+    };
+    let shape = match args.first().map(String::as_str).unwrap_or("bspline2") {
         "linear" => ShapeKind::Linear,
         "gimp" => ShapeKind::Gimp,
         "bspline3" => ShapeKind::CubicBspline,
         _ => ShapeKind::QuadraticBspline,
     };
-    let steps: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(300);
-    let material = match args.get(3).map(String::as_str) {
+    let default_steps = if three_d { 30 } else { 300 };
+    let steps: u64 = args
+        .get(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default_steps);
+    let material = match args.get(2).map(String::as_str) {
         Some("gas") => BlockMaterial::GasPoint,
         Some("jc") => BlockMaterial::JohnsonCook,
         Some("hypo") => BlockMaterial::HypoElastic,
@@ -25,7 +41,31 @@ fn main() {
         Some("tensile") => BlockMaterial::Tensile,
         _ => BlockMaterial::NeoHookean,
     };
-    let mut run = rotating_block_of(shape, material);
+    if three_d {
+        if material != BlockMaterial::NeoHookean {
+            eprintln!("the 3D block is neo-Hookean only (got {material:?})");
+            std::process::exit(2);
+        }
+        measure(rotating_block_3d(shape), "3D", shape, material, steps);
+    } else {
+        measure(
+            rotating_block_of(shape, material),
+            "2D",
+            shape,
+            material,
+            steps,
+        );
+    }
+}
+
+/// Runs `steps` steps of `run` and prints the throughput and phase split.
+fn measure<const D: usize>(
+    mut run: SolidRun<D>,
+    dim: &str,
+    shape: ShapeKind,
+    material: BlockMaterial,
+    steps: u64,
+) {
     run.time.max_steps = Some(steps);
     let np = run.particles.len() as f64;
     let start = std::time::Instant::now();
@@ -42,7 +82,7 @@ fn main() {
     let t = run.phase_times();
     let ms = |s: f64| 1e3 * s / steps as f64;
     println!(
-        "{shape:?} {material:?}: {np} particles, {steps} steps, {:.3e} particle-steps/s on {} threads; \
+        "{dim} {shape:?} {material:?}: {np} particles, {steps} steps, {:.3e} particle-steps/s on {} threads; \
          per step: bin {:.2} ms, p2g {:.2} ms, grid {:.2} ms, g2p {:.2} ms",
         np * steps as f64 / wall,
         rayon::current_num_threads(),

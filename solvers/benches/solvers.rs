@@ -1,7 +1,10 @@
 //! Criterion benchmarks: setup and solve of Cholesky, PCG-Jacobi and
 //! PCG-multigrid on the variable-coefficient cell-centred Poisson problem
 //! (1e3 ball inclusion, all-Neumann, diag_extra = 1e-6·c, zero-mean random
-//! rhs, rel_tol 1e-10, one thread).
+//! rhs, rel_tol 1e-10). The `pcg_multigrid` rows (setup, solve, V-cycle)
+//! run on explicit rayon pools of 1 and 2 threads, the thread count the
+//! last part of the id (`pcg_multigrid/solve/256^2/2`); the other groups
+//! run outside any pool of ours, as before.
 //!
 //! Default sizes are kept small so that `cargo bench -p solvers` finishes in
 //! a few minutes; set `SOLVERS_BENCH_LARGE=1` to add 1024² and 96³ for the
@@ -18,7 +21,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use common::*;
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use solvers::*;
 
 fn problem(dims: [usize; 3]) -> (CellStencil, Vec<f64>) {
@@ -95,30 +98,58 @@ fn benches(c: &mut Criterion) {
     }
     g.finish();
 
+    // Setup, solve and one V-cycle, each on explicit rayon pools of 1 and 2
+    // threads: ids `setup/256^2/1`, `solve/256^2/2`, ...
+    let pools: Vec<(usize, rayon::ThreadPool)> = [1usize, 2]
+        .into_iter()
+        .map(|t| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .expect("thread pool");
+            (t, pool)
+        })
+        .collect();
     let mut g = c.benchmark_group("pcg_multigrid");
     g.sample_size(10).measurement_time(Duration::from_secs(3));
     for d in mg_sizes {
         let (st, b) = problem(d);
         let o = MgOptions::default();
-        g.bench_function(format!("setup/{}", label(d)), |bch| {
-            bch.iter(|| black_box(Multigrid::new(&st, &o).unwrap()))
-        });
-        let mg = Multigrid::new(&st, &o).unwrap();
-        let mut ws = KrylovWorkspace::with_dim(b.len());
-        let mut x = vec![0.0; b.len()];
-        g.bench_function(format!("solve/{}", label(d)), |bch| {
-            bch.iter(|| {
-                x.fill(0.0);
-                black_box(pcg(&st, &mg, &b, &mut x, &TOL, &mut ws).unwrap())
-            })
-        });
-        let mut z = vec![0.0; b.len()];
-        g.bench_function(format!("vcycle/{}", label(d)), |bch| {
-            bch.iter(|| {
-                mg.apply(&b, &mut z);
-                black_box(z[0])
-            })
-        });
+        for (threads, pool) in &pools {
+            g.bench_with_input(
+                BenchmarkId::new(format!("setup/{}", label(d)), threads),
+                threads,
+                |bch, _| pool.install(|| bch.iter(|| black_box(Multigrid::new(&st, &o).unwrap()))),
+            );
+            let mg = pool.install(|| Multigrid::new(&st, &o).unwrap());
+            let mut ws = KrylovWorkspace::with_dim(b.len());
+            let mut x = vec![0.0; b.len()];
+            g.bench_with_input(
+                BenchmarkId::new(format!("solve/{}", label(d)), threads),
+                threads,
+                |bch, _| {
+                    pool.install(|| {
+                        bch.iter(|| {
+                            x.fill(0.0);
+                            black_box(pcg(&st, &mg, &b, &mut x, &TOL, &mut ws).unwrap())
+                        })
+                    })
+                },
+            );
+            let mut z = vec![0.0; b.len()];
+            g.bench_with_input(
+                BenchmarkId::new(format!("vcycle/{}", label(d)), threads),
+                threads,
+                |bch, _| {
+                    pool.install(|| {
+                        bch.iter(|| {
+                            mg.apply(&b, &mut z);
+                            black_box(z[0])
+                        })
+                    })
+                },
+            );
+        }
     }
     g.finish();
 

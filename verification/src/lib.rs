@@ -2,6 +2,7 @@
 //! plots) and the studies themselves.
 
 pub mod axisym_studies;
+pub mod bench_report;
 pub mod coupled_studies;
 pub mod eos_studies;
 pub mod formulation_studies;

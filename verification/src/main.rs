@@ -1,18 +1,22 @@
 //! `verification`: runs convergence and work-precision studies and writes
 //! `results/STUDY.{json,csv,png}` (full runs also refresh `RESULTS.md`).
+//! `verification bench_report` writes `bench/RESULTS.md` from criterion's
+//! results instead (`verification::bench_report`).
 
 use std::path::PathBuf;
 
 use anyhow::bail;
 use clap::Parser;
+use verification::bench_report::{self, BenchReportArgs};
 use verification::harness::{write_results_md, write_study, StudyResult};
 use verification::STUDIES;
 
 #[derive(Parser)]
 #[command(about = "mpmice convergence and work-precision studies")]
 struct Args {
-    /// Study name, `list`, `all`, or `report` (rebuild RESULTS.md from the
-    /// stored results only).
+    /// Study name, `list`, `all`, `report` (rebuild RESULTS.md from the
+    /// stored results only), or `bench_report` (write bench/RESULTS.md from
+    /// criterion's results; `bench_report --help` lists its options).
     study: String,
     /// Coarse resolutions only (what the test suite runs).
     #[arg(long)]
@@ -23,6 +27,15 @@ struct Args {
 }
 
 fn main() -> anyhow::Result<()> {
+    // `bench_report` has options of its own.
+    if std::env::args().nth(1).as_deref() == Some("bench_report") {
+        let args = BenchReportArgs::parse_from(std::env::args().skip(1));
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+        let root = root.canonicalize().unwrap_or(root);
+        let out = bench_report::run(&args, &root)?;
+        println!("wrote {}", out.display());
+        return Ok(());
+    }
     let args = Args::parse();
     if args.study == "list" {
         for (name, about, _) in STUDIES {
