@@ -1,5 +1,6 @@
 //! What sets a model's stable time step: the particle or cell, its material
-//! and the wave speed behind the CFL limit. The progress guard of the run
+//! and the wave speed behind the CFL limit, or, for an implicit model, the
+//! failed solve that last cut Δt. The progress guard of the run
 //! loop names it when a run's Δt collapses or would take an absurd number
 //! of steps ([`crate::driver::Model::dt_limiter`]).
 
@@ -16,21 +17,47 @@ use crate::mpm::Particles;
 pub struct DtLimiter {
     /// `particle 17` or `cell [3, 4]`.
     pub site: String,
-    /// The material's scene name.
+    /// The material's scene name (several, joined by `` `, ` ``, when the
+    /// site is not one particle or cell).
     pub material: String,
-    /// The signal speed behind the limit, `h / Δt_limit` [m/s].
-    pub speed: f64,
-    /// The limit at that site before the Courant number \[s\].
+    /// What limits Δt there.
+    pub cause: LimitCause,
+    /// The limit at that site before the Courant number, or the Δt that
+    /// failed \[s\].
     pub dt: f64,
+}
+
+/// Why a site limits Δt.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LimitCause {
+    /// An explicit model's CFL limit: the signal speed `h / Δt_limit`
+    /// (wave speed plus |v|) \[m/s\].
+    Wave {
+        /// The signal speed \[m/s\].
+        speed: f64,
+    },
+    /// An implicit model's step control: a solve at Δt `dt` failed there
+    /// (Newton did not converge, a particle inverted, ...), and Δt was cut.
+    FailedSolve {
+        /// The solver's reason.
+        what: String,
+    },
 }
 
 impl std::fmt::Display for DtLimiter {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} of material `{}`: signal speed {:.3e} m/s (wave speed plus |v|), Δt limit {:.3e} s",
-            self.site, self.material, self.speed, self.dt
-        )
+        match &self.cause {
+            LimitCause::Wave { speed } => write!(
+                f,
+                "{} of material `{}`: signal speed {:.3e} m/s (wave speed plus |v|), Δt limit {:.3e} s",
+                self.site, self.material, speed, self.dt
+            ),
+            LimitCause::FailedSolve { what } => write!(
+                f,
+                "{} of material `{}`: the last Δt cut, after the implicit solve at Δt {:.3e} s failed ({what})",
+                self.site, self.material, self.dt
+            ),
+        }
     }
 }
 
@@ -61,7 +88,7 @@ pub fn particle_limiter<const D: usize>(
     Some(DtLimiter {
         site: format!("particle {i}"),
         material: materials[p.material[i] as usize].name.clone(),
-        speed: h / dt,
+        cause: LimitCause::Wave { speed: h / dt },
         dt,
     })
 }
@@ -96,7 +123,7 @@ pub fn cell_limiter<const D: usize>(
     Some(DtLimiter {
         site: format!("cell {:?}", s.layout.coords(c)),
         material: s.materials[r].name.clone(),
-        speed: rate * h,
+        cause: LimitCause::Wave { speed: rate * h },
         dt: 1.0 / rate,
     })
 }
@@ -112,7 +139,9 @@ pub fn element_limiter(meshes: &[MembraneMesh], names: &[String]) -> Option<DtLi
         let site = DtLimiter {
             site: format!("element {e}"),
             material: name.clone(),
-            speed: m.material.wave_speed(),
+            cause: LimitCause::Wave {
+                speed: m.material.wave_speed(),
+            },
             dt,
         };
         best = tighter(best, Some(site));

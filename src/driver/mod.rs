@@ -16,7 +16,7 @@ pub mod outputs;
 pub mod run_loop;
 pub mod summary;
 
-pub use limiter::DtLimiter;
+pub use limiter::{DtLimiter, LimitCause};
 pub use memory::MemoryEstimate;
 pub use model::{CoupledIterations, DtRequest, FieldIterations, Model, StepStats};
 pub use run_loop::{preflight, run_model, scene_hash, Preflight, RunOptions, MAX_RETRIES};

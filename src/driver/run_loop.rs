@@ -728,8 +728,9 @@ impl Run {
     }
 
     /// Ends the run: the last snapshot and history row, and after a stop
-    /// the checkpoint — of the current state after an interrupt (if it
-    /// passes the watchdog), of the last good one after a failure. After a
+    /// the checkpoint — of the current state after an interrupt or the
+    /// progress guard (whole steps; if it passes the watchdog), of the last
+    /// good one after a failure. After a
     /// failure the model goes back to the last good state (the failed step
     /// may have left it half-updated) and that state is the last snapshot,
     /// unless it already is one; without a last good state (watchdog off)
@@ -738,20 +739,24 @@ impl Run {
     fn finish<M: Model>(&mut self, model: &mut M, failure: Option<Error>) -> Result<Option<Error>> {
         let saved = match failure {
             None => None,
-            Some(e @ Error::Interrupted { .. }) => match model.watchdog() {
-                None => Some((
-                    e,
-                    Some(capture(model, &self.hash, &self.ls, &self.out, None)),
-                )),
-                Some(v) => Some((
-                    Error::Watchdog {
-                        step: model.steps(),
-                        time: model.time(),
-                        what: v.to_string(),
-                    },
-                    self.last_good.take(),
-                )),
-            },
+            // An interrupt, or the progress guard, stops after a whole
+            // step: that state is the one to keep if it passes the watchdog.
+            Some(e @ (Error::Interrupted { .. } | Error::Progress { .. })) => {
+                match model.watchdog() {
+                    None => Some((
+                        e,
+                        Some(capture(model, &self.hash, &self.ls, &self.out, None)),
+                    )),
+                    Some(v) => Some((
+                        Error::Watchdog {
+                            step: model.steps(),
+                            time: model.time(),
+                            what: v.to_string(),
+                        },
+                        self.last_good.take(),
+                    )),
+                }
+            }
             Some(e) => Some((e, self.last_good.take())),
         };
         let interrupted = matches!(saved, Some((Error::Interrupted { .. }, _)));

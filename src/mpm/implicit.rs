@@ -330,6 +330,17 @@ pub struct StepStats {
 }
 
 /// Why an attempt failed (internal; the run turns it into a retry or an error).
+/// A failed implicit attempt after which Δt was cut.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DtCut {
+    /// The particle the failure names, if any.
+    pub particle: Option<usize>,
+    /// The reason (Newton did not converge, J ≤ 0, ...).
+    pub what: String,
+    /// The Δt that failed \[s\].
+    pub dt: f64,
+}
+
 #[derive(Debug)]
 struct Failure {
     what: String,
@@ -422,6 +433,9 @@ pub struct ImplicitRun<const D: usize> {
     pub steps: u64,
     /// Statistics of every accepted step.
     pub stats: Vec<StepStats>,
+    /// The last failed attempt that cut Δt (what the progress guard names
+    /// when Δt collapses); not part of a checkpoint.
+    pub last_cut: Option<DtCut>,
     /// Particle accelerations aₚ (Newmark state).
     pub accel: Vec<SVector<f64, D>>,
     /// Grips: particle sets with a prescribed (ramped) displacement.
@@ -574,6 +588,7 @@ impl<const D: usize> ImplicitRun<D> {
             t: 0.0,
             steps: 0,
             stats: Vec::new(),
+            last_cut: None,
             accel: vec![SVector::zeros(); np],
             prescribed: Vec::new(),
             fluid_load: None,
@@ -697,6 +712,11 @@ impl<const D: usize> ImplicitRun<D> {
                         });
                     }
                     retries += 1;
+                    self.last_cut = Some(DtCut {
+                        particle: f.particle,
+                        what: f.what,
+                        dt: dt_try,
+                    });
                     dt = (dt_try * self.params.dt_cut).max(self.params.dt_min);
                 }
             }

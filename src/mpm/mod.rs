@@ -12,6 +12,7 @@ pub use explicit::{
     StepScratch, UpdateScheme,
 };
 pub use implicit::{
-    FluidLoad, ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats, SurfaceLoad,
+    DtCut, FluidLoad, ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats,
+    SurfaceLoad,
 };
 pub use particles::Particles;

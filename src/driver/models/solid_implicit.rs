@@ -11,6 +11,7 @@ use crate::driver::models::arrays::{
     put_vectors, save_particles, take_vectors,
 };
 use crate::driver::models::solid_explicit::SOLID_HISTORY;
+use crate::driver::{DtLimiter, LimitCause};
 use crate::error::Error;
 use crate::mpm::{ImplicitCarried, ImplicitRun};
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
@@ -66,6 +67,36 @@ impl<const D: usize> Model for ImplicitSolid<D> {
 
     fn annotate(&self, e: Error) -> Error {
         name_particle_material(e, &self.run.particles, &self.run.materials)
+    }
+
+    /// Δt here is the Newton step control's: the site is the last failed
+    /// attempt that cut it (its particle and material, or every material
+    /// when the failure names no particle), `None` before any cut.
+    fn dt_limiter(&self) -> Option<DtLimiter> {
+        let r = &self.run;
+        let cut = r.last_cut.as_ref()?;
+        let (site, material) = match cut.particle {
+            Some(p) if p < r.particles.len() => (
+                format!("particle {p}"),
+                r.materials[r.particles.material[p] as usize].name.clone(),
+            ),
+            _ => (
+                "the implicit solve".to_string(),
+                r.materials
+                    .iter()
+                    .map(|m| m.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join("`, `"),
+            ),
+        };
+        Some(DtLimiter {
+            site,
+            material,
+            cause: LimitCause::FailedSolve {
+                what: cut.what.clone(),
+            },
+            dt: cut.dt,
+        })
     }
 
     fn field_sets(&self) -> Vec<FieldSet> {
