@@ -71,3 +71,38 @@ fn long_1d_ice_rows_are_bit_identical_across_threads() {
         );
     }
 }
+
+/// The 3D benchmark block (52³ particles on 32³ cells: nine slabs, so the
+/// odd slabs start as soon as their even neighbours finish) gives the same
+/// particles to the bit on 1 and 2 threads.
+#[test]
+fn the_3d_block_is_bit_identical_across_threads() {
+    use mpmice::diagnostics::bench_cases::rotating_block_3d;
+    use mpmice::shape::ShapeKind;
+    let mut states = Vec::new();
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let mut run = rotating_block_3d(ShapeKind::QuadraticBspline);
+        pool.install(|| {
+            for _ in 0..4 {
+                run.step().expect("step");
+            }
+        });
+        let p = &run.particles;
+        let bits: Vec<u64> =
+            p.x.iter()
+                .chain(&p.v)
+                .flat_map(|v| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>())
+                .chain(
+                    p.stress
+                        .iter()
+                        .flat_map(|s| s.iter().map(|c| c.to_bits()).collect::<Vec<_>>()),
+                )
+                .collect();
+        states.push(bits);
+    }
+    assert!(states[0] == states[1], "1- and 2-thread 3D blocks differ");
+}

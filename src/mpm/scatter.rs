@@ -4,9 +4,14 @@
 //! (a stable counting sort of indices, so each slab lists its particles in
 //! index order). A particle in cell c touches nodes c−1 … c+2 along that axis,
 //! so slabs two apart never touch the same node when the width exceeds 2. The
-//! scatter runs the even slabs in parallel, then the odd ones; every node thus
-//! receives its contributions in the same order for any thread count, and the
-//! result is bit-identical with 1 or N threads.
+//! scatter runs the even slabs in parallel, and each odd slab as soon as its
+//! two even neighbours are done (not after all of them, so that a few slabs
+//! per colour still keep every thread busy); a node shared by an even and an
+//! odd slab thus receives the even slab's contributions first, every node
+//! receives them in the same order for any thread count, and the result is
+//! bit-identical with 1 or N threads.
+
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -30,6 +35,36 @@ pub struct Bins {
     slab: Vec<u32>,
     /// Per chunk and slab: count, then the chunk's write offset.
     chunk_slab: Vec<usize>,
+    schedule: Schedule,
+}
+
+/// The order in which [`Bins::for_each_colored`] hands out slabs.
+#[derive(Debug, Default)]
+struct Schedule {
+    /// Slabs in the order they become ready, even slabs first; `u32::MAX`
+    /// until an odd slab's place is published.
+    ready: Vec<AtomicU32>,
+    /// Per odd slab: its even neighbours not done yet.
+    waiting: Vec<AtomicU32>,
+}
+
+impl Clone for Schedule {
+    /// A schedule of the same size (its content is set at every use).
+    fn clone(&self) -> Self {
+        let mut s = Self::default();
+        s.resize(self.ready.len());
+        s
+    }
+}
+
+impl Schedule {
+    /// Sized for `n` slabs (allocates only when `n` changes).
+    fn resize(&mut self, n: usize) {
+        if self.ready.len() != n {
+            self.ready = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
+            self.waiting = (0..n).map(|_| AtomicU32::new(0)).collect();
+        }
+    }
 }
 
 impl Bins {
@@ -88,6 +123,7 @@ impl Bins {
             }
         }
         self.start[n_slabs] = total;
+        self.schedule.resize(n_slabs);
         self.order.resize(n, 0);
         let order = SharedMut::new(&mut self.order);
         self.slab
@@ -111,19 +147,67 @@ impl Bins {
         self.start.len().saturating_sub(1)
     }
 
-    /// Runs `f(particle)` for every particle, slab-coloured: even slabs in
-    /// parallel, then odd slabs in parallel; sequential within a slab.
+    /// Runs `f(particle)` for every particle, slab-coloured: the even slabs
+    /// in parallel, and each odd slab once both its even neighbours are
+    /// done; sequential within a slab (see the module docs).
+    ///
+    /// The slabs are handed out from a list in which the even slabs come
+    /// first and each odd slab is appended when the last of its neighbours
+    /// finishes; as many workers as the pool has threads take the list's
+    /// places in turn, a worker whose place is not filled yet waiting for
+    /// the slab in progress that will fill it. Nothing is allocated.
     pub fn for_each_colored(&self, f: impl Fn(usize) + Sync) {
         let n = self.num_slabs();
-        for color in 0..2 {
-            (0..n.div_ceil(2)).into_par_iter().for_each(|k| {
-                let s = 2 * k + color;
-                if s < n {
-                    for &p in &self.order[self.start[s]..self.start[s + 1]] {
-                        f(p as usize);
+        let sch = &self.schedule;
+        debug_assert_eq!(sch.ready.len(), n, "the schedule is sized by `build`");
+        if n == 0 {
+            return;
+        }
+        let n_even = n.div_ceil(2);
+        for s in 0..n {
+            if s % 2 == 0 {
+                sch.ready[s / 2].store(s as u32, Ordering::Relaxed);
+            } else {
+                let neighbours = 1 + u32::from(s + 1 < n);
+                sch.waiting[s].store(neighbours, Ordering::Relaxed);
+            }
+        }
+        for slot in &sch.ready[n_even..] {
+            slot.store(u32::MAX, Ordering::Relaxed);
+        }
+        let (next, tail) = (AtomicUsize::new(0), AtomicUsize::new(n_even));
+        let worker = || loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= n {
+                break;
+            }
+            // Acquire: the even neighbours' scatter happened before.
+            let s = loop {
+                let v = sch.ready[i].load(Ordering::Acquire);
+                if v != u32::MAX {
+                    break v as usize;
+                }
+                std::hint::spin_loop();
+            };
+            for &p in &self.order[self.start[s]..self.start[s + 1]] {
+                f(p as usize);
+            }
+            if s % 2 == 0 {
+                for o in [s.wrapping_sub(1), s + 1] {
+                    // AcqRel: the last neighbour to finish publishes the odd
+                    // slab after seeing the other neighbour's writes.
+                    if o < n && sch.waiting[o].fetch_sub(1, Ordering::AcqRel) == 1 {
+                        let slot = tail.fetch_add(1, Ordering::Relaxed);
+                        sch.ready[slot].store(o as u32, Ordering::Release);
                     }
                 }
-            });
+            }
+        };
+        let workers = rayon::current_num_threads().min(n);
+        if workers <= 1 {
+            worker();
+        } else {
+            (0..workers).into_par_iter().for_each(|_| worker());
         }
     }
 }
@@ -198,5 +282,49 @@ mod tests {
         y[20_000] = SVector::from([0.5, 3.0]);
         y[25_000] = SVector::from([f64::NAN, 0.5]);
         assert_eq!(bins.build(&grid, &y), Err(20_000));
+    }
+
+    /// Every particle is visited once, in index order within its slab, and
+    /// an odd slab starts only after both its even neighbours have ended.
+    #[test]
+    fn odd_slabs_wait_for_their_even_neighbours() {
+        let grid = Grid::<2>::new(
+            SVector::zeros(),
+            SVector::repeat(1.0),
+            [8, 37],
+            [[Boundary::Free; 2]; 2],
+        );
+        let x: Vec<SVector<f64, 2>> = (0..5000)
+            .map(|p| SVector::from([0.5, ((p * 7919) % 5000) as f64 / 5000.0]))
+            .collect();
+        let mut bins = Bins::default();
+        bins.build(&grid, &x).expect("on grid");
+        let n = bins.num_slabs();
+        assert!(n >= 8);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("pool");
+        let clock = AtomicUsize::new(0);
+        let stamp: Vec<AtomicUsize> = (0..x.len()).map(|_| AtomicUsize::new(usize::MAX)).collect();
+        pool.install(|| {
+            bins.for_each_colored(|p| {
+                let t = clock.fetch_add(1, Ordering::SeqCst);
+                assert_eq!(stamp[p].swap(t, Ordering::SeqCst), usize::MAX, "twice");
+            })
+        });
+        let t = |p: u32| stamp[p as usize].load(Ordering::SeqCst);
+        let slab = |s: usize| &bins.order[bins.start[s]..bins.start[s + 1]];
+        for s in 0..n {
+            assert!(slab(s).windows(2).all(|w| t(w[0]) < t(w[1])));
+            if s % 2 == 1 {
+                let first = slab(s).iter().map(|&p| t(p)).min().unwrap_or(usize::MAX);
+                for e in [s - 1, s + 1].into_iter().filter(|&e| e < n) {
+                    let last = slab(e).iter().map(|&p| t(p)).max().unwrap_or(0);
+                    assert!(last < first, "odd slab {s} started before slab {e} ended");
+                }
+            }
+        }
+        assert!((0..x.len()).all(|p| t(p as u32) != usize::MAX));
     }
 }
