@@ -391,6 +391,21 @@ fn small_disks() -> Scene {
     s
 }
 
+/// The step a progress-guard stop happened at and the step of its
+/// checkpoint (panics on any other error).
+fn progress_stop(e: &Error) -> (u64, u64) {
+    let Error::Stopped {
+        cause, step: saved, ..
+    } = e
+    else {
+        panic!("not a stop with a checkpoint: {e}")
+    };
+    let Error::Progress { step, .. } = **cause else {
+        panic!("not the progress guard: {e}")
+    };
+    (step, *saved)
+}
+
 /// A Δt halving every step falls below 1e-6 of the largest after 20
 /// steps: the run stops there naming the key, Δt and what sets the stable
 /// step, with a checkpoint of that (whole) step.
@@ -402,18 +417,10 @@ fn a_collapsing_time_step_stops_the_run_naming_the_cause() {
     let e = run_model(&mut m, &s, &opts(tmp.path()), 1).expect_err("stops");
     let msg = e.to_string();
     println!("{msg}");
-    let Error::Stopped {
-        cause, step: saved, ..
-    } = &e
-    else {
-        panic!("{msg}")
-    };
-    let Error::Progress { step, .. } = **cause else {
-        panic!("{msg}")
-    };
+    let (step, saved) = progress_stop(&e);
     // Δt_k = 2^-k Δt_0 < 1e-6 Δt_0 first at k = 20, the 21st step.
     assert_eq!(step, 21, "{msg}");
-    assert_eq!(*saved, 21, "{msg}");
+    assert_eq!(saved, 21, "{msg}");
     for part in [
         "time.min_dt_fraction",
         "particle ",
@@ -457,18 +464,10 @@ fn a_collapsing_implicit_time_step_names_the_failed_solve() {
     let e = run_scene(&s, &opts(tmp.path())).expect_err("stops");
     let msg = e.to_string();
     println!("{msg}");
-    let Error::Stopped {
-        cause, step: saved, ..
-    } = &e
-    else {
-        panic!("{msg}")
-    };
-    let Error::Progress { step, .. } = **cause else {
-        panic!("{msg}")
-    };
+    let (step, saved) = progress_stop(&e);
     assert!(step > 1, "{msg}");
     assert_eq!(
-        *saved, step,
+        saved, step,
         "the checkpoint is the step the guard stopped after: {msg}"
     );
     for part in [

@@ -786,6 +786,34 @@ impl Cells {
     }
 }
 
+/// The face coefficients around the `nx` cells of the row starting at
+/// padded index `p0`: x faces (`nx + 1`), south and north, bottom and top
+/// (empty in 2D).
+struct RowCoeffs<'a> {
+    ax: &'a [f64],
+    ays: &'a [f64],
+    ayn: &'a [f64],
+    azb: &'a [f64],
+    azt: &'a [f64],
+}
+
+#[inline(always)]
+fn row_coeffs<const D3: bool>(lv: &Level, p0: usize) -> RowCoeffs<'_> {
+    let (nx, sy, sz) = (lv.n[0], lv.sy, lv.sz);
+    let (azb, azt): (&[f64], &[f64]) = if D3 {
+        (&lv.a[2][p0..p0 + nx], &lv.a[2][p0 + sz..p0 + sz + nx])
+    } else {
+        (&[], &[])
+    };
+    RowCoeffs {
+        ax: &lv.a[0][p0..p0 + nx + 1],
+        ays: &lv.a[1][p0..p0 + nx],
+        ayn: &lv.a[1][p0 + sy..p0 + sy + nx],
+        azb,
+        azt,
+    }
+}
+
 /// Gauss–Seidel/SOR update of the cells of one colour on row `(j, k)`.
 ///
 /// # Safety
@@ -816,26 +844,19 @@ unsafe fn gs_row<const D3: bool>(
             u.set(p0 - 1, u.get(p0 + nx - 1));
             u.set(p0 + nx, u.get(p0));
         }
-        let ax = &lv.a[0][p0..p0 + nx + 1];
-        let ays = &lv.a[1][p0..p0 + nx];
-        let ayn = &lv.a[1][p0 + sy..p0 + sy + nx];
-        let (azb, azt): (&[f64], &[f64]) = if D3 {
-            (&lv.a[2][p0..p0 + nx], &lv.a[2][p0 + sz..p0 + sz + nx])
-        } else {
-            (&[], &[])
-        };
+        let co = row_coeffs::<D3>(lv, p0);
         let inv = &lv.inv_diag[p0..p0 + nx];
         let fr = &f[p0..p0 + nx];
         let mut i = (j + k + color) & 1;
         while i < nx {
             let c = p0 + i;
             let mut s = fr[i]
-                + ax[i] * u.get(c - 1)
-                + ax[i + 1] * u.get(c + 1)
-                + ays[i] * u.get(c - sy)
-                + ayn[i] * u.get(c + sy);
+                + co.ax[i] * u.get(c - 1)
+                + co.ax[i + 1] * u.get(c + 1)
+                + co.ays[i] * u.get(c - sy)
+                + co.ayn[i] * u.get(c + sy);
             if D3 {
-                s += azb[i] * u.get(c - sz) + azt[i] * u.get(c + sz);
+                s += co.azb[i] * u.get(c - sz) + co.azt[i] * u.get(c + sz);
             }
             let old = u.get(c);
             u.set(c, old + omega * (s * inv[i] - old));
@@ -1074,26 +1095,19 @@ fn residual_row<const D3: bool>(
     } else {
         (&[], &[])
     };
-    let ax = &lv.a[0][p0..p0 + nx + 1];
-    let ays = &lv.a[1][p0..p0 + nx];
-    let ayn = &lv.a[1][p0 + sy..p0 + sy + nx];
-    let (azb, azt): (&[f64], &[f64]) = if D3 {
-        (&lv.a[2][p0..p0 + nx], &lv.a[2][p0 + sz..p0 + sz + nx])
-    } else {
-        (&[], &[])
-    };
+    let co = row_coeffs::<D3>(lv, p0);
     let d = &lv.diag[p0..p0 + nx];
     let fr = &f[p0..p0 + nx];
     let out = &mut out[..nx];
     let mut acc = 0.0;
     for i in 0..nx {
         let mut s = fr[i] - d[i] * cur[i + 1]
-            + ax[i] * cur[i]
-            + ax[i + 1] * cur[i + 2]
-            + ays[i] * south[i]
-            + ayn[i] * north[i];
+            + co.ax[i] * cur[i]
+            + co.ax[i + 1] * cur[i + 2]
+            + co.ays[i] * south[i]
+            + co.ayn[i] * north[i];
         if D3 {
-            s += azb[i] * bottom[i] + azt[i] * top[i];
+            s += co.azb[i] * bottom[i] + co.azt[i] * top[i];
         }
         out[i] = s;
         acc += s * s;

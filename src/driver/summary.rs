@@ -157,7 +157,7 @@ pub fn utc_now() -> String {
 /// `YYYY-MM-DDThh:mm:ssZ` of `secs` seconds after 1970-01-01T00:00:00Z
 /// (the proleptic Gregorian calendar: days to year, month, day by the
 /// 400-year cycle of 146 097 days, years starting on 1 March).
-fn utc_of(secs: u64) -> String {
+pub fn utc_of(secs: u64) -> String {
     let days = (secs / 86_400) as i64;
     let rem = secs % 86_400;
     let z = days + 719_468;

@@ -45,7 +45,7 @@ use super::boundary::{fill_scalar, zero_wall_faces};
 use super::equilibration::min_pressure_all;
 use super::exchange::exchange_momentum;
 use super::faces::{face_exchange, face_specific_volume};
-use super::par::{max_rows, par_face_rows, Out};
+use super::par::{max_rows, nan_max, par_face_rows, Out};
 use super::params::{cell_shock_sensor, IceParams};
 use super::pressure_system::{ImplicitWorkspace, PressureSystem};
 use super::state::{CellLayout, IceState};
@@ -202,9 +202,8 @@ fn residual_max<const D: usize>(
     max_rows(layout, |row| {
         let mut m: f64 = 0.0;
         for c in row {
-            let r = (stk[c] * dp[c] + dt * div[c]).abs();
-            // NaN propagates as the maximum.
-            m = if r.is_nan() { f64::NAN } else { m.max(r) };
+            // NaN propagates as the maximum (through `max_rows` too).
+            m = nan_max(m, (stk[c] * dp[c] + dt * div[c]).abs());
         }
         m
     })

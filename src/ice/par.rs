@@ -146,7 +146,8 @@ pub(crate) fn par_rows<const D: usize>(
     pieces(&layout.rows, n).for_each(f);
 }
 
-/// Maximum of `f` over the interior x-rows (exact, so order-independent).
+/// Maximum of `f` over the interior x-rows and 0 (exact, so
+/// order-independent); a row that returns NaN makes it NaN.
 pub(crate) fn max_rows<const D: usize>(
     layout: &CellLayout<D>,
     f: impl Fn(Range<usize>) -> f64 + Sync + Send,
@@ -154,9 +155,19 @@ pub(crate) fn max_rows<const D: usize>(
     let n = layout.cells[0];
     if one_task(&layout.rows, n) {
         let s = layout.rows[0];
-        return f(s..s + n).max(0.0);
+        return nan_max(f(s..s + n), 0.0);
     }
-    pieces(&layout.rows, n).map(f).reduce(|| 0.0, f64::max)
+    pieces(&layout.rows, n).map(f).reduce(|| 0.0, nan_max)
+}
+
+/// The larger of `a` and `b`, NaN if either is (`f64::max` drops a NaN).
+#[inline]
+pub(crate) fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
 }
 
 /// Runs `f` on every x-row of the faces normal to `d` (the faces of
@@ -173,4 +184,40 @@ pub(crate) fn par_face_rows<const D: usize>(
         return f(s..s + n);
     }
     pieces(rows, n).for_each(f);
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::SVector;
+
+    use super::*;
+
+    /// A long 1D row is cut into pieces that cover it once, in order, and
+    /// a NaN from any piece or row is the maximum (`f64::max` would drop
+    /// it), in 1D and 2D.
+    #[test]
+    fn pieces_cover_the_row_and_max_keeps_nan() {
+        use std::sync::Mutex;
+        let n = 3 * ROW_PIECE + 17;
+        let l1 = CellLayout::<1>::new(SVector::zeros(), SVector::repeat(1.0), [n]).expect("1D");
+        let seen = Mutex::new(Vec::new());
+        par_rows(&l1, |r| seen.lock().expect("lock").push(r));
+        let mut seen = seen.into_inner().expect("lock");
+        seen.sort_by_key(|r| r.start);
+        assert_eq!(seen.len(), 4);
+        let s = l1.rows[0];
+        assert_eq!(seen[0].start, s);
+        assert!(seen.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!(seen[3].end, s + n);
+        let l2 = CellLayout::<2>::new(SVector::zeros(), SVector::repeat(1.0), [8, 9]).expect("2D");
+        let bad = l1.rows[0] + 2 * ROW_PIECE + 3;
+        assert!(max_rows(&l1, |r| if r.contains(&bad) { f64::NAN } else { 1.0 }).is_nan());
+        assert_eq!(
+            max_rows(&l1, |r| r.start as f64),
+            (s + 3 * ROW_PIECE) as f64
+        );
+        let row = l2.rows[4];
+        assert!(max_rows(&l2, |r| if r.start == row { f64::NAN } else { 2.0 }).is_nan());
+        assert_eq!(max_rows(&l2, |_| -1.0), 0.0);
+    }
 }

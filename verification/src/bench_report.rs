@@ -554,25 +554,11 @@ pub fn render(header: &Header, scan: &Scan) -> String {
     s
 }
 
-/// The UTC calendar time of `secs` since the epoch, `YYYY-MM-DD HH:MM UTC`.
+/// The UTC calendar time of `secs` since the epoch, `YYYY-MM-DD HH:MM UTC`
+/// (the date of `summary.json`'s provenance, to the minute).
 pub fn utc_string(secs: u64) -> String {
-    let days = (secs / 86_400) as i64;
-    let rem = secs % 86_400;
-    // Howard Hinnant's civil-from-days.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
-        rem / 3600,
-        (rem % 3600) / 60
-    )
+    let iso = mpmice::driver::summary::utc_of(secs);
+    format!("{} {} UTC", &iso[..10], &iso[11..16])
 }
 
 fn git_rev(root: &Path) -> String {
