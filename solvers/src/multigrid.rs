@@ -954,6 +954,14 @@ fn fill_outer_ghosts<const D3: bool>(lv: &Level, u: &mut [f64]) {
     }
 }
 
+/// The number of units of the outermost axis (rows in 2D, planes in 3D)
+/// and whether that axis is periodic.
+#[inline]
+fn outer_units<const D3: bool>(lv: &Level) -> (usize, bool) {
+    let axis = if D3 { 2 } else { 1 };
+    (lv.n[axis], lv.periodic[axis])
+}
+
 /// Units (rows in 2D, planes in 3D) per task below which a sweep is not
 /// shared between threads.
 const PAR_MIN_UNITS: usize = 8;
@@ -993,8 +1001,7 @@ fn rb_sweep<const D3: bool>(
     from_zero: bool,
 ) {
     let second = 1 - first;
-    let m = if D3 { lv.n[2] } else { lv.n[1] };
-    let outer_periodic = lv.periodic[if D3 { 2 } else { 1 }];
+    let (m, outer_periodic) = outer_units::<D3>(lv);
     if !outer_periodic && m >= 2 * PAR_MIN_UNITS && parallel(lv) {
         rb_sweep_blocks::<D3>(lv, Cells::new(u), f, first, omega, from_zero);
         return;
@@ -1050,7 +1057,7 @@ fn rb_sweep_blocks<const D3: bool>(
 ) {
     use rayon::prelude::*;
     let second = 1 - first;
-    let m = if D3 { lv.n[2] } else { lv.n[1] };
+    let m = outer_units::<D3>(lv).0;
     let blocks = (m / PAR_MIN_UNITS).min(4 * rayon::current_num_threads());
     let bounds = |b: usize| (b * m / blocks, (b + 1) * m / blocks);
     (0..blocks).into_par_iter().for_each(|b| {

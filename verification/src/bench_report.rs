@@ -661,8 +661,13 @@ pub fn run(args: &BenchReportArgs, root: &Path) -> anyhow::Result<PathBuf> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
     }
-    std::fs::write(&out, render(&header, &scan))
-        .with_context(|| format!("writing {}", out.display()))?;
+    // Written under a temporary name and renamed: never half a file.
+    let text = render(&header, &scan);
+    mpmice::output::atomic_write(&out, |w| {
+        use std::io::Write as _;
+        w.write_all(text.as_bytes())
+    })
+    .with_context(|| format!("writing {}", out.display()))?;
     Ok(out)
 }
 
