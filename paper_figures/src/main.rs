@@ -1,5 +1,15 @@
 //! `paper_figures`: regenerates the paper figures and tables this project
-//! reproduces (PNG + CSV in `paper_figures/output/`).
+//! reproduces (PNG + CSV).
+//!
+//! `paper_figures FIGURE [--quick] [--out DIR]` makes one figure,
+//! `paper_figures all [--quick] [--out DIR]` every one in turn (a failing
+//! figure does not stop the rest; the failures are listed at the end and
+//! the exit status is non-zero), `paper_figures list` names them. The
+//! output goes to `DIR` (default `paper_figures/output/`); `--quick`
+//! (coarse resolutions) writes to `DIR/quick/` instead, so it never
+//! overwrites the full figures. Figures that copy or read a verification
+//! study's output take it from `verification/results/` (`--quick`:
+//! `verification/results/quick/`, where `verification --quick` writes).
 //!
 //! Available: the convergence figure of the explicit MPM study
 //! (`mpm_convergence`, from the axis-aligned manufactured solution), and the
@@ -32,124 +42,175 @@
 //! cell sizes, from the `zhang_rod` study, with the Alekseevskii–Tate
 //! band).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use clap::Parser;
-use verification::harness::{plot_xy, PlotSeries, Style};
+use verification::harness::{fit_line, plot_xy, PlotSeries, Style};
 
 #[derive(Parser)]
 #[command(about = "Regenerate paper figures")]
 struct Args {
-    /// Figure name or `list`.
+    /// Figure name, `all` or `list`.
     figure: String,
-    /// Coarse resolutions only.
+    /// Coarse resolutions only (written to the `quick/` subfolder of the
+    /// output folder).
     #[arg(long)]
     quick: bool,
+    /// Output folder (default: paper_figures/output).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
-const FIGURES: &[(&str, &str)] = &[
+/// One figure: writes its files into the folder given (`quick`: coarse
+/// resolutions).
+type Figure = fn(bool, &Path) -> anyhow::Result<()>;
+
+/// Every figure: name, description and the function that makes it.
+const FIGURES: &[(&str, &str, Figure)] = &[
     (
         "lian_vibration",
         "pre-tensioned square membrane (Lian 4 elements): centre deflection vs time against exact mode (1,1)",
+        lian_vibration,
     ),
     (
         "axisym_lame",
         "axisymmetric r-z MPM, Lame thick cylinder and sphere: sigma_r, sigma_theta vs r against exact",
+        axisym_lame,
     ),
     (
         "mpm_convergence",
         "error vs h of the axis-aligned MMS, 2D, every shape function, A = 0.05 (cell crossing)",
+        mpm_convergence,
     ),
     (
         "guilkey_fig3",
         "pressurised cylinder, MPM-ICE: 3a stresses vs Lame, 3b ln(Eq. 43 error) vs ln(dx)",
+        guilkey_fig3,
     ),
     (
         "guilkey_fig4",
         "adiabatic piston, MPM-ICE: closed-end pressure vs compression ratio",
+        guilkey_fig4,
     ),
     (
         "guilkey_fig5",
         "Mach 3 wedge, MPM-ICE: pressure field with the exact and measured shock",
+        guilkey_fig5,
     ),
     (
         "york_fig9",
         "piston-container (York 4.2): piston displacement vs time, m = 0.1 and 1.0, exact periods",
+        york_fig9,
     ),
     (
         "york_fig11",
         "dog-bone membrane expansion (York 4.3): point positions at several times",
+        |q, o| york_dogbone_figures(q, o, true),
     ),
     (
         "york_fig13",
         "dog-bone membrane expansion (York 4.3): radii at 0 and 90 deg and energies vs time",
+        |q, o| york_dogbone_figures(q, o, false),
     ),
     (
         "york_fig16",
         "airbag impact (York 4.4): bag and probe at release, peak penetration and end",
+        |q, o| york_airbag_figures(q, o, true),
     ),
     (
         "york_fig17",
         "airbag impact (York 4.4): probe displacement, bag pressure (point mean, pV) and energies vs time",
+        |q, o| york_airbag_figures(q, o, false),
     ),
     (
         "zhang_block",
         "block test (Zhang 3): air-pressure change vs time, weak (Eq. 18) vs strong (Eq. 7) constraint and Guilkey MPM-ICE",
+        zhang_block,
     ),
     (
         "zhang_shock",
         "Mach 1.5 shock on a steel block, Zhang multiphase vs Guilkey MPM-ICE: probe pressure vs p5, block momentum vs 1D",
+        zhang_shock,
     ),
     (
         "zhang_fig2",
         "plate spall (Zhang 4, Fig. 2): first-failure time and plane vs h against 3d/c and the mid-plane",
+        zhang_fig2,
     ),
     (
         "zhang_fig4",
         "tungsten rod into steel (Zhang Figs. 3-4): penetration and residual length vs time at three cell sizes (from the zhang_rod study) with the Alekseevskii-Tate band",
+        zhang_fig4,
     ),
     (
         "york_fig6",
         "Sod with gas material points (York 4.1): density, velocity, pressure, energy vs exact",
+        york_fig6,
     ),
 ];
 
 fn main() -> anyhow::Result<()> {
     let args = Args::parse();
-    match args.figure.as_str() {
-        "list" => {
-            for (n, d) in FIGURES {
-                println!("{n:20} {d}");
-            }
-            Ok(())
+    if args.figure == "list" {
+        for (n, d, _) in FIGURES {
+            println!("{n:20} {d}");
         }
-        "mpm_convergence" => mpm_convergence(args.quick),
-        "guilkey_fig3" => guilkey_fig3(args.quick),
-        "guilkey_fig4" => guilkey_fig4(args.quick),
-        "guilkey_fig5" => guilkey_fig5(args.quick),
-        "york_fig6" => york_fig6(args.quick),
-        "york_fig9" => york_fig9(args.quick),
-        "axisym_lame" => axisym_lame(args.quick),
-        "lian_vibration" => lian_vibration(args.quick),
-        "york_fig11" => york_dogbone_figures(args.quick, true),
-        "york_fig13" => york_dogbone_figures(args.quick, false),
-        "york_fig16" => york_airbag_figures(args.quick, true),
-        "york_fig17" => york_airbag_figures(args.quick, false),
-        "zhang_block" => zhang_block(args.quick),
-        "zhang_shock" => zhang_shock(args.quick),
-        "zhang_fig2" => zhang_fig2(args.quick),
-        "zhang_fig4" => zhang_fig4(args.quick),
-        other => bail!(
-            "unknown figure `{other}`; available: {}, list",
+        return Ok(());
+    }
+    let chosen: Vec<_> = FIGURES
+        .iter()
+        .filter(|f| args.figure == "all" || f.0 == args.figure)
+        .collect();
+    if chosen.is_empty() {
+        bail!(
+            "unknown figure `{}`; available: {}, all, list",
+            args.figure,
             FIGURES.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
-        ),
+        );
+    }
+    let out = output_dir(args.out.as_deref(), args.quick)?;
+    let mut failed = Vec::new();
+    for (name, _, make) in chosen {
+        eprintln!("figure {name}{}", if args.quick { " (quick)" } else { "" });
+        if let Err(e) = make(args.quick, &out) {
+            eprintln!("figure {name} failed: {e:#}");
+            failed.push(*name);
+        }
+    }
+    if !failed.is_empty() {
+        bail!("{} figure(s) failed: {}", failed.len(), failed.join(", "));
+    }
+    Ok(())
+}
+
+/// The folder figures are written to, created: `out` (default
+/// `paper_figures/output`), or its `quick/` subfolder when `quick`.
+fn output_dir(out: Option<&Path>, quick: bool) -> anyhow::Result<PathBuf> {
+    let base = out.map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("output"),
+        Path::to_path_buf,
+    );
+    let dir = if quick { base.join("quick") } else { base };
+    std::fs::create_dir_all(&dir)?;
+    Ok(dir)
+}
+
+/// Where the `verification` studies keep their output (as its default):
+/// `verification/results`, or its `quick/` subfolder.
+fn study_results_dir(quick: bool) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../verification/results");
+    if quick {
+        dir.join("quick")
+    } else {
+        dir
     }
 }
 
-fn mpm_convergence(quick: bool) -> anyhow::Result<()> {
-    let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("output");
-    std::fs::create_dir_all(&out)?;
+/// Error against h of the axis-aligned MMS (the `mpm_mms_axis_aligned`
+/// study), 2D, A = 0.05, one series per shape function, log-log with a
+/// reference slope triangle; one PNG, one CSV.
+fn mpm_convergence(quick: bool, out: &Path) -> anyhow::Result<()> {
     let result = verification::mpm_studies::mpm_mms_axis_aligned(quick)?;
     let series: Vec<PlotSeries> = result
         .series
@@ -171,8 +232,8 @@ fn mpm_convergence(quick: bool) -> anyhow::Result<()> {
     plot_xy(
         &out.join("mpm_convergence.png"),
         "MPM, axis-aligned MMS, 2D, A = 0.05",
-        "h",
-        "max_t RMS displacement error / A",
+        "h [m]",
+        "max_t RMS displacement error / A [-]",
         true,
         true,
         &series,
@@ -181,37 +242,25 @@ fn mpm_convergence(quick: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn out_dir() -> anyhow::Result<PathBuf> {
-    let out = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("output");
-    std::fs::create_dir_all(&out)?;
-    Ok(out)
-}
-
 /// The study's own plots live next to its results; copy one here.
-fn copy_study_plot(name: &str, quick: bool, out: &std::path::Path) -> anyhow::Result<()> {
-    let mut src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../verification/results");
-    if quick {
-        src = src.join("quick");
-    }
-    std::fs::copy(src.join(name), out.join(name))?;
+fn copy_study_plot(name: &str, quick: bool, out: &Path) -> anyhow::Result<()> {
+    std::fs::copy(study_results_dir(quick).join(name), out.join(name))?;
     println!("wrote {}", out.join(name).display());
     Ok(())
 }
 
-fn guilkey_fig3(quick: bool) -> anyhow::Result<()> {
-    let out = out_dir()?;
+/// Guilkey Fig. 3 (pressurised cylinder, the `cylinder_order` study): 3a
+/// the study's stress plot, 3b ln error against ln dx with the
+/// least-squares line ([`fit_line`], the series' observed order).
+fn guilkey_fig3(quick: bool, out: &Path) -> anyhow::Result<()> {
     let result = verification::coupled_studies::cylinder_order(quick)?;
-    copy_study_plot("cylinder_order_fig3a.png", quick, &out)?;
+    copy_study_plot("cylinder_order_fig3a.png", quick, out)?;
     let s = &result.series[0];
     let pts: Vec<(f64, f64)> = s.points.iter().map(|p| (p.h.ln(), p.error.ln())).collect();
-    // Least-squares line through (ln dx, ln error), as Guilkey Fig. 3b.
-    let n = pts.len() as f64;
-    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-    let (sxx, sxy) = pts
-        .iter()
-        .fold((0.0, 0.0), |a, p| (a.0 + p.0 * p.0, a.1 + p.0 * p.1));
-    let slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-    let icpt = (sy - slope * sx) / n;
+    // Least-squares line through (ln dx, ln error), as Guilkey Fig. 3b: the
+    // harness's fit, whose slope is the series' observed order.
+    let (slope, icpt) =
+        fit_line(&pts).ok_or_else(|| anyhow::anyhow!("cylinder_order: no line through {pts:?}"))?;
     let mut csv = String::from("ln dx,ln error\n");
     for (x, y) in &pts {
         csv.push_str(&format!("{x},{y}\n"));
@@ -223,8 +272,8 @@ fn guilkey_fig3(quick: bool) -> anyhow::Result<()> {
     plot_xy(
         &out.join("guilkey_fig3b.png"),
         &format!("Guilkey Fig. 3b: ln error vs ln dx, slope {slope:.2} (paper: 0.89)"),
-        "ln dx",
-        "ln error (Eq. 43)",
+        "ln(dx / 1 m)",
+        "ln(Eq. 43 error) [-]",
         false,
         false,
         &[
@@ -247,18 +296,17 @@ fn guilkey_fig3(quick: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn guilkey_fig4(quick: bool) -> anyhow::Result<()> {
-    let out = out_dir()?;
+/// Guilkey Fig. 4 (adiabatic piston): the `piston_adiabatic` study's plot.
+fn guilkey_fig4(quick: bool, out: &Path) -> anyhow::Result<()> {
     verification::coupled_studies::piston_adiabatic(quick)?;
-    copy_study_plot("piston_adiabatic_fig4.png", quick, &out)
+    copy_study_plot("piston_adiabatic_fig4.png", quick, out)
 }
 
 /// Guilkey Fig. 5: the `wedge_mach3` study's pressure field (h = 0.0025;
 /// the quick study's h = 0.005).
-fn guilkey_fig5(quick: bool) -> anyhow::Result<()> {
-    let out = out_dir()?;
+fn guilkey_fig5(quick: bool, out: &Path) -> anyhow::Result<()> {
     verification::coupled_studies::wedge_mach3(quick)?;
-    copy_study_plot("wedge_mach3_fig5.png", quick, &out)
+    copy_study_plot("wedge_mach3_fig5.png", quick, out)
 }
 
 /// York Fig. 6: Sod with gas material points at t = 0.143 (200 cells of
@@ -266,9 +314,8 @@ fn guilkey_fig5(quick: bool) -> anyhow::Result<()> {
 /// 100 cells): density, velocity, pressure and specific internal energy of
 /// the points of one row against the exact Riemann solution. One PNG per
 /// variable (`york_fig6_<var>.png`) and one CSV.
-fn york_fig6(quick: bool) -> anyhow::Result<()> {
+fn york_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::york::{run_york_sod, sod_exact, YorkSod};
-    let out = out_dir()?;
     let setup = YorkSod {
         cells: if quick { 100 } else { 200 },
         ..YorkSod::default()
@@ -297,10 +344,10 @@ fn york_fig6(quick: bool) -> anyhow::Result<()> {
     std::fs::write(out.join("york_fig6.csv"), csv)?;
     let fine: Vec<f64> = (0..=2000).map(|i| i as f64 / 2000.0).collect();
     for (k, (name, label)) in [
-        ("density", "density"),
-        ("velocity", "velocity"),
-        ("pressure", "pressure"),
-        ("energy", "specific internal energy"),
+        ("density", "density [-]"),
+        ("velocity", "velocity [-]"),
+        ("pressure", "pressure [-]"),
+        ("energy", "specific internal energy [-]"),
     ]
     .into_iter()
     .enumerate()
@@ -313,7 +360,7 @@ fn york_fig6(quick: bool) -> anyhow::Result<()> {
                 1.0 / setup.cells as f64,
                 run.l1_density
             ),
-            "x",
+            "x [-]",
             label,
             false,
             false,
@@ -339,9 +386,8 @@ fn york_fig6(quick: bool) -> anyhow::Result<()> {
 /// piston–container (h = 0.5; `--quick`: h = 1), m = 0.1 and 1.0, three
 /// periods, with vertical lines at multiples of Eq. 27's period. One PNG per
 /// mass (`york_fig9_m0.1.png`, `york_fig9_m1.png`) and one CSV each.
-fn york_fig9(quick: bool) -> anyhow::Result<()> {
+fn york_fig9(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::york::{run_piston_container, PistonContainer};
-    let out = out_dir()?;
     for mass in [0.1, 1.0] {
         let s = PistonContainer {
             mass,
@@ -379,7 +425,7 @@ fn york_fig9(quick: bool) -> anyhow::Result<()> {
             &path,
             &format!("York Fig. 9: piston displacement, m = {mass}, h = {}", s.h),
             "t [s]",
-            "displacement",
+            "displacement [m]",
             false,
             false,
             &series,
@@ -389,17 +435,11 @@ fn york_fig9(quick: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Axisymmetric r–z MPM against Lamé (the `axisym_lame` study's setup,
-/// 16 cells across the wall; `--quick`: 8): σ_r/P and σ_θ/P (hoop,
-/// `stress[(2,2)]`) of every particle against the exact curves, one PNG per
-/// problem (`axisym_lame_cylinder.png`, `axisym_lame_sphere.png`) and one
-/// CSV each.
 /// Centre deflection z(t) of the pre-tensioned square membrane
 /// (`SquareVibration`, 16 and 32 elements per side; quick: 8 and 16) over
 /// two exact periods against z = (V/ω) sin ωt, ω = 2π f₁₁.
-fn lian_vibration(quick: bool) -> anyhow::Result<()> {
+fn lian_vibration(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::membrane_fe::{square_membrane_f11, SquareVibration};
-    let out = out_dir()?;
     let cfg = SquareVibration::default();
     let f11 = square_membrane_f11(cfg.side, cfg.prestress, cfg.material.density);
     let omega = 2.0 * std::f64::consts::PI * f11;
@@ -453,9 +493,13 @@ fn lian_vibration(quick: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn axisym_lame(quick: bool) -> anyhow::Result<()> {
+/// Axisymmetric r–z MPM against Lamé (the `axisym_lame` study's setup,
+/// 16 cells across the wall; `--quick`: 8): σ_r/P and σ_θ/P (hoop,
+/// `stress[(2,2)]`) of every particle against the exact curves, one PNG per
+/// problem (`axisym_lame_cylinder.png`, `axisym_lame_sphere.png`) and one
+/// CSV each.
+fn axisym_lame(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::axisymmetric::{Lame, LameShape, Relax};
-    let out = out_dir()?;
     let n = if quick { 8 } else { 16 };
     for shape in [LameShape::Cylinder, LameShape::Sphere] {
         let lame = Lame::standard(shape);
@@ -505,8 +549,8 @@ fn axisym_lame(quick: bool) -> anyhow::Result<()> {
                 "axisymmetric MPM, Lame {} (P = 1e-5 E, GIMP, {n} cells across the wall)",
                 shape.name()
             ),
-            "r (reference)",
-            "stress / P",
+            "r (reference) [m]",
+            "stress / P [-]",
             false,
             false,
             &[
@@ -543,9 +587,8 @@ fn axisym_lame(quick: bool) -> anyhow::Result<()> {
 /// a CSV of all points; otherwise the radii at 0° and 90° and the kinetic,
 /// gas internal, membrane strain and total energies against time
 /// (`york_fig13_radii.png`, `york_fig13_energy.png`, `york_fig13.csv`).
-fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
+fn york_dogbone_figures(quick: bool, out: &Path, positions: bool) -> anyhow::Result<()> {
     use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
-    let out = out_dir()?;
     let h = if quick { 0.4 } else { 0.1 };
     let r = run_dog_bone(&DogBone {
         h,
@@ -585,8 +628,8 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
             plot_xy(
                 &path,
                 &format!("York Fig. 11/12: dog-bone, h = {h}, t = {t:.2}"),
-                "x",
-                "y",
+                "x [-]",
+                "y [-]",
                 false,
                 false,
                 &series,
@@ -617,8 +660,8 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
     plot_xy(
         &path,
         &format!("York Fig. 13: dog-bone radii, h = {h}"),
-        "t",
-        "radius",
+        "t [-]",
+        "radius [-]",
         false,
         false,
         &radii,
@@ -650,8 +693,8 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
     plot_xy(
         &path,
         &format!("York Fig. 13: dog-bone energies, h = {h}"),
-        "t",
-        "energy (per unit depth)",
+        "t [-]",
+        "energy per unit depth [-]",
         false,
         false,
         &energy,
@@ -667,9 +710,8 @@ fn york_dogbone_figures(quick: bool, positions: bool) -> anyhow::Result<()> {
 /// mean and `p V` over the enclosed volume) and the energies against time
 /// (`york_fig17_displacement.png`, `york_fig17_pressure.png`,
 /// `york_fig17_energy.png`, `york_fig17.csv`).
-fn york_airbag_figures(quick: bool, shapes: bool) -> anyhow::Result<()> {
+fn york_airbag_figures(quick: bool, out: &Path, shapes: bool) -> anyhow::Result<()> {
     use mpmice::diagnostics::york_airbag::{run_airbag, Airbag, AirbagSample};
-    let out = out_dir()?;
     let h = if quick { 0.02 } else { 0.01 };
     let r = run_airbag(&Airbag {
         h,
@@ -793,9 +835,8 @@ fn york_airbag_figures(quick: bool, shapes: bool) -> anyhow::Result<()> {
 /// 20): the largest relative air-pressure change at each step against time
 /// for Zhang's weak constraint (Eq. 18), the strong one (Eq. 7, until it
 /// fails) and Guilkey's MPM-ICE. Log scale; one PNG and one CSV.
-fn zhang_block(quick: bool) -> anyhow::Result<()> {
+fn zhang_block(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::formulations::{run_block, BlockCase, Formulation};
-    let out = out_dir()?;
     let cells = if quick { 20 } else { 40 };
     let runs = [
         (
@@ -843,7 +884,7 @@ fn zhang_block(quick: bool) -> anyhow::Result<()> {
         &path,
         &format!("Zhang block test: disk moving diagonally with the air, {cells} x {cells} cells"),
         "t [s]",
-        "max |p - p1| / p1 of the air",
+        "max |p - p1| / p1 of the air [-]",
         false,
         true,
         &series,
@@ -858,11 +899,10 @@ fn zhang_block(quick: bool) -> anyhow::Result<()> {
 /// p5 (`zhang_shock_pressure.png`), and the half block's momentum against
 /// the 1D rate (p5 − p1) b from the exact arrival (`zhang_shock_momentum.png`);
 /// one CSV.
-fn zhang_shock(quick: bool) -> anyhow::Result<()> {
+fn zhang_shock(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::formulations::{
         run_shock, shock_exact, shock_window, Formulation, ShockCase, HALF_HEIGHT, P1,
     };
-    let out = out_dir()?;
     let cells = if quick { 100 } else { 200 };
     let e = shock_exact();
     let end = 6.34e-4;
@@ -931,7 +971,7 @@ fn zhang_shock(quick: bool) -> anyhow::Result<()> {
         (
             "zhang_shock_pressure.png",
             format!("Mach 1.5 shock on a steel block, probe 2 cm ahead, h = {h} m"),
-            "p / p1",
+            "p / p1 [-]",
             &pressure,
         ),
         (
@@ -952,9 +992,8 @@ fn zhang_shock(quick: bool) -> anyhow::Result<()> {
 /// `zhang_spall` study's resolutions), with the 1D elastic-wave analysis
 /// (3d/c, the target's mid-plane) and the band of every point failed by the
 /// end; one PNG each, one CSV.
-fn zhang_fig2(quick: bool) -> anyhow::Result<()> {
+fn zhang_fig2(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::zhang_spall::{analytic, run_spall};
-    let out = out_dir()?;
     let cells: &[usize] = if quick { &[161, 322] } else { &[161, 322, 644] };
     let (t_exact, x_exact) = analytic();
     let mut csv = String::from("cells,h [m],spall time [s],plane [m],band low [m],band high [m]\n");
@@ -1044,16 +1083,11 @@ fn zhang_fig2(quick: bool) -> anyhow::Result<()> {
 /// [--quick]` first: R/4 takes about 15 minutes), with the
 /// Alekseevskii–Tate model at the study's two target resistances. One PNG
 /// each, one CSV.
-fn zhang_fig4(quick: bool) -> anyhow::Result<()> {
+fn zhang_fig4(quick: bool, out: &Path) -> anyhow::Result<()> {
     use mpmice::diagnostics::zhang_rod::{tate, RHO_PLATE, RHO_ROD, ROD_LENGTH, SPEED};
     use verification::harness::StudyResult;
     use verification::multiphase_rod::{TATE_R, TATE_Y};
-    let out = out_dir()?;
-    let mut src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../verification/results");
-    if quick {
-        src = src.join("quick");
-    }
-    let path = src.join("zhang_rod.json");
+    let path = study_results_dir(quick).join("zhang_rod.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
         anyhow::anyhow!(
             "{}: {e}; run `verification zhang_rod{}` first",

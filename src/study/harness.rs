@@ -33,6 +33,7 @@ use anyhow::{bail, Context, Result};
 use crate::output::fmt_f64;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
 
 /// The result of one verification study, stored as `STUDY.json`.
@@ -151,19 +152,25 @@ pub fn fit_order(points: &[Point]) -> f64 {
         .filter(|p| p.h.is_finite() && p.h > 0.0 && p.error.is_finite() && p.error > 0.0)
         .map(|p| (p.h.ln(), p.error.ln()))
         .collect();
-    if logs.len() < 2 {
-        return f64::NAN;
+    fit_line(&logs).map_or(f64::NAN, |(slope, _)| slope)
+}
+
+/// Least-squares line `y = a + b x` through `points`: `Some((b, a))`, or
+/// `None` when there are fewer than two points or all share one `x`.
+/// [`fit_order`] is this on `(ln h, ln error)`.
+pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    if points.len() < 2 {
+        return None;
     }
-    let n = logs.len() as f64;
-    let mx = logs.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = logs.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-    if sxx > 0.0 {
-        sxy / sxx
-    } else {
-        f64::NAN
-    }
+    let n = points.len() as f64;
+    let mx = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    (sxx > 0.0).then(|| {
+        let slope = sxy / sxx;
+        (slope, my - slope * mx)
+    })
 }
 
 /// File stem for a study name: characters other than ASCII letters,
@@ -201,8 +208,8 @@ fn csv_cell(s: &str) -> String {
 /// The CSV has the columns `series,norm,h,error,wall_s,updates_per_s`, one
 /// row per point. The PNG is a log-log plot of error against `h` with one
 /// line-and-markers series per [`Series`] (points sorted by `h`), labelled
-/// with the series label, norm and observed order. Every file is written
-/// atomically.
+/// with the series label, norm and observed order, and [`plot_xy`]'s
+/// reference slope triangle. Every file is written atomically.
 ///
 /// # Errors
 /// An unusable study name, or any I/O, serialisation or plotting error.
@@ -231,7 +238,7 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
     }
     atomic_write_bytes(&dir.join(format!("{stem}.csv")), csv.as_bytes())?;
 
-    let mut plot_series: Vec<PlotSeries> = result
+    let plot_series: Vec<PlotSeries> = result
         .series
         .iter()
         .map(|s| {
@@ -249,48 +256,62 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
             }
         })
         .collect();
-    if let Some(t) = slope_triangle(&result.series) {
-        plot_series.push(t);
-    }
     plot_xy(
         &dir.join(format!("{stem}.png")),
         &result.study,
-        "h",
-        "error",
+        "h (resolution, in the study's units)",
+        "error (norm in the legend)",
         true,
         true,
         &plot_series,
     )
 }
 
-/// A reference slope triangle for a log-log plot of error against `h`:
-/// slope the observed order of the first series that has one, rounded to
-/// the nearest half (at least ½), spanning a factor 2 in `h` from the
-/// smallest `h`, below the smallest error there (so it covers no data).
-/// `None` without a series with a finite order and positive points.
-pub fn slope_triangle(series: &[Series]) -> Option<PlotSeries> {
-    let s = series.iter().find(|s| s.observed_order.is_finite())?;
-    let order = ((s.observed_order * 2.0).round() / 2.0).max(0.5);
-    let valid = |p: &&Point| p.h.is_finite() && p.h > 0.0 && p.error.is_finite() && p.error > 0.0;
-    let h0 = s
-        .points
+/// The reference slope triangle that [`plot_xy`] adds to a log-log plot:
+/// slope the median of the least-squares slopes of `ln y` on `ln x`
+/// ([`fit_line`]) of the labelled series with two distinct positive `x`
+/// (the upper one of an even count), rounded to the nearest half (at least
+/// ½ in size, sign kept), spanning a factor 2 in `x` from those series'
+/// smallest `x`, starting below the smallest `y` of all series (so it
+/// covers no data). Points that are not finite and positive are ignored.
+/// `None` without such a series.
+pub fn slope_triangle(series: &[PlotSeries]) -> Option<PlotSeries> {
+    let positive = |p: &&(f64, f64)| p.0.is_finite() && p.0 > 0.0 && p.1.is_finite() && p.1 > 0.0;
+    let fits: Vec<(f64, f64)> = series
         .iter()
-        .filter(valid)
-        .map(|p| p.h)
-        .fold(f64::INFINITY, f64::min);
-    let e_min = series
+        .filter(|s| !s.label.is_empty())
+        .filter_map(|s| {
+            let logs: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .filter(positive)
+                .map(|p| (p.0.ln(), p.1.ln()))
+                .collect();
+            let (slope, _) = fit_line(&logs)?;
+            let x0 = logs.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+            Some((slope, x0.exp()))
+        })
+        .collect();
+    let mut slopes: Vec<f64> = fits.iter().map(|f| f.0).collect();
+    slopes.sort_by(f64::total_cmp);
+    let slope = *slopes.get(slopes.len() / 2)?;
+    let x0 = fits.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    let y_min = series
         .iter()
-        .flat_map(|s| s.points.iter().filter(valid))
-        .map(|p| p.error)
+        .flat_map(|s| s.points.iter().filter(positive))
+        .map(|p| p.1)
         .fold(f64::INFINITY, f64::min);
-    if !(h0.is_finite() && e_min.is_finite()) {
-        return None;
-    }
-    let (h1, y0) = (2.0 * h0, 0.4 * e_min);
+    let rounded = (slope * 2.0).round() / 2.0;
+    let order = if rounded.abs() < 0.5 {
+        0.5f64.copysign(slope)
+    } else {
+        rounded
+    };
+    let (x1, y0) = (2.0 * x0, 0.4 * y_min);
     let y1 = y0 * 2f64.powf(order);
     Some(PlotSeries {
         label: format!("slope {order}"),
-        points: vec![(h0, y0), (h1, y0), (h1, y1), (h0, y0)],
+        points: vec![(x0, y0), (x1, y0), (x1, y1), (x0, y0)],
         style: Style::Line,
     })
 }
@@ -319,6 +340,27 @@ pub struct PlotSeries {
 
 /// Plot width and height in pixels.
 const PLOT_SIZE: (u32, u32) = (1000, 750);
+/// Margin around a chart, pixels.
+const MARGIN: u32 = 25;
+/// Height of the x-axis label area and width of the y-axis one, pixels.
+const LABEL_AREA: (u32, u32) = (60, 95);
+/// Title font size, pixels (the title takes 10 px more height).
+const TITLE_FONT: u32 = 30;
+/// Legend font size, pixels.
+const LEGEND_FONT: u32 = 18;
+/// Width of the colour bar beside a field plot, pixels.
+const COLOR_BAR_WIDTH: u32 = 170;
+/// Where a legend may go, in order of preference (corners first).
+const LEGEND_POSITIONS: [SeriesLabelPosition; 8] = [
+    SeriesLabelPosition::UpperLeft,
+    SeriesLabelPosition::UpperRight,
+    SeriesLabelPosition::LowerLeft,
+    SeriesLabelPosition::LowerRight,
+    SeriesLabelPosition::UpperMiddle,
+    SeriesLabelPosition::LowerMiddle,
+    SeriesLabelPosition::MiddleLeft,
+    SeriesLabelPosition::MiddleRight,
+];
 
 /// Series colours (the "tab10" palette).
 const COLORS: [RGBColor; 10] = [
@@ -334,7 +376,8 @@ const COLORS: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
-/// Draws a 1000×750 PNG line/marker plot at `path` (written atomically).
+/// Draws a 1000×750 PNG line/marker plot at `path` (written atomically;
+/// taller when the legend goes below the chart, see below).
 ///
 /// Points that are not finite, or not positive on a logarithmic axis, are
 /// skipped. Axis ranges cover the remaining points with padding (5% of the
@@ -342,6 +385,13 @@ const COLORS: [RGBColor; 10] = [
 /// width). Empty input still gives a valid (empty) plot. If text cannot be
 /// rendered (no usable system font), the plot is drawn without title, axis
 /// labels and legend instead of failing, and a warning goes to stderr.
+///
+/// A log-log plot gets a reference [`slope_triangle`] (a legend entry
+/// `slope p`). The legend goes to the corner (or, failing that, the edge
+/// middle) whose box covers the fewest data points and line samples; when
+/// every place would cover some, the top of the y range is raised until
+/// the legend fits above the data, or, for a legend taller than 70 % of
+/// the chart, the legend goes in a panel below the chart.
 ///
 /// # Errors
 /// Any I/O or drawing error other than a text-rendering failure.
@@ -357,7 +407,7 @@ pub fn plot_xy(
     let keep = |&(x, y): &(f64, f64)| {
         x.is_finite() && y.is_finite() && (!log_x || x > 0.0) && (!log_y || y > 0.0)
     };
-    let cleaned: Vec<PlotSeries> = series
+    let mut cleaned: Vec<PlotSeries> = series
         .iter()
         .map(|s| PlotSeries {
             label: s.label.clone(),
@@ -365,6 +415,9 @@ pub fn plot_xy(
             style: s.style,
         })
         .collect();
+    if log_x && log_y {
+        cleaned.extend(slope_triangle(&cleaned));
+    }
     let x_range = axis_range(
         cleaned.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         log_x,
@@ -373,7 +426,7 @@ pub fn plot_xy(
         cleaned.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
         log_y,
     );
-    let plot = Plot {
+    let mut plot = Plot {
         title,
         x_label,
         y_label,
@@ -384,7 +437,7 @@ pub fn plot_xy(
         series: &cleaned,
         field: None,
     };
-
+    plot.make_room_for_legend();
     plot.write_atomically(path)
 }
 
@@ -532,9 +585,18 @@ struct Plot<'a> {
     x_range: (f64, f64),
     y_range: (f64, f64),
     series: &'a [PlotSeries],
-    /// A cell field drawn under the series (linear axes only), with the
-    /// range of its finite values (the colour scale).
-    field: Option<(&'a CellField, (f64, f64))>,
+    /// A cell field drawn under the series (linear axes only).
+    field: Option<FieldLayer<'a>>,
+}
+
+/// The cell field of a [`plot_field`] plot.
+#[derive(Clone, Copy)]
+struct FieldLayer<'a> {
+    field: &'a CellField,
+    /// Range of its finite values (the colour scale).
+    range: (f64, f64),
+    /// Name and unit of the values (the colour bar's label).
+    label: &'a str,
 }
 
 /// A scalar field on a uniform grid of cells for [`plot_field`]: cell
@@ -580,10 +642,11 @@ impl CellField {
 }
 
 /// Draws a 1000×750 PNG of a cell field (colour scale blue → white → red
-/// from its smallest to its largest finite value, appended to the title as
-/// `[min, max]`) with
-/// line/marker series on top, at `path` (written atomically, as
-/// [`plot_xy`]).
+/// from its smallest to its largest finite value, shown by a colour bar on
+/// the right with ticks, labelled `value_label` (name and unit, e.g.
+/// `"p [Pa]"`), the exact minimum written below it and the maximum above)
+/// with line/marker series on top, at `path` (written atomically, as
+/// [`plot_xy`]; the legend avoids the series).
 ///
 /// # Errors
 /// Any I/O or drawing error other than a text-rendering failure.
@@ -592,22 +655,22 @@ pub fn plot_field(
     title: &str,
     x_label: &str,
     y_label: &str,
+    value_label: &str,
     field: &CellField,
     series: &[PlotSeries],
 ) -> Result<()> {
     let (nx, ny) = field.cells;
     let x_range = (field.lower.0, field.lower.0 + nx as f64 * field.h.0);
     let y_range = (field.lower.1, field.lower.1 + ny as f64 * field.h.1);
-    let (lo, hi) = field
+    let range = field
         .values
         .iter()
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    let title = format!("{title} [{lo:.2e}, {hi:.2e}]");
     let plot = Plot {
-        title: &title,
+        title,
         x_label,
         y_label,
         log_x: false,
@@ -615,12 +678,168 @@ pub fn plot_field(
         x_range,
         y_range,
         series,
-        field: Some((field, (lo, hi))),
+        field: Some(FieldLayer {
+            field,
+            range,
+            label: value_label,
+        }),
     };
     plot.write_atomically(path)
 }
 
+/// Estimated size `(width, height)` in pixels of the legend of `series`
+/// (a generous 0.62 em per character of the longest label); `None` when no
+/// series has a label.
+fn legend_size(series: &[PlotSeries]) -> Option<(f64, f64)> {
+    let labels = series.iter().filter(|s| !s.label.is_empty());
+    let entries = labels.clone().count();
+    let chars = labels.map(|s| s.label.chars().count()).max()?;
+    let font = f64::from(LEGEND_FONT);
+    // plotters: 30 px for the glyph, a 10 px margin all round, 1.25 em lines.
+    Some((
+        0.62 * font * chars as f64 + 50.0,
+        1.25 * font * entries as f64 + 20.0,
+    ))
+}
+
+/// Top-left corner of a legend box of `size` at `pos` in a plotting area
+/// of `area` pixels (as plotters lays it out: 5 px from the edges).
+fn legend_corner(pos: &SeriesLabelPosition, size: (f64, f64), area: (u32, u32)) -> (f64, f64) {
+    use SeriesLabelPosition::*;
+    let (w, h) = (f64::from(area.0), f64::from(area.1));
+    let x = match pos {
+        UpperLeft | MiddleLeft | LowerLeft => 5.0,
+        UpperRight | MiddleRight | LowerRight => w - size.0 - 5.0,
+        _ => (w - size.0) / 2.0,
+    };
+    let y = match pos {
+        UpperLeft | UpperMiddle | UpperRight => 5.0,
+        LowerLeft | LowerMiddle | LowerRight => h - size.1 - 5.0,
+        _ => (h - size.1) / 2.0,
+    };
+    (x, y)
+}
+
+/// Raises `range`'s top so that its old extent fills the lower `1 − free`
+/// of the axis (in log space on a log axis).
+fn raise_top((lo, hi): (f64, f64), log: bool, free: f64) -> (f64, f64) {
+    if log {
+        (lo, lo * (hi / lo).powf(1.0 / (1.0 - free)))
+    } else {
+        (lo, lo + (hi - lo) / (1.0 - free))
+    }
+}
+
 impl Plot<'_> {
+    /// Size in pixels of the plotting area (inside the axes) of a plot
+    /// without a field, as `render_in` lays it out with text.
+    const AREA: (u32, u32) = (
+        PLOT_SIZE.0 - 2 * MARGIN - LABEL_AREA.1,
+        PLOT_SIZE.1 - (TITLE_FONT + 10) - 2 * MARGIN - LABEL_AREA.0,
+    );
+
+    /// [`Plot::AREA`], less the colour bar of a field plot.
+    fn area_estimate(&self) -> (u32, u32) {
+        let bar = if self.field.is_some() {
+            COLOR_BAR_WIDTH
+        } else {
+            0
+        };
+        (Self::AREA.0 - bar, Self::AREA.1)
+    }
+
+    /// Height of the panel below the chart that holds the legend when it
+    /// would cover data anywhere inside (0 when it fits inside, or with
+    /// no `text`).
+    fn legend_panel(&self, text: bool) -> u32 {
+        match legend_size(self.series) {
+            Some((_, h)) if text && self.legend_position(self.area_estimate()).1 > 0 => {
+                h.ceil() as u32 + 10
+            }
+            _ => 0,
+        }
+    }
+
+    /// Pixel position of a data point in a plotting area of `area` pixels
+    /// (origin top left).
+    fn to_pixel(&self, (x, y): (f64, f64), area: (u32, u32)) -> (f64, f64) {
+        let frac = |v: f64, (lo, hi): (f64, f64), log: bool| {
+            if log {
+                (v / lo).ln() / (hi / lo).ln()
+            } else {
+                (v - lo) / (hi - lo)
+            }
+        };
+        (
+            frac(x, self.x_range, self.log_x) * f64::from(area.0),
+            (1.0 - frac(y, self.y_range, self.log_y)) * f64::from(area.1),
+        )
+    }
+
+    /// Pixel positions of every data point, and of samples every 4 px
+    /// along the lines of line series.
+    fn data_pixels(&self, area: (u32, u32)) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        for s in self.series {
+            let px: Vec<(f64, f64)> = s.points.iter().map(|&p| self.to_pixel(p, area)).collect();
+            out.extend(&px);
+            if s.style == Style::Markers {
+                continue;
+            }
+            for w in px.windows(2) {
+                let (dx, dy) = (w[1].0 - w[0].0, w[1].1 - w[0].1);
+                // NaN (a non-finite point) casts to 0 steps.
+                let steps = (dx.hypot(dy) / 4.0).ceil().min(1e4) as usize;
+                out.extend((1..steps).map(|k| {
+                    let t = k as f64 / steps as f64;
+                    (w[0].0 + t * dx, w[0].1 + t * dy)
+                }));
+            }
+        }
+        out
+    }
+
+    /// The legend position (of [`LEGEND_POSITIONS`], the first on a tie)
+    /// whose box covers the fewest data pixels, with that number, in a
+    /// plotting area of `area` pixels. A point within 6 px of the box (a
+    /// marker's radius, a line's width) counts as covered.
+    fn legend_position(&self, area: (u32, u32)) -> (SeriesLabelPosition, usize) {
+        let Some(size) = legend_size(self.series) else {
+            return (SeriesLabelPosition::UpperLeft, 0);
+        };
+        let pixels = self.data_pixels(area);
+        let covered = |pos: &SeriesLabelPosition| {
+            let (x0, y0) = legend_corner(pos, size, area);
+            let (x1, y1) = (x0 + size.0, y0 + size.1);
+            pixels
+                .iter()
+                .filter(|p| p.0 > x0 - 6.0 && p.0 < x1 + 6.0 && p.1 > y0 - 6.0 && p.1 < y1 + 6.0)
+                .count()
+        };
+        LEGEND_POSITIONS
+            .iter()
+            .map(|pos| (pos.clone(), covered(pos)))
+            .min_by_key(|c| c.1)
+            .unwrap_or((SeriesLabelPosition::UpperLeft, 0))
+    }
+
+    /// When the legend would cover data wherever it goes, raises the top of
+    /// the y range so that it fits above the data (unless that would take
+    /// more than 70 % of the height: then it goes below the chart).
+    fn make_room_for_legend(&mut self) {
+        let Some((_, height)) = legend_size(self.series) else {
+            return;
+        };
+        let area = self.area_estimate();
+        if self.legend_position(area).1 == 0 {
+            return;
+        }
+        let free = (height + 15.0) / f64::from(area.1);
+        if free < 0.7 {
+            self.y_range = raise_top(self.y_range, self.log_y, free);
+        }
+    }
+
     /// Renders to a temporary sibling of `path` and renames it into place.
     fn write_atomically(&self, path: &Path) -> Result<()> {
         let tmp = tmp_sibling(path, ".png")?;
@@ -672,6 +891,9 @@ impl Plot<'_> {
         }
     }
 
+    /// Renders into `path` with axes `x` and `y`: the title, a colour bar
+    /// on the right for a field, then the chart, with the legend in a panel
+    /// below (the image taller) when it would cover data inside.
     fn render_in<X, Y>(&self, path: &Path, text: bool, x: X, y: Y) -> Result<()>
     where
         X: AsRangedCoord<Value = f64>,
@@ -679,18 +901,52 @@ impl Plot<'_> {
         X::CoordDescType: ValueFormatter<f64>,
         Y::CoordDescType: ValueFormatter<f64>,
     {
-        let draw_err = |e: &dyn std::fmt::Display| anyhow::anyhow!("drawing plot: {e}");
-        let root = BitMapBackend::new(path, PLOT_SIZE).into_drawing_area();
+        let panel = self.legend_panel(text);
+        let size = (PLOT_SIZE.0, PLOT_SIZE.1 + panel);
+        let root = BitMapBackend::new(path, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-        let mut builder = ChartBuilder::on(&root);
-        builder.margin(25);
-        if text {
-            builder
-                .caption(self.title, ("sans-serif", 30))
-                .x_label_area_size(60)
-                .y_label_area_size(95);
+        let (top, bottom) = root.split_vertically(PLOT_SIZE.1);
+        if panel > 0 {
+            draw_legend_panel(&bottom, self.series)?;
         }
-        let mut chart = builder.build_cartesian_2d(x, y).map_err(|e| draw_err(&e))?;
+        let body = if text {
+            top.titled(self.title, ("sans-serif", TITLE_FONT))
+                .map_err(|e| draw_err(&e))?
+        } else {
+            top
+        };
+        let main = match self.field {
+            Some(layer) => {
+                let (main, bar) = body.split_horizontally(PLOT_SIZE.0 - COLOR_BAR_WIDTH);
+                draw_color_bar(&bar, layer, text)?;
+                main
+            }
+            None => body,
+        };
+        self.draw_chart(&main, text, panel > 0, x, y)?;
+        root.present().map_err(|e| draw_err(&e))?;
+        Ok(())
+    }
+
+    /// Draws the axes, the field's cells, the series and, unless `below`
+    /// (then the legend has a panel of its own), the legend.
+    fn draw_chart<X, Y>(
+        &self,
+        area: &BitMapArea<'_>,
+        text: bool,
+        below: bool,
+        x: X,
+        y: Y,
+    ) -> Result<()>
+    where
+        X: AsRangedCoord<Value = f64>,
+        Y: AsRangedCoord<Value = f64>,
+        X::CoordDescType: ValueFormatter<f64>,
+        Y::CoordDescType: ValueFormatter<f64>,
+    {
+        let mut chart = chart_builder(area, text)
+            .build_cartesian_2d(x, y)
+            .map_err(|e| draw_err(&e))?;
         if text {
             // Log axes: no round-off snapping (span 0 disables it).
             let span = |(lo, hi): (f64, f64), log: bool| if log { 0.0 } else { hi - lo };
@@ -708,7 +964,8 @@ impl Plot<'_> {
                 .draw()
                 .map_err(|e| draw_err(&e))?;
         }
-        if let (Some((f, (lo, hi))), false, false) = (self.field, self.log_x, self.log_y) {
+        if let (Some(layer), false, false) = (self.field, self.log_x, self.log_y) {
+            let (f, (lo, hi)) = (layer.field, layer.range);
             let (nx, ny) = f.cells;
             let cells = (0..nx * ny).map(|k| {
                 let (i, j) = ((k % nx) as f64, (k / nx) as f64);
@@ -722,56 +979,202 @@ impl Plot<'_> {
             chart.draw_series(cells).map_err(|e| draw_err(&e))?;
         }
         for (i, s) in self.series.iter().enumerate() {
-            let color = COLORS[i % COLORS.len()];
-            let line = color.stroke_width(2);
-            let marker = color.filled();
-            let anno = match s.style {
-                Style::Line | Style::LineMarkers => chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), line))
-                    .map_err(|e| draw_err(&e))?,
-                Style::Markers => chart
-                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 5, marker)))
-                    .map_err(|e| draw_err(&e))?,
-            };
-            if text && !s.label.is_empty() {
-                anno.label(s.label.as_str());
-                match s.style {
-                    Style::Line => {
-                        anno.legend(move |(lx, ly)| {
-                            PathElement::new(vec![(lx, ly), (lx + 24, ly)], line)
-                        });
-                    }
-                    Style::Markers => {
-                        anno.legend(move |(lx, ly)| Circle::new((lx + 12, ly), 5, marker));
-                    }
-                    Style::LineMarkers => {
-                        anno.legend(move |(lx, ly)| {
-                            EmptyElement::at((lx, ly))
-                                + PathElement::new(vec![(0, 0), (24, 0)], line)
-                                + Circle::new((12, 0), 5, marker)
-                        });
-                    }
-                }
-            }
-            if s.style == Style::LineMarkers {
-                chart
-                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 5, marker)))
-                    .map_err(|e| draw_err(&e))?;
-            }
+            draw_one_series(&mut chart, s, COLORS[i % COLORS.len()], text)?;
         }
-        if text && self.series.iter().any(|s| !s.label.is_empty()) {
+        if text && !below && self.series.iter().any(|s| !s.label.is_empty()) {
+            let position = self.legend_position(chart.plotting_area().dim_in_pixel()).0;
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .label_font(("sans-serif", 18))
+                .position(position)
+                .label_font(("sans-serif", LEGEND_FONT))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .draw()
                 .map_err(|e| draw_err(&e))?;
         }
-        root.present().map_err(|e| draw_err(&e))?;
         Ok(())
     }
+}
+
+/// The chart layout of [`plot_xy`] and [`plot_field`] in `area`: margins
+/// and, with `text`, the axis label areas ([`Plot::AREA`] assumes these).
+fn chart_builder<'a, 'b, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    text: bool,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(MARGIN);
+    if text {
+        builder
+            .x_label_area_size(LABEL_AREA.0)
+            .y_label_area_size(LABEL_AREA.1);
+    }
+    builder
+}
+
+/// The drawing area of a PNG plot.
+type BitMapArea<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// A drawing error as an [`anyhow::Error`].
+fn draw_err(e: &dyn std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("drawing plot: {e}")
+}
+
+/// Draws one series (line, markers or both) and, with `text`, its legend
+/// entry.
+fn draw_one_series<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    s: &PlotSeries,
+    color: RGBColor,
+    text: bool,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate<From = (f64, f64)>,
+{
+    let line = color.stroke_width(2);
+    let marker = color.filled();
+    let markers = || s.points.iter().map(move |&p| Circle::new(p, 5, marker));
+    let anno = match s.style {
+        Style::Line | Style::LineMarkers => chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), line))
+            .map_err(|e| draw_err(&e))?,
+        Style::Markers => chart.draw_series(markers()).map_err(|e| draw_err(&e))?,
+    };
+    if text && !s.label.is_empty() {
+        let style = s.style;
+        anno.label(s.label.as_str())
+            .legend(move |at| legend_glyph(style, color, at));
+    }
+    if s.style == Style::LineMarkers {
+        chart.draw_series(markers()).map_err(|e| draw_err(&e))?;
+    }
+    Ok(())
+}
+
+/// A legend glyph: a line and a marker, either possibly invisible.
+type Glyph<DB> = plotters::element::ComposedElement<
+    (i32, i32),
+    DB,
+    PathElement<(i32, i32)>,
+    Circle<(i32, i32), i32>,
+>;
+
+/// The legend glyph of a series drawn in `style` and `color`, 24 px wide,
+/// its left end at `at`.
+fn legend_glyph<DB: DrawingBackend>(style: Style, color: RGBColor, at: (i32, i32)) -> Glyph<DB> {
+    let shown = |on: bool, s: ShapeStyle| if on { s } else { TRANSPARENT.filled() };
+    let line = shown(style != Style::Markers, color.stroke_width(2));
+    let marker = shown(style != Style::Line, color.filled());
+    EmptyElement::at(at)
+        + PathElement::new(vec![(0, 0), (24, 0)], line)
+        + Circle::new((12, 0), 5, marker)
+}
+
+/// The legend of `series` in a panel of its own (below a chart whose
+/// legend would cover data): one line per labelled series, in the
+/// chart's colours, framed.
+fn draw_legend_panel(area: &BitMapArea<'_>, series: &[PlotSeries]) -> Result<()> {
+    let Some((w, h)) = legend_size(series) else {
+        return Ok(());
+    };
+    let x0 = MARGIN as i32;
+    let frame = Rectangle::new([(x0, 0), (x0 + w as i32, h as i32)], BLACK);
+    area.draw(&frame).map_err(|e| draw_err(&e))?;
+    let font = ("sans-serif", LEGEND_FONT).into_font();
+    let style = font
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let line = 1.25 * f64::from(LEGEND_FONT);
+    let labelled = series
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !s.label.is_empty());
+    for (row, (i, s)) in labelled.enumerate() {
+        let y = (10.0 + line * (row as f64 + 0.5)) as i32;
+        let glyph = legend_glyph(s.style, COLORS[i % COLORS.len()], (x0 + 10, y));
+        area.draw(&glyph).map_err(|e| draw_err(&e))?;
+        area.draw_text(&s.label, &style, (x0 + 40, y))
+            .map_err(|e| draw_err(&e))?;
+    }
+    Ok(())
+}
+
+/// The colour bar of a field plot in `area`: a vertical strip of the
+/// field's colour scale with ticks and, with `text`, the field's label and
+/// its exact minimum and maximum below and above the strip. Its margins
+/// match the chart's, so the strip spans the chart's height.
+fn draw_color_bar(area: &BitMapArea<'_>, layer: FieldLayer<'_>, text: bool) -> Result<()> {
+    let (lo, hi) = layer.range;
+    let (b0, b1) = if lo < hi {
+        (lo, hi)
+    } else {
+        axis_range([lo, hi].into_iter().filter(|v| v.is_finite()), false)
+    };
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin_top(MARGIN)
+        .margin_bottom(MARGIN)
+        .margin_left(5)
+        .margin_right(10);
+    if text {
+        builder
+            .x_label_area_size(LABEL_AREA.0)
+            .right_y_label_area_size(COLOR_BAR_WIDTH - 65);
+    }
+    let mut chart = builder
+        .build_cartesian_2d(0.0..1.0, b0..b1)
+        .map_err(|e| draw_err(&e))?;
+    if text {
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(0)
+            .y_labels(6)
+            .y_desc(layer.label)
+            .y_label_formatter(&|v| tick_label(*v, b1 - b0))
+            .label_style(("sans-serif", 18))
+            .axis_desc_style(("sans-serif", 22))
+            .draw()
+            .map_err(|e| draw_err(&e))?;
+    }
+    let n = 200;
+    let strip = (0..n).map(|k| {
+        let v0 = b0 + (b1 - b0) * k as f64 / n as f64;
+        let v1 = b0 + (b1 - b0) * (k + 1) as f64 / n as f64;
+        Rectangle::new(
+            [(0.0, v0), (1.0, v1)],
+            CellField::color(0.5 * (v0 + v1), lo, hi).filled(),
+        )
+    });
+    chart.draw_series(strip).map_err(|e| draw_err(&e))?;
+    let frame = Rectangle::new([(0.0, b0), (1.0, b1)], BLACK.stroke_width(1));
+    chart
+        .draw_series(std::iter::once(frame))
+        .map_err(|e| draw_err(&e))?;
+    if text {
+        // The strip's corners in the area's own pixels.
+        let base = area.get_base_pixel();
+        let (x, top) = chart.backend_coord(&(0.0, b1));
+        let (_, bottom) = chart.backend_coord(&(0.0, b0));
+        let font = ("sans-serif", 16).into_font();
+        for (name, v, y, v_pos) in [
+            ("max", hi, top - 4, VPos::Bottom),
+            ("min", lo, bottom + 4, VPos::Top),
+        ] {
+            let style = font
+                .clone()
+                .into_text_style(area)
+                .pos(Pos::new(HPos::Left, v_pos));
+            area.draw_text(
+                &format!("{name} {}", tick_label(v, 0.0)),
+                &style,
+                (x - base.0, y - base.1),
+            )
+            .map_err(|e| draw_err(&e))?;
+        }
+    }
+    Ok(())
 }
 
 /// Start and end of the generated block in `RESULTS.md`.
@@ -922,25 +1325,129 @@ mod tests {
 
     #[test]
     fn slope_triangle_has_the_rounded_order_below_the_data() {
-        let pts = |e: [f64; 3]| -> Vec<Point> {
-            [0.1, 0.05, 0.025]
-                .iter()
-                .zip(e)
-                .map(|(&h, e)| Point::new(h, e, 0.0, 0.0))
-                .collect()
+        let s = |label: &str, e: [f64; 3]| PlotSeries {
+            label: label.into(),
+            points: [0.1, 0.05, 0.025].into_iter().zip(e).collect(),
+            style: Style::LineMarkers,
         };
-        let s = vec![
-            Series::new("a", "L1", pts([4e-2, 1.1e-2, 2.6e-3])),
-            Series::new("b", "L1", pts([1e-3, 5e-4, 2.5e-4])),
+        // The median slope (2 of 0, 1, 2, 2.1) names the triangle.
+        let series = [
+            s("", [1.0, 1.0, 1.0]),
+            s("flat", [3e-3, 3e-3, 3e-3]),
+            s("a", [4e-2, 1.1e-2, 2.6e-3]),
+            s("b", [1e-3, 5e-4, 2.5e-4]),
+            s("c", [4e-2, 1e-2, 2.3e-3]),
         ];
-        let t = slope_triangle(&s).expect("triangle");
+        let t = slope_triangle(&series).expect("triangle");
         assert_eq!(t.label, "slope 2");
         let (h0, y0) = t.points[0];
         assert_eq!(h0, 0.025);
         assert!(y0 < 2.5e-4);
         let (h1, y1) = t.points[2];
         assert!(((y1 / y0).ln() / (h1 / h0).ln() - 2.0).abs() < 1e-12);
-        assert!(slope_triangle(&[Series::new("c", "L1", vec![])]).is_none());
+        // Work-precision (error falling with cost): a negative slope.
+        let t = slope_triangle(&[s("w", [1e-4, 4e-4, 1.6e-3])]).expect("triangle");
+        assert_eq!(t.label, "slope -2");
+        assert!(slope_triangle(&[s("c", [f64::NAN, -1.0, 1.0])]).is_none());
+        assert!(slope_triangle(&[]).is_none());
+    }
+
+    #[test]
+    fn fit_line_is_fit_order_in_logs() {
+        assert_eq!(
+            fit_line(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]),
+            Some((2.0, 1.0))
+        );
+        assert_eq!(fit_line(&[(1.0, 1.0), (1.0, 3.0)]), None);
+        assert_eq!(fit_line(&[(1.0, 1.0)]), None);
+        let pts = power_law(3.0, 1.5, &[0.1, 0.05, 0.025]);
+        let logs: Vec<(f64, f64)> = pts.iter().map(|p| (p.h.ln(), p.error.ln())).collect();
+        assert_eq!(fit_line(&logs).map(|f| f.0), Some(fit_order(&pts)));
+    }
+
+    /// A scatter plot of `points` on the unit square (or on `[1e-3, 1]²`
+    /// with log axes), with a legend entry.
+    fn scatter(points: Vec<(f64, f64)>, log: bool) -> (Vec<PlotSeries>, (f64, f64)) {
+        let series = vec![PlotSeries {
+            label: "data".into(),
+            points,
+            style: Style::Markers,
+        }];
+        (series, if log { (1e-3, 1.0) } else { (0.0, 1.0) })
+    }
+
+    fn plot_of<'a>(series: &'a [PlotSeries], range: (f64, f64), log: bool) -> Plot<'a> {
+        Plot {
+            title: "legend",
+            x_label: "x [m]",
+            y_label: "y [m]",
+            log_x: log,
+            log_y: log,
+            x_range: range,
+            y_range: range,
+            series,
+            field: None,
+        }
+    }
+
+    #[test]
+    fn legend_goes_to_the_empty_corner() {
+        // A 6 x 6 block of points in each corner but the lower right.
+        let block = |x0: f64, y0: f64| {
+            (0..36).map(move |k| (x0 + 0.05 * (k % 6) as f64, y0 + 0.05 * (k / 6) as f64))
+        };
+        let lin: Vec<(f64, f64)> = block(0.0, 0.72)
+            .chain(block(0.72, 0.72))
+            .chain(block(0.0, 0.0))
+            .collect();
+        let (series, range) = scatter(lin.clone(), false);
+        let (pos, covered) = plot_of(&series, range, false).legend_position(Plot::AREA);
+        assert_eq!((pos, covered), (SeriesLabelPosition::LowerRight, 0));
+        // The same layout on log axes: x -> 1e-3^(1 - x).
+        let to_log = |(x, y): (f64, f64)| (1e-3f64.powf(1.0 - x), 1e-3f64.powf(1.0 - y));
+        let (series, range) = scatter(lin.into_iter().map(to_log).collect(), true);
+        let (pos, covered) = plot_of(&series, range, true).legend_position(Plot::AREA);
+        assert_eq!((pos, covered), (SeriesLabelPosition::LowerRight, 0));
+    }
+
+    #[test]
+    fn estimated_plot_area_is_the_charts() {
+        let mut buf = vec![0u8; (PLOT_SIZE.0 * PLOT_SIZE.1 * 3) as usize];
+        let root = BitMapBackend::with_buffer(&mut buf, PLOT_SIZE).into_drawing_area();
+        let body = root
+            .titled("a title", ("sans-serif", TITLE_FONT))
+            .expect("fonts");
+        let chart = chart_builder(&body, true)
+            .build_cartesian_2d(0.0..1.0, 0.0..1.0)
+            .unwrap();
+        let (w, h) = chart.plotting_area().dim_in_pixel();
+        assert_eq!(w, Plot::AREA.0);
+        assert!(h.abs_diff(Plot::AREA.1) <= 6, "{h} vs {}", Plot::AREA.1);
+    }
+
+    #[test]
+    fn legend_gets_room_above_data_that_fills_the_plot() {
+        let wave: Vec<(f64, f64)> = (0..=400)
+            .map(|k| {
+                (
+                    k as f64 / 400.0,
+                    0.5 + 0.45 * (40.0 * k as f64 / 400.0).sin(),
+                )
+            })
+            .collect();
+        let series = vec![PlotSeries {
+            label: "a line that crosses every corner".into(),
+            points: wave,
+            style: Style::Line,
+        }];
+        let mut plot = plot_of(&series, (0.0, 1.0), false);
+        assert!(plot.legend_position(Plot::AREA).1 > 0);
+        plot.make_room_for_legend();
+        assert!(plot.y_range.1 > 1.0);
+        assert_eq!(
+            plot.legend_position(Plot::AREA),
+            (SeriesLabelPosition::UpperLeft, 0)
+        );
     }
 
     const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
@@ -1212,11 +1719,43 @@ mod tests {
             values: (0..8).map(f64::from).collect(),
         };
         let path = dir.join("field.png");
-        plot_field(&path, "field", "x", "y", &field, &[]).unwrap();
+        plot_field(&path, "field", "x [m]", "y [m]", "v [-]", &field, &[]).unwrap();
         assert_png(&path);
         assert_eq!(CellField::color(0.0, 0.0, 7.0), RGBColor(40, 70, 200));
         assert_eq!(CellField::color(3.5, 0.0, 7.0), RGBColor(255, 255, 255));
         assert_eq!(CellField::color(7.0, 0.0, 7.0), RGBColor(200, 30, 30));
+    }
+
+    #[test]
+    fn color_bar_runs_from_blue_at_the_minimum_to_red_at_the_maximum() {
+        let (w, h) = (COLOR_BAR_WIDTH, PLOT_SIZE.1);
+        let mut buf = vec![0u8; (w * h * 3) as usize];
+        let field = CellField {
+            lower: (0.0, 0.0),
+            h: (1.0, 1.0),
+            cells: (1, 1),
+            values: vec![0.0],
+        };
+        let layer = FieldLayer {
+            field: &field,
+            range: (-1.0, 3.0),
+            label: "v [-]",
+        };
+        {
+            let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+            area.fill(&WHITE).unwrap();
+            draw_color_bar(&area, layer, true).expect("colour bar");
+            area.present().unwrap();
+        }
+        let rgb = |x: u32, y: u32| {
+            let i = 3 * (y * w + x) as usize;
+            (buf[i], buf[i + 1], buf[i + 2])
+        };
+        // The strip: 5 px in from the left, MARGIN below the top, above the
+        // x label area.
+        let (top, bottom) = (rgb(20, MARGIN + 4), rgb(20, h - MARGIN - LABEL_AREA.0 - 4));
+        assert!(top.0 > 190 && top.2 < 60, "top {top:?}");
+        assert!(bottom.2 > 190 && bottom.0 < 60, "bottom {bottom:?}");
     }
 
     #[test]

@@ -209,7 +209,7 @@ pub fn piston_adiabatic(quick: bool) -> anyhow::Result<StudyResult> {
     plot_xy(
         &dir.join("piston_adiabatic_fig4.png"),
         "Guilkey Fig. 4: pressure at the closed end vs compression ratio",
-        "V1/V2",
+        "V1/V2 [-]",
         "p [MPa]",
         false,
         false,
@@ -330,6 +330,7 @@ fn wedge_fig5(
         &format!("Fig. 5: pressure [Pa], Mach 3 wedge, h = {h}"),
         "x [m]",
         "y [m]",
+        "p [Pa]",
         pressure,
         &series,
     )?;

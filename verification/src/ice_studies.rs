@@ -1260,7 +1260,7 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
         &dir.join("ice_low_mach_work_precision.png"),
         "low-Mach periodic vortex: RMS velocity error vs wall time",
         "wall time [s]",
-        "RMS velocity error",
+        "RMS velocity error [-]",
         true,
         true,
         &plot,

@@ -82,7 +82,7 @@ pub fn cylinder_implicit(quick: bool) -> anyhow::Result<StudyResult> {
         &dir.join("cylinder_implicit_work_precision.png"),
         "Pressurised cylinder: Eq. 43 error against wall time",
         "wall time [s]",
-        "Eq. 43 error",
+        "Eq. 43 error [-]",
         true,
         true,
         &[

@@ -249,7 +249,7 @@ pub fn impm_vs_explicit(quick: bool) -> anyhow::Result<StudyResult> {
         &dir.join("impm_vs_explicit_work_precision.png"),
         "work-precision: implicit vs explicit MPM",
         "wall time [s]",
-        "error",
+        "error [-] (Eq. 43; bar: RMS / amplitude)",
         true,
         true,
         &[

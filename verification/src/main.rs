@@ -1,5 +1,6 @@
 //! `verification`: runs convergence and work-precision studies and writes
-//! `results/STUDY.{json,csv,png}` (full runs also refresh `RESULTS.md`).
+//! `results/STUDY.{json,csv,png}` (full runs also refresh `RESULTS.md`;
+//! `--quick` runs write to `results/quick/` and never overwrite them).
 //! `verification bench_report` writes `bench/RESULTS.md` from criterion's
 //! results instead (`verification::bench_report`).
 
@@ -21,7 +22,10 @@ struct Args {
     /// Coarse resolutions only (what the test suite runs).
     #[arg(long)]
     quick: bool,
-    /// Output folder (default: verification/results, or verification/results/quick).
+    /// Output folder (default: verification/results); `--quick` writes to
+    /// its `quick/` subfolder, so it never overwrites the full results.
+    /// The extra figures some studies draw always go to
+    /// verification/results (or results/quick).
     #[arg(long)]
     out: Option<PathBuf>,
 }
@@ -49,13 +53,8 @@ fn main() -> anyhow::Result<()> {
         println!("wrote {}", root.join("RESULTS.md").display());
         return Ok(());
     }
-    let out = args.out.clone().unwrap_or_else(|| {
-        if args.quick {
-            root.join("results/quick")
-        } else {
-            root.join("results")
-        }
-    });
+    let base = args.out.clone().unwrap_or_else(|| root.join("results"));
+    let out = if args.quick { base.join("quick") } else { base };
     let chosen: Vec<_> = STUDIES
         .iter()
         .filter(|(n, _, _)| args.study == "all" || *n == args.study)
