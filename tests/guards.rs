@@ -617,3 +617,88 @@ fn os_errors_name_the_path_once() {
         .count();
     assert_eq!(os, 1, "the OS error once: {err}");
 }
+
+/// The watchdog's cell scan (a branch-free pass over each interior x-row,
+/// then the per-cell search) finds each impossible value it checks, in
+/// the first row's last cell and in a middle row, and passes the clean
+/// state.
+fn poison_every_cell_field<const D: usize>(scene: &Scene) {
+    use mpmice::driver::model::Location;
+    use mpmice::driver::models::arrays::cell_watchdog;
+    let (s, _) = mpmice::scene::build_fluid_run::<D>(scene).expect("fluid");
+    assert!(cell_watchdog(&s).is_none(), "the initial state is good");
+    let (rows, n) = (&s.layout.rows, s.layout.cells[0]);
+    type Poison<const D: usize> = fn(&mut mpmice::ice::IceState<D>, usize);
+    let cases: [(&str, Poison<D>); 6] = [
+        ("mass", |s, c| s.cells[0].mass[c] = -1e-300),
+        ("velocity", |s, c| s.cells[0].velocity[c][D - 1] = f64::NAN),
+        ("temperature (internal energy)", |s, c| {
+            s.cells[0].temperature[c] = 0.0
+        }),
+        ("specific volume (1/density)", |s, c| {
+            s.cells[0].sp_vol[c] = f64::INFINITY
+        }),
+        ("volume fraction", |s, c| s.cells[0].vol_frac[c] = f64::NAN),
+        ("pressure", |s, c| s.pressure[c] = f64::NEG_INFINITY),
+    ];
+    for c in [rows[0] + n - 1, rows[rows.len() / 2] + n / 2] {
+        for (field, poison) in cases {
+            let mut bad = s.clone();
+            poison(&mut bad, c);
+            let v = cell_watchdog(&bad).unwrap_or_else(|| panic!("{field} at cell {c} missed"));
+            assert_eq!(v.field, field);
+            assert!(matches!(v.at, Location::Cell(k, _) if k == c), "{v}");
+        }
+    }
+}
+
+#[test]
+fn the_cell_watchdog_finds_every_impossible_value() {
+    poison_every_cell_field::<1>(&case("sod.toml"));
+    // 3D: 200 × 2 × 2 cells, four interior x-rows.
+    poison_every_cell_field::<3>(&case("sod_3d.toml"));
+}
+
+#[test]
+fn the_particle_watchdog_finds_every_impossible_value() {
+    use mpmice::driver::model::Location;
+    use mpmice::driver::models::arrays::particle_watchdog;
+    let mut run = mpmice::scene::build_solid_run::<2>(&case("two_disks.toml")).expect("solid");
+    let n = run.particles.len();
+    run.particles.damage = vec![0.0; n];
+    let mats = run.materials.clone();
+    assert!(particle_watchdog(&run.particles, &mats).is_none());
+    type Poison = fn(&mut mpmice::mpm::Particles<2>, usize);
+    let cases: [(&str, Poison); 9] = [
+        ("position", |p, i| p.x[i][1] = f64::INFINITY),
+        ("velocity", |p, i| p.v[i][0] = f64::NAN),
+        ("mass", |p, i| p.mass[i] = 0.0),
+        ("volume", |p, i| p.vol[i] = -1.0),
+        ("J", |p, i| p.f[i][(0, 0)] = -p.f[i][(0, 0)]),
+        ("stress", |p, i| p.stress[i][(2, 2)] = f64::NAN),
+        ("temperature", |p, i| p.temperature[i] = f64::NAN),
+        ("plastic_strain", |p, i| p.plastic_strain[i] = -1e-9),
+        ("damage", |p, i| p.damage[i] = 1.5),
+    ];
+    // The first and last particle of the 4096-particle chunks the fast pass
+    // sweeps, and the very last particle.
+    for i in [0, 4095, 4096, n - 1] {
+        for (field, poison) in cases {
+            let mut p = run.particles.clone();
+            poison(&mut p, i);
+            let v = particle_watchdog(&p, &mats)
+                .unwrap_or_else(|| panic!("{field} at particle {i} missed"));
+            assert_eq!(v.field, field);
+            assert!(matches!(v.at, Location::Particle(k) if k == i), "{v}");
+            assert_eq!(v.material, "elastic");
+        }
+    }
+    // A gas point's internal energy (York's Sod tube of gas points).
+    let gas = mpmice::scene::build_solid_run::<2>(&case("york_sod.toml")).expect("gas");
+    let mut p = gas.particles.clone();
+    assert!(particle_watchdog(&p, &gas.materials).is_none());
+    let i = p.len() / 2;
+    p.work[i] = 0.0;
+    let v = particle_watchdog(&p, &gas.materials).expect("found");
+    assert_eq!((v.field, v.at), ("internal_energy", Location::Particle(i)));
+}

@@ -155,7 +155,7 @@ impl SolidMaterial {
     /// Largest stable explicit step of one particle in a grid of smallest
     /// cell size `h`: `h / (c + |v|)` for a solid, [`GasPoint::dt_limit`]
     /// for a gas point. `p` gives the particle's state.
-    #[inline]
+    #[inline(always)]
     pub fn dt_limit(&self, h: f64, p: &PointState, c_max: f64) -> f64 {
         let rho = p.mass / p.vol;
         match &self.model {

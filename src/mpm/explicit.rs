@@ -172,6 +172,7 @@ pub fn stable_dt_stiffened<const D: usize>(
 /// number: its material's `dt_limit` at the smallest cell size `hmin` (gas
 /// points' `c_max` from [`gas_sound_speed_max`]) over `√stiffening[p]`
 /// where `stiffening` has an entry for it.
+#[inline(always)]
 pub fn particle_dt_limit<const D: usize>(
     materials: &[SolidMaterial],
     particles: &Particles<D>,

@@ -17,7 +17,9 @@ use crate::output::checkpoint::{Checkpoint, CheckpointError};
 /// Stores `D`-vectors as an `[n, D]` array.
 pub fn put_vectors<const D: usize>(ck: &mut Checkpoint, name: &str, v: &[SVector<f64, D>]) {
     ck.put_f64_with(name, vec![v.len(), D], |buf| {
-        buf.extend(v.iter().flat_map(|x| x.iter().copied()));
+        for x in v {
+            buf.extend_from_slice(x.as_slice());
+        }
     });
 }
 
@@ -37,11 +39,12 @@ pub fn take_vectors<const D: usize>(
 /// Stores 3×3 matrices as an `[n, 3, 3]` array (row-major, as NumPy reads
 /// it).
 pub fn put_matrices(ck: &mut Checkpoint, name: &str, m: &[Matrix3<f64>]) {
+    // Row-major: nalgebra stores columns, so each matrix goes out
+    // transposed.
     ck.put_f64_with(name, vec![m.len(), 3, 3], |buf| {
-        buf.extend(
-            m.iter()
-                .flat_map(|a| (0..9).map(move |k| a[(k / 3, k % 3)])),
-        );
+        for a in m {
+            buf.extend_from_slice(a.transpose().as_slice());
+        }
     });
 }
 
@@ -339,11 +342,49 @@ fn particle_violation<const D: usize>(
     None
 }
 
+/// Whether every particle passes [`particle_violation`]: the watchdog's
+/// fast pass, branch-free sweeps per field over chunks of particles (as
+/// [`cells_pass`]); only a failing state pays for the search that names the
+/// particle.
+fn particles_pass<const D: usize>(p: &Particles<D>, materials: &[SolidMaterial]) -> bool {
+    const CHUNK: usize = 4096;
+    let any_gas = materials.iter().any(|m| m.gas().is_some());
+    (0..p.len().div_ceil(CHUNK)).into_par_iter().all(|c| {
+        let r = c * CHUNK..((c + 1) * CHUNK).min(p.len());
+        let j_ok = p.f[r.clone()].iter().fold(true, |ok, f| {
+            let j = f.determinant();
+            ok & (j > 0.0) & (j <= f64::MAX)
+        });
+        let stress_ok = p.stress[r.clone()].iter().fold(true, |ok, s| {
+            ok & s.iter().fold(true, |o, &x| o & (x.abs() <= f64::MAX))
+        });
+        let damage_ok = p
+            .damage
+            .get(r.clone())
+            .is_none_or(|d| d.iter().fold(true, |ok, &x| ok & (0.0..=1.0).contains(&x)));
+        all_finite_vectors(&p.x[r.clone()])
+            && all_finite_vectors(&p.v[r.clone()])
+            && all_positive(&p.mass[r.clone()])
+            && all_positive(&p.vol[r.clone()])
+            && j_ok
+            && stress_ok
+            && all_positive(&p.temperature[r.clone()])
+            && all_nonnegative(&p.plastic_strain[r.clone()])
+            && damage_ok
+            && (!any_gas
+                || r.into_iter()
+                    .all(|i| particle_violation(p, i, materials).is_none()))
+    })
+}
+
 /// The first particle (lowest index) with an impossible value.
 pub fn particle_watchdog<const D: usize>(
     p: &Particles<D>,
     materials: &[SolidMaterial],
 ) -> Option<Violation> {
+    if particles_pass(p, materials) {
+        return None;
+    }
     let i = (0..p.len())
         .into_par_iter()
         .find_first(|&i| !particle_ok(p, i, materials))?;
@@ -428,10 +469,60 @@ fn cell_violation<const D: usize>(
     None
 }
 
+/// Whether every value is finite and ≥ 0 (`x ∈ [0, MAX]` fails on NaN and
+/// ±∞). Non-short-circuit `&` over a contiguous slice: no branch per
+/// value, so the compiler vectorises it.
+fn all_nonnegative(v: &[f64]) -> bool {
+    v.iter()
+        .fold(true, |ok, &x| ok & (0.0..=f64::MAX).contains(&x))
+}
+
+/// Whether every value is finite and > 0 (as [`all_nonnegative`]).
+fn all_positive(v: &[f64]) -> bool {
+    v.iter()
+        .fold(true, |ok, &x| ok & (x > 0.0) & (x <= f64::MAX))
+}
+
+/// Whether every value is finite (as [`all_nonnegative`]).
+fn all_finite(v: &[f64]) -> bool {
+    v.iter().fold(true, |ok, &x| ok & (x.abs() <= f64::MAX))
+}
+
+/// Whether every component of every vector is finite.
+fn all_finite_vectors<const D: usize>(v: &[SVector<f64, D>]) -> bool {
+    v.iter().fold(true, |ok, x| {
+        ok & x.iter().fold(true, |o, &c| o & (c.abs() <= f64::MAX))
+    })
+}
+
+/// Whether every interior cell passes [`cell_violation`] for every material
+/// and has a finite pressure: the watchdog's fast pass, one branch-free
+/// sweep per field over each contiguous interior x-row (about 1 ns a
+/// value, where the per-cell [`cell_violation`] test with its early exits
+/// took 9 ns a cell). Only a failing state pays for the search of
+/// [`cell_watchdog`] that names the site.
+fn cells_pass<const D: usize>(s: &IceState<D>) -> bool {
+    let n = s.layout.cells[0];
+    s.layout.rows.par_iter().all(|&r0| {
+        let r = r0..r0 + n;
+        all_finite(&s.pressure[r.clone()])
+            && s.cells.iter().all(|mc| {
+                all_nonnegative(&mc.mass[r.clone()])
+                    && all_finite_vectors(&mc.velocity[r.clone()])
+                    && all_positive(&mc.temperature[r.clone()])
+                    && all_positive(&mc.sp_vol[r.clone()])
+                    && all_nonnegative(&mc.vol_frac[r.clone()])
+            })
+    })
+}
+
 /// The first interior cell (in layout order, then material order) with an
 /// impossible value; `names[r]` names ICE material `r`; the pressure must be
 /// finite.
 pub fn cell_watchdog<const D: usize>(s: &IceState<D>) -> Option<Violation> {
+    if cells_pass(s) {
+        return None;
+    }
     let interior = &s.layout.interior;
     let bad = |c: usize| {
         !s.pressure[c].is_finite() || s.cells.iter().any(|mc| cell_violation(mc, c).is_some())
