@@ -1,0 +1,94 @@
+//! What the run loop costs over a bare stepping loop (issue 14), one
+//! configuration per process so that `/usr/bin/time -f %U` gives its CPU
+//! time:
+//!
+//! `cargo run --release --example run_loop_cost -- CASE CELLS MODE`
+//!
+//! `CASE` is `sod` (1D explicit ICE, `cases/sod.toml` to t = 0.2) or
+//! `two_disks` (2D explicit MPM, `cases/two_disks.toml` to t = 1),
+//! `CELLS` the cells per direction, no snapshot files in either. `MODE`:
+//! - `bare`: `Model::step` in a plain loop (this crate's instantiation);
+//! - `loop`: `run_scene` with the scene's defaults (watchdog, history);
+//! - `no_watchdog`: the same with `time.watchdog_interval = 0`;
+//! - `minimal`: no watchdog and a single history row;
+//! - `local_loop`: `run_model` on a model built here (`two_disks` only): the
+//!   loop instantiated in this crate, as `bare` is, so the difference from
+//!   `bare` is the loop's own work and not the library's code generation.
+//!
+//! Prints the wall time and the step count.
+
+use std::time::Instant;
+
+use mpmice::driver::models::{ExplicitSolid, Fluid};
+use mpmice::driver::{run_model, run_scene, DtRequest, Model, RunOptions};
+use mpmice::ice::{self, IceWorkspace};
+use mpmice::scene::{self, Scene};
+
+/// Steps `m` to `end` with the largest stable steps.
+fn bare<M: Model>(m: &mut M, end: f64) -> anyhow::Result<u64> {
+    while m.time() < end * (1.0 - 1e-12) {
+        let left = end - m.time();
+        m.step(DtRequest {
+            value: left,
+            exact: false,
+        })?;
+    }
+    Ok(m.steps())
+}
+
+fn main() -> anyhow::Result<()> {
+    let a: Vec<String> = std::env::args().collect();
+    let case = a.get(1).map_or("sod", String::as_str);
+    let cells: usize = a.get(2).map_or(Ok(3200), |s| s.parse())?;
+    let mode = a.get(3).map_or("loop", String::as_str);
+    let mut sc: Scene = scene::load(std::path::Path::new(&format!("cases/{case}.toml")))?;
+    sc.grid.cells = vec![cells; sc.grid.dim];
+    sc.output.formats = vec![];
+    if case == "two_disks" {
+        sc.time.end = 1.0;
+    }
+    match mode {
+        "no_watchdog" => sc.time.watchdog_interval = 0,
+        "minimal" | "local_loop" => {
+            sc.time.watchdog_interval = 0;
+            sc.output.history_interval = Some(sc.time.end);
+        }
+        _ => {}
+    }
+    let out = std::env::temp_dir().join(format!("run_loop_cost_{}", std::process::id()));
+    let opts = RunOptions::quiet(&out, 1);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let start = Instant::now();
+    let steps = pool.install(|| -> anyhow::Result<u64> {
+        match (mode, case) {
+            ("bare", "two_disks") => bare(
+                &mut ExplicitSolid {
+                    run: scene::build_solid_run::<2>(&sc)?,
+                },
+                sc.time.end,
+            ),
+            ("bare", _) => {
+                let (mut state, params) = scene::build_fluid_run::<1>(&sc)?;
+                ice::equilibrate(&mut state, &params)?;
+                let ws = IceWorkspace::new(&state);
+                bare(&mut Fluid { state, params, ws }, sc.time.end)
+            }
+            ("local_loop", "two_disks") => {
+                let mut m = ExplicitSolid {
+                    run: scene::build_solid_run::<2>(&sc)?,
+                };
+                Ok(run_model(&mut m, &sc, &opts, 1)?.steps)
+            }
+            ("loop" | "no_watchdog" | "minimal", _) => Ok(run_scene(&sc, &opts)?.steps),
+            _ => {
+                anyhow::bail!("MODE: bare | loop | no_watchdog | minimal | local_loop (two_disks)")
+            }
+        }
+    })?;
+    println!(
+        "{case} {cells} {mode}: {steps} steps, {:.3} s",
+        start.elapsed().as_secs_f64()
+    );
+    let _ = std::fs::remove_dir_all(&out);
+    Ok(())
+}
