@@ -714,13 +714,15 @@ impl<const D: usize> CoupledRun<D> {
 
     /// Largest stable time step: the ICE limit over all materials (the
     /// solids' sound speeds included) and the MPM limit of every
-    /// deformable field.
+    /// deformable field; with the semi-implicit pressure, at most
+    /// `max_dt_growth` times the last accepted step (as a fluid-only run).
     pub fn stable_dt(&self) -> f64 {
-        let factor = self
-            .ice
-            .implicit
-            .as_ref()
-            .map_or(1.0, |sp| sp.sound_speed_factor);
+        let implicit = self.ice.implicit.as_ref();
+        let factor = implicit.map_or(1.0, |sp| sp.sound_speed_factor);
+        let growth = match (implicit, self.ws.last_dt()) {
+            (Some(sp), Some(last)) => sp.max_dt_growth * last,
+            _ => f64::INFINITY,
+        };
         // Explicit: every material's sound speed (a deformable solid's too:
         // Eq. 29 in cells it shares; not a rigid one's); semi-implicit:
         // advection only (factor 0 by default) — the solid fields stay
@@ -742,7 +744,7 @@ impl<const D: usize> CoupledRun<D> {
             .iter()
             .map(|r| r.dt_limit)
             .fold(f64::INFINITY, f64::min);
-        fluid_dt.min(solid_dt).min(burn_dt)
+        fluid_dt.min(solid_dt).min(burn_dt).min(growth)
     }
 
     /// Accumulated MPM phase times, summed over the fields.
@@ -770,6 +772,7 @@ impl<const D: usize> CoupledRun<D> {
             return Err(self.fail(format!("time step is {dt}")));
         }
         let info = self.step_retried(dt)?;
+        self.ws.set_last_dt(info.dt);
         self.steps += 1;
         Ok(info)
     }
@@ -864,6 +867,7 @@ impl<const D: usize> CoupledRun<D> {
             return Err(self.fail(format!("time step is {dt}")));
         }
         let info = self.step_retried(dt)?;
+        self.ws.set_last_dt(info.dt);
         self.steps += 1;
         Ok(info)
     }

@@ -20,6 +20,12 @@ impl<const D: usize> IceWorkspace<D> {
         &self.accel
     }
 
+    /// Records an accepted step's Δt (a coupled step, which runs the ICE
+    /// stages itself), so that the next semi-implicit step grows from it.
+    pub fn set_last_dt(&mut self, dt: f64) {
+        self.last_dt = Some(dt);
+    }
+
     /// Restores what [`Self::last_dt`] and [`Self::accelerations`] returned.
     pub fn restore_carried(&mut self, last_dt: Option<f64>, accel: Vec<Vec<SVector<f64, D>>>) {
         self.last_dt = last_dt;
