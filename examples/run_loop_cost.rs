@@ -13,7 +13,10 @@
 //! - `minimal`: no watchdog and a single history row;
 //! - `local_loop`: `run_model` on a model built here (`two_disks` only): the
 //!   loop instantiated in this crate, as `bare` is, so the difference from
-//!   `bare` is the loop's own work and not the library's code generation.
+//!   `bare` is the loop's own work and not the library's code generation;
+//! - `parts`: `bare`, then the mean time of one watchdog scan, one copy of
+//!   the state into a checkpoint (what the loop keeps as the last good
+//!   state) and one history row, over 20 calls each.
 //!
 //! Prints the wall time and the step count.
 
@@ -23,6 +26,36 @@ use mpmice::driver::models::{ExplicitSolid, Fluid};
 use mpmice::driver::{run_model, run_scene, DtRequest, Model, RunOptions};
 use mpmice::ice::{self, IceWorkspace};
 use mpmice::scene::{self, Scene};
+
+/// Mean seconds of one call of `f` over `n` calls.
+fn mean_s(n: u32, mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    for _ in 0..n {
+        f();
+    }
+    start.elapsed().as_secs_f64() / f64::from(n)
+}
+
+/// Prints what one watchdog scan, one state copy and one history row of
+/// `m` cost.
+fn parts<M: Model>(m: &M) {
+    let mut ck = mpmice::output::checkpoint::Checkpoint::new(&m.kind(), "", 0, 0.0);
+    let scan = mean_s(20, || {
+        std::hint::black_box(m.watchdog());
+    });
+    let copy = mean_s(20, || m.save(&mut ck));
+    let mut row = Vec::new();
+    let history = mean_s(20, || {
+        row.clear();
+        m.history_row(&mut row);
+    });
+    println!(
+        "watchdog scan {:.3} ms, state copy {:.3} ms, history row {:.3} ms",
+        1e3 * scan,
+        1e3 * copy,
+        1e3 * history
+    );
+}
 
 /// Steps `m` to `end` with the largest stable steps.
 fn bare<M: Model>(m: &mut M, end: f64) -> anyhow::Result<u64> {
@@ -61,17 +94,26 @@ fn main() -> anyhow::Result<()> {
     let start = Instant::now();
     let steps = pool.install(|| -> anyhow::Result<u64> {
         match (mode, case) {
-            ("bare", "two_disks") => bare(
-                &mut ExplicitSolid {
+            ("bare" | "parts", "two_disks") => {
+                let mut m = ExplicitSolid {
                     run: scene::build_solid_run::<2>(&sc)?,
-                },
-                sc.time.end,
-            ),
-            ("bare", _) => {
+                };
+                let steps = bare(&mut m, sc.time.end)?;
+                if mode == "parts" {
+                    parts(&m);
+                }
+                Ok(steps)
+            }
+            ("bare" | "parts", _) => {
                 let (mut state, params) = scene::build_fluid_run::<1>(&sc)?;
                 ice::equilibrate(&mut state, &params)?;
                 let ws = IceWorkspace::new(&state);
-                bare(&mut Fluid { state, params, ws }, sc.time.end)
+                let mut m = Fluid { state, params, ws };
+                let steps = bare(&mut m, sc.time.end)?;
+                if mode == "parts" {
+                    parts(&m);
+                }
+                Ok(steps)
             }
             ("local_loop", "two_disks") => {
                 let mut m = ExplicitSolid {
