@@ -247,14 +247,19 @@ mod tests {
     use super::*;
     use crate::grid::Boundary;
 
-    #[test]
-    fn parallel_binning_equals_a_serial_stable_sort() {
-        let grid = Grid::<2>::new(
+    /// The unit square with `cells` cells and free walls.
+    fn free_grid(cells: [usize; 2]) -> Grid<2> {
+        Grid::new(
             SVector::zeros(),
             SVector::repeat(1.0),
-            [37, 50],
+            cells,
             [[Boundary::Free; 2]; 2],
-        );
+        )
+    }
+
+    #[test]
+    fn parallel_binning_equals_a_serial_stable_sort() {
+        let grid = free_grid([37, 50]);
         // 30 000 pseudo-random positions: several chunks, every slab.
         let mut state = 12345u64;
         let mut rnd = || {
@@ -288,12 +293,7 @@ mod tests {
     /// an odd slab starts only after both its even neighbours have ended.
     #[test]
     fn odd_slabs_wait_for_their_even_neighbours() {
-        let grid = Grid::<2>::new(
-            SVector::zeros(),
-            SVector::repeat(1.0),
-            [8, 37],
-            [[Boundary::Free; 2]; 2],
-        );
+        let grid = free_grid([8, 37]);
         let x: Vec<SVector<f64, 2>> = (0..5000)
             .map(|p| SVector::from([0.5, ((p * 7919) % 5000) as f64 / 5000.0]))
             .collect();
