@@ -220,9 +220,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     sum.n_cells, sum.n_fluid_materials, sum.cell_steps_per_s
                 )
             };
+            let peak = sum.peak_memory_bytes.map_or(String::new(), |b| {
+                let per = sum
+                    .peak_memory_per_particle
+                    .map_or(String::new(), |p| format!(", {p:.0} B a particle"));
+                format!(
+                    "; peak memory {}{per}",
+                    mpmice::driver::memory::bytes(b as f64)
+                )
+            });
             writeln!(
                 std::io::stdout(),
-                "{}: {} steps to t = {:.6e} in {:.2} s ({rate} on {} threads)",
+                "{}: {} steps to t = {:.6e} in {:.2} s ({rate} on {} threads{peak})",
                 scene.display(),
                 sum.steps,
                 sum.final_time,

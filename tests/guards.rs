@@ -338,7 +338,7 @@ impl mpmice::driver::Model for Faulty {
     fn annotate(&self, e: Error) -> Error {
         self.inner.annotate(e)
     }
-    fn field_sets(&self) -> Vec<mpmice::driver::model::FieldSet> {
+    fn field_sets(&self) -> Vec<mpmice::driver::model::FieldSet<'_>> {
         self.inner.field_sets()
     }
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {

@@ -438,7 +438,7 @@ impl mpmice::driver::Model for Poisoned {
     fn annotate(&self, e: Error) -> Error {
         self.inner.annotate(e)
     }
-    fn field_sets(&self) -> Vec<mpmice::driver::model::FieldSet> {
+    fn field_sets(&self) -> Vec<mpmice::driver::model::FieldSet<'_>> {
         self.inner.field_sets()
     }
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {

@@ -252,6 +252,20 @@ pub fn available_memory() -> Option<u64> {
     }
 }
 
+/// The process's peak resident memory so far \[bytes\] (`VmHWM` of
+/// `/proc/self/status`); `None` where the system does not report it.
+pub fn peak_resident_bytes() -> Option<u64> {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()?
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse::<u64>()
+        .ok()
+        .map(|kb| kb.saturating_mul(1024))
+}
+
 /// The share of the memory limit a scene's estimate may take: the
 /// estimate leaves out the program, its threads and the allocator's slack
 /// (20-step runs of `cases/` peaked at 1.1–1.6× the estimate above the

@@ -48,9 +48,9 @@ pub struct KeptRun {
     /// The run summary (as `summary.json`).
     pub summary: Summary,
     /// [`Model::field_sets`] before the first step.
-    pub initial: Vec<model::FieldSet>,
+    pub initial: Vec<model::FieldSet<'static>>,
     /// [`Model::field_sets`] at the end.
-    pub last: Vec<model::FieldSet>,
+    pub last: Vec<model::FieldSet<'static>>,
     /// `(column, value)` of the history row at the end (time first).
     pub history: Vec<(String, f64)>,
 }
@@ -141,11 +141,16 @@ struct RunIt<'a> {
     keep: bool,
 }
 
+/// Field sets independent of the model they were read from.
+fn owned(sets: Vec<model::FieldSet<'_>>) -> Vec<model::FieldSet<'static>> {
+    sets.into_iter().map(model::FieldSet::into_owned).collect()
+}
+
 impl WithModel for RunIt<'_> {
     type Out = KeptRun;
     fn with<M: Model>(self, model: &mut M, scene: &Scene) -> Result<KeptRun> {
         let initial = if self.keep {
-            model.field_sets()
+            owned(model.field_sets())
         } else {
             Vec::new()
         };
@@ -164,7 +169,7 @@ impl WithModel for RunIt<'_> {
         Ok(KeptRun {
             summary,
             initial,
-            last: model.field_sets(),
+            last: owned(model.field_sets()),
             history: names.map(str::to_string).zip(row).collect(),
         })
     }

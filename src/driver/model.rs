@@ -89,19 +89,169 @@ impl Conserved {
 }
 
 /// Values of one snapshot field, one entry per point or cell.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Values {
+#[derive(Clone)]
+pub enum Values<'a> {
     /// One number.
     Scalar(Vec<f64>),
     /// A vector padded to 3 components.
     Vector(Vec<[f64; 3]>),
     /// A 3×3 tensor, row-major.
     Tensor(Vec<[f64; 9]>),
+    /// Values computed from the model's arrays as they are written, so that
+    /// a snapshot of a large run copies nothing (issue 24: a copy of every
+    /// particle field took 264 bytes a particle at each snapshot).
+    Computed(Computed<'a>),
+}
+
+/// Writes tuple `i` of a [`Computed`] field into its output slice.
+pub type TupleFn<'a> = dyn Fn(usize, &mut [f64]) + Send + Sync + 'a;
+
+/// A field computed on demand: `n` tuples of `components` values (1, 3 or
+/// 9, laid out as [`Values::Scalar`], [`Values::Vector`] or
+/// [`Values::Tensor`]), tuple `i` written by `f(i, out)` into
+/// `out[..components]`.
+#[derive(Clone)]
+pub struct Computed<'a> {
+    /// Number of tuples.
+    pub n: usize,
+    /// Values per tuple: 1, 3 or 9.
+    pub components: usize,
+    /// Writes tuple `i`.
+    pub f: std::sync::Arc<TupleFn<'a>>,
+}
+
+impl<'a> Values<'a> {
+    /// `n` tuples of `components` values (1, 3 or 9) computed by `f`.
+    pub fn computed(
+        n: usize,
+        components: usize,
+        f: impl Fn(usize, &mut [f64]) + Send + Sync + 'a,
+    ) -> Self {
+        debug_assert!(matches!(components, 1 | 3 | 9));
+        Values::Computed(Computed {
+            n,
+            components,
+            f: std::sync::Arc::new(f),
+        })
+    }
+
+    /// A scalar field read from `v` as it is written.
+    pub fn scalars(v: &'a [f64]) -> Self {
+        Self::computed(v.len(), 1, move |i, o| o[0] = v[i])
+    }
+
+    /// A vector field read from `v` (padded to 3 components) as it is
+    /// written.
+    pub fn vectors<const D: usize>(v: &'a [nalgebra::SVector<f64, D>]) -> Self {
+        Self::computed(v.len(), 3, move |i, o| {
+            o[..3].copy_from_slice(&crate::driver::outputs::pad3(&v[i]))
+        })
+    }
+
+    /// A tensor field read from `m` (row-major) as it is written.
+    pub fn tensors(m: &'a [nalgebra::Matrix3<f64>]) -> Self {
+        Self::computed(m.len(), 9, move |i, o| {
+            for (k, x) in o[..9].iter_mut().enumerate() {
+                *x = m[i][(k / 3, k % 3)];
+            }
+        })
+    }
+
+    /// Number of tuples.
+    pub fn len(&self) -> usize {
+        match self {
+            Values::Scalar(v) => v.len(),
+            Values::Vector(v) => v.len(),
+            Values::Tensor(v) => v.len(),
+            Values::Computed(c) => c.n,
+        }
+    }
+
+    /// Whether there are no tuples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Values per tuple: 1, 3 or 9.
+    pub fn components(&self) -> usize {
+        match self {
+            Values::Scalar(_) => 1,
+            Values::Vector(_) => 3,
+            Values::Tensor(_) => 9,
+            Values::Computed(c) => c.components,
+        }
+    }
+
+    /// Writes tuple `i` into `out[..self.components()]`.
+    pub fn tuple(&self, i: usize, out: &mut [f64]) {
+        match self {
+            Values::Scalar(v) => out[0] = v[i],
+            Values::Vector(v) => out[..3].copy_from_slice(&v[i]),
+            Values::Tensor(v) => out[..9].copy_from_slice(&v[i]),
+            Values::Computed(c) => (c.f)(i, out),
+        }
+    }
+
+    /// The values stored (a computed field evaluated), independent of the
+    /// model they were read from.
+    pub fn into_owned(self) -> Values<'static> {
+        match self {
+            Values::Scalar(v) => Values::Scalar(v),
+            Values::Vector(v) => Values::Vector(v),
+            Values::Tensor(v) => Values::Tensor(v),
+            Values::Computed(c) => {
+                let mut t = [0.0; 9];
+                let mut tuple = |i: usize| {
+                    (c.f)(i, &mut t);
+                    t
+                };
+                match c.components {
+                    1 => Values::Scalar((0..c.n).map(|i| tuple(i)[0]).collect()),
+                    3 => Values::Vector(
+                        (0..c.n)
+                            .map(|i| std::array::from_fn(|k| tuple(i)[k]))
+                            .collect(),
+                    ),
+                    _ => Values::Tensor((0..c.n).map(tuple).collect()),
+                }
+            }
+        }
+    }
+}
+
+impl std::fmt::Debug for Values<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Values::Scalar(v) => f.debug_tuple("Scalar").field(v).finish(),
+            Values::Vector(v) => f.debug_tuple("Vector").field(v).finish(),
+            Values::Tensor(v) => f.debug_tuple("Tensor").field(v).finish(),
+            Values::Computed(c) => f
+                .debug_struct("Computed")
+                .field("n", &c.n)
+                .field("components", &c.components)
+                .finish_non_exhaustive(),
+        }
+    }
+}
+
+/// Equal when the tuples are equal, whether stored or computed.
+impl PartialEq for Values<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        if self.len() != other.len() || self.components() != other.components() {
+            return false;
+        }
+        let (mut a, mut b) = ([0.0; 9], [0.0; 9]);
+        (0..self.len()).all(|i| {
+            self.tuple(i, &mut a);
+            other.tuple(i, &mut b);
+            a == b
+        })
+    }
 }
 
 /// A named snapshot field with its unit.
 #[derive(Debug, Clone, PartialEq)]
-pub struct OutField {
+pub struct OutField<'a> {
     /// Name in the VTK file.
     pub name: String,
     /// Column base name in the CSV file (vectors add `x`, `y`, `z`, tensors
@@ -110,12 +260,12 @@ pub struct OutField {
     /// Unit, e.g. `m/s` or `kg/m` (already per depth where it applies).
     pub unit: String,
     /// The values.
-    pub values: Values,
+    pub values: Values<'a>,
 }
 
-impl OutField {
+impl<'a> OutField<'a> {
     /// A field with the CSV name equal to the VTK name.
-    pub fn new(name: &str, unit: &str, values: Values) -> Self {
+    pub fn new(name: &str, unit: &str, values: Values<'a>) -> Self {
         Self {
             name: name.to_string(),
             csv: Some(name.to_string()),
@@ -125,7 +275,7 @@ impl OutField {
     }
 
     /// A field with its own CSV base name (`None`: not in the CSV).
-    pub fn with_csv(name: &str, csv: Option<&str>, unit: &str, values: Values) -> Self {
+    pub fn with_csv(name: &str, csv: Option<&str>, unit: &str, values: Values<'a>) -> Self {
         Self {
             name: name.to_string(),
             csv: csv.map(str::to_string),
@@ -170,15 +320,37 @@ pub enum Geometry {
 /// One group of snapshot fields: written as `NAME_NNNN.vtu|vti` (with a
 /// `NAME.pvd` series) and, if `csv`, `NAME_NNNN.csv`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct FieldSet {
+pub struct FieldSet<'a> {
     /// File stem: `particles`, `grid`, `cells`, ….
     pub name: &'static str,
     /// Points or grid.
     pub geometry: Geometry,
     /// The fields.
-    pub fields: Vec<OutField>,
+    pub fields: Vec<OutField<'a>>,
     /// Whether to write a CSV table too (when the scene asks for CSV).
     pub csv: bool,
+}
+
+impl FieldSet<'_> {
+    /// The set with every computed field evaluated, independent of the
+    /// model it was read from.
+    pub fn into_owned(self) -> FieldSet<'static> {
+        FieldSet {
+            name: self.name,
+            geometry: self.geometry,
+            fields: self
+                .fields
+                .into_iter()
+                .map(|f| OutField {
+                    name: f.name,
+                    csv: f.csv,
+                    unit: f.unit,
+                    values: f.values.into_owned(),
+                })
+                .collect(),
+            csv: self.csv,
+        }
+    }
 }
 
 /// Where an impossible value sits.
@@ -323,7 +495,7 @@ pub trait Model {
         e
     }
     /// The snapshot fields of the current state.
-    fn field_sets(&self) -> Vec<FieldSet>;
+    fn field_sets(&self) -> Vec<FieldSet<'_>>;
     /// Columns of `history.csv` after the time: `(quantity, unit)`, units
     /// before the per-depth suffix the loop appends.
     fn history_columns(&self) -> Vec<(&'static str, &'static str)>;
@@ -350,5 +522,41 @@ pub trait Model {
     /// absurd number of steps (`None`: the model does not say).
     fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix3, SVector};
+
+    /// A computed field equals the stored one it stands for, and
+    /// `into_owned` stores exactly those values.
+    #[test]
+    fn computed_values_equal_their_stored_form() {
+        let v = [SVector::from([1.0, -2.0]), SVector::from([0.5, 1e-300])];
+        let m = [
+            Matrix3::from_fn(|i, j| (3 * i + j) as f64),
+            Matrix3::identity(),
+        ];
+        let s = [0.25, -7.0];
+        let stored_v = Values::Vector(vec![[1.0, -2.0, 0.0], [0.5, 1e-300, 0.0]]);
+        let stored_m = Values::Tensor(vec![
+            std::array::from_fn(|k| k as f64),
+            [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        ]);
+        for (lazy, stored) in [
+            (Values::vectors(&v), stored_v),
+            (Values::tensors(&m), stored_m),
+            (Values::scalars(&s), Values::Scalar(s.to_vec())),
+        ] {
+            assert_eq!(lazy, stored);
+            assert_eq!((lazy.len(), lazy.components()), (2, stored.components()));
+            let owned = lazy.into_owned();
+            assert!(!matches!(owned, Values::Computed(_)));
+            assert_eq!(owned, stored);
+        }
+        assert_ne!(Values::scalars(&s), Values::Scalar(vec![0.25, -7.5]));
+        assert_ne!(Values::scalars(&s), Values::Scalar(vec![0.25]));
     }
 }

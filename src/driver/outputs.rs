@@ -11,8 +11,10 @@ use std::time::Instant;
 
 use crate::driver::model::{FieldSet, Geometry, Values};
 use crate::error::{Error, Result};
-use crate::output::csv::write_columns;
-use crate::output::vtk::{write_vti, write_vtu_points, write_vtu_quads, Field, PvdSeries};
+use crate::output::csv::write_rows;
+use crate::output::vtk::{
+    write_vti, write_vtu_points, write_vtu_quads, Field, FieldData, PvdSeries,
+};
 use crate::scene::Format;
 
 /// Unit of a quantity per unit of the dimensions a run does not resolve
@@ -103,19 +105,19 @@ impl Outputs {
         let start = Instant::now();
         let w = self.header.len();
         let rows = self.history.len() / w;
-        let cols: Vec<Vec<f64>> = (0..w)
-            .map(|j| (0..rows).map(|i| self.history[i * w + j]).collect())
-            .collect();
         let h: Vec<&str> = self.header.iter().map(String::as_str).collect();
-        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         let path = self.dir.join("history.csv");
-        write_columns(&path, &h, &c).map_err(|e| Error::io(&path, e))?;
+        let history = &self.history;
+        write_rows(&path, &h, rows, |i, row| {
+            row.extend_from_slice(&history[i * w..(i + 1) * w])
+        })
+        .map_err(|e| Error::io(&path, e))?;
         self.output_s += start.elapsed().as_secs_f64();
         Ok(())
     }
 
     /// Writes snapshot number [`Self::snapshots`] of `sets` at time `t`.
-    pub fn snapshot(&mut self, t: f64, sets: &[FieldSet]) -> Result<()> {
+    pub fn snapshot(&mut self, t: f64, sets: &[FieldSet<'_>]) -> Result<()> {
         let start = Instant::now();
         let k = self.times.len();
         for set in sets {
@@ -157,7 +159,12 @@ impl Outputs {
     /// Restores the state of a restarted run: the snapshot times (the
     /// `.pvd` series of `sets` are rewritten to list them) and the history
     /// rows.
-    pub fn restore(&mut self, times: Vec<f64>, history: Vec<f64>, sets: &[FieldSet]) -> Result<()> {
+    pub fn restore(
+        &mut self,
+        times: Vec<f64>,
+        history: Vec<f64>,
+        sets: &[FieldSet<'_>],
+    ) -> Result<()> {
         if self.formats.contains(&Format::Vtk) {
             for set in sets {
                 let ext = match set.geometry {
@@ -178,18 +185,26 @@ impl Outputs {
     }
 }
 
-fn vtk_fields(set: &FieldSet) -> Vec<Field<'_>> {
+fn vtk_fields<'s>(set: &'s FieldSet<'_>) -> Vec<Field<'s>> {
     set.fields
         .iter()
         .map(|f| match &f.values {
             Values::Scalar(v) => Field::scalar(&f.name, v),
             Values::Vector(v) => Field::vector(&f.name, v),
             Values::Tensor(v) => Field::tensor(&f.name, v),
+            Values::Computed(c) => Field {
+                name: &f.name,
+                data: FieldData::Computed {
+                    n: c.n,
+                    components: c.components,
+                    f: &*c.f,
+                },
+            },
         })
         .collect()
 }
 
-fn write_vtk(path: &Path, set: &FieldSet) -> std::io::Result<()> {
+fn write_vtk(path: &Path, set: &FieldSet<'_>) -> std::io::Result<()> {
     let fields = vtk_fields(set);
     match &set.geometry {
         Geometry::Points(x) => write_vtu_points(path, x, &fields),
@@ -230,10 +245,10 @@ fn tensor_components(dim: usize) -> &'static [(usize, usize)] {
     }
 }
 
-fn write_csv(path: &Path, set: &FieldSet, dim: usize) -> std::io::Result<()> {
+/// Writes `set` as a CSV table row by row (coordinates, then each CSV
+/// field's components), computing no column ahead.
+fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()> {
     const AXES: [&str; 3] = ["x", "y", "z"];
-    let mut header: Vec<String> = Vec::new();
-    let mut cols: Vec<Vec<f64>> = Vec::new();
     let coords: &[[f64; 3]] = match &set.geometry {
         Geometry::Points(x) => x,
         Geometry::Quads {
@@ -250,33 +265,51 @@ fn write_csv(path: &Path, set: &FieldSet, dim: usize) -> std::io::Result<()> {
         }
         Geometry::Image { centres, .. } => centres,
     };
-    for d in 0..dim {
-        header.push(format!("{} [m]", AXES[d]));
-        cols.push(coords.iter().map(|x| x[d]).collect());
-    }
+    let mut header: Vec<String> = (0..dim).map(|d| format!("{} [m]", AXES[d])).collect();
+    // Per CSV field: its values and the tuple entries that are columns.
+    let mut columns: Vec<(&Values<'_>, Vec<usize>)> = Vec::new();
     for f in &set.fields {
         let Some(base) = &f.csv else { continue };
         let unit = &f.unit;
-        match &f.values {
-            Values::Scalar(v) => {
+        let picks: Vec<usize> = match f.values.components() {
+            1 => {
                 header.push(format!("{base} [{unit}]"));
-                cols.push(v.clone());
+                vec![0]
             }
-            Values::Vector(v) => {
-                for d in 0..dim {
-                    header.push(format!("{base}{} [{unit}]", AXES[d]));
-                    cols.push(v.iter().map(|x| x[d]).collect());
+            3 => {
+                for axis in &AXES[..dim] {
+                    header.push(format!("{base}{axis} [{unit}]"));
                 }
+                (0..dim).collect()
             }
-            Values::Tensor(v) => {
-                for &(a, b) in tensor_components(dim) {
+            _ => tensor_components(dim)
+                .iter()
+                .map(|&(a, b)| {
                     header.push(format!("{base}{}{} [{unit}]", AXES[a], AXES[b]));
-                    cols.push(v.iter().map(|s| s[3 * a + b]).collect());
-                }
-            }
+                    3 * a + b
+                })
+                .collect(),
+        };
+        if f.values.len() != coords.len() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "field \"{}\" has {} values for {} rows",
+                    f.name,
+                    f.values.len(),
+                    coords.len()
+                ),
+            ));
         }
+        columns.push((&f.values, picks));
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    write_columns(path, &h, &c)
+    let mut t = [0.0; 9];
+    write_rows(path, &h, coords.len(), |i, row| {
+        row.extend_from_slice(&coords[i][..dim]);
+        for (v, picks) in &columns {
+            v.tuple(i, &mut t);
+            row.extend(picks.iter().map(|&k| t[k]));
+        }
+    })
 }

@@ -896,6 +896,7 @@ fn summarise<M: Model>(
         e1.kinetic.max(e1.strain).max(f64::MIN_POSITIVE)
     };
     let p_scale = ls.initial.momentum_scale;
+    let peak = super::memory::peak_resident_bytes();
     let iterations = desc.iterative.then(|| {
         let mut it = ls.iters.clone();
         if let Some([a, f, s, p]) = desc.implicit_split {
@@ -926,6 +927,10 @@ fn summarise<M: Model>(
         n_fluid_materials: counts.fluid_materials,
         n_elements: counts.elements,
         element_steps_per_s: per_step(counts.elements),
+        peak_memory_bytes: peak,
+        peak_memory_per_particle: peak
+            .filter(|_| counts.particles > 0)
+            .map(|b| b as f64 / counts.particles as f64),
         retries: ls.iters.retries,
         threads,
         dt_min: if ls.dt_min.is_finite() {

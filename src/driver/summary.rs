@@ -47,6 +47,13 @@ pub struct Summary {
     /// Membrane element updates per second of stepping (output excluded; 0
     /// without membrane elements).
     pub element_steps_per_s: f64,
+    /// The process's peak resident memory when the summary was written
+    /// \[bytes\] (program, model, last good state, snapshots; `null` where
+    /// the system does not report it).
+    pub peak_memory_bytes: Option<u64>,
+    /// [`Summary::peak_memory_bytes`] per particle (`null` without
+    /// particles).
+    pub peak_memory_per_particle: Option<f64>,
     /// Steps repeated with a smaller timestep (the loop's retries and the
     /// model's own cuts).
     pub retries: u64,

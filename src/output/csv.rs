@@ -1,4 +1,5 @@
-//! Plain CSV output: whole tables written atomically ([`write_columns`]) and
+//! Plain CSV output: whole tables written atomically ([`write_columns`],
+//! [`write_rows`]) and
 //! append-as-you-go history files ([`CsvAppender`]).
 //!
 //! Numbers are written in Rust's shortest round-trip form (plain notation
@@ -73,12 +74,40 @@ pub fn write_columns(path: &Path, header: &[&str], columns: &[&[f64]]) -> io::Re
             header[0]
         )));
     }
+    write_rows(path, header, rows, |i, row| {
+        row.extend(columns.iter().map(|c| c[i]))
+    })
+}
+
+/// Writes a table atomically, row by row, without holding it: a header
+/// line, then `rows` rows, row `i` being the values `fill(i, row)` appends
+/// to the (cleared) `row`.
+///
+/// # Errors
+/// [`io::ErrorKind::InvalidInput`] when a row has another number of values
+/// than the header (the file is left as it was); otherwise any I/O
+/// error of the write.
+pub fn write_rows(
+    path: &Path,
+    header: &[&str],
+    rows: usize,
+    mut fill: impl FnMut(usize, &mut Vec<f64>),
+) -> io::Result<()> {
     atomic_write(path, |w| {
         w.write_all(header_line(header).as_bytes())?;
-        let mut line = String::new();
+        let (mut line, mut row) = (String::new(), Vec::with_capacity(header.len()));
         for i in 0..rows {
+            row.clear();
+            fill(i, &mut row);
+            if row.len() != header.len() {
+                return Err(invalid(format!(
+                    "row {i} has {} values for {} header names",
+                    row.len(),
+                    header.len()
+                )));
+            }
             line.clear();
-            push_row(&mut line, columns.iter().map(|c| c[i]));
+            push_row(&mut line, row.iter().copied());
             w.write_all(line.as_bytes())?;
         }
         Ok(())
@@ -223,6 +252,29 @@ mod tests {
         write_columns(&path, &["a,b", "say \"hi\""], &[&[1.0], &[2.0]]).expect("write");
         let text = fs::read_to_string(&path).expect("read");
         assert_eq!(text, "\"a,b\",\"say \"\"hi\"\"\"\n1,2\n");
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn rows_are_written_as_columns_are_and_a_short_row_writes_nothing() {
+        let dir = test_dir("csv-rows");
+        let (a, b) = (dir.join("a.csv"), dir.join("b.csv"));
+        let x = [0.1, 1.0 / 3.0, -2.5e-7];
+        let y = [7.0, f64::MAX, 0.0];
+        write_columns(&a, &["x [m]", "y [m]"], &[&x, &y]).expect("columns");
+        write_rows(&b, &["x [m]", "y [m]"], 3, |i, r| r.extend([x[i], y[i]])).expect("rows");
+        assert_eq!(fs::read(&a).expect("a"), fs::read(&b).expect("b"));
+        let c = dir.join("c.csv");
+        let err = write_rows(&c, &["x [m]", "y [m]"], 3, |i, r| {
+            r.push(x[i]);
+            if i < 2 {
+                r.push(y[i]);
+            }
+        })
+        .expect_err("short row");
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("row 2"), "{err}");
+        assert!(!c.exists());
         fs::remove_dir_all(&dir).expect("cleanup");
     }
 

@@ -33,7 +33,7 @@ const VTK_VERTEX: u8 = 1;
 const VTK_QUAD: u8 = 9;
 
 /// The values of one named field, one tuple per point or per cell.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy)]
 pub enum FieldData<'a> {
     /// One `f64` per entity (`NumberOfComponents="1"`).
     Scalar(&'a [f64]),
@@ -42,6 +42,27 @@ pub enum FieldData<'a> {
     /// Nine components per entity, row-major
     /// (`[xx, xy, xz, yx, yy, yz, zx, zy, zz]`, `NumberOfComponents="9"`).
     Tensor(&'a [[f64; 9]]),
+    /// `n` tuples of `components` (1, 3 or 9) values computed as they are
+    /// written: `f(i, out)` writes tuple `i` into `out[..components]`.
+    Computed {
+        /// Number of tuples.
+        n: usize,
+        /// Values per tuple.
+        components: usize,
+        /// Writes one tuple.
+        f: &'a (dyn Fn(usize, &mut [f64]) + Sync),
+    },
+}
+
+impl std::fmt::Debug for FieldData<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "FieldData({} tuples of {})",
+            self.len(),
+            self.components()
+        )
+    }
 }
 
 impl FieldData<'_> {
@@ -51,6 +72,7 @@ impl FieldData<'_> {
             FieldData::Scalar(d) => d.len(),
             FieldData::Vector(d) => d.len(),
             FieldData::Tensor(d) => d.len(),
+            FieldData::Computed { n, .. } => *n,
         }
     }
 
@@ -65,6 +87,7 @@ impl FieldData<'_> {
             FieldData::Scalar(_) => 1,
             FieldData::Vector(_) => 3,
             FieldData::Tensor(_) => 9,
+            FieldData::Computed { components, .. } => *components,
         }
     }
 }
@@ -196,6 +219,14 @@ impl Block<'_> {
             Block::Field(FieldData::Scalar(d)) => write_f64s(w, d.iter().copied()),
             Block::Field(FieldData::Vector(d)) => write_f64s(w, d.iter().flatten().copied()),
             Block::Field(FieldData::Tensor(d)) => write_f64s(w, d.iter().flatten().copied()),
+            Block::Field(FieldData::Computed { n, components, f }) => {
+                let mut t = [0.0; 9];
+                for i in 0..*n {
+                    f(i, &mut t);
+                    write_f64s(w, t[..*components].iter().copied())?;
+                }
+                Ok(())
+            }
             Block::Points(p) => write_f64s(w, p.iter().flatten().copied()),
             Block::Iota { n, start } => {
                 for i in 0..*n {

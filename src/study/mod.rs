@@ -34,7 +34,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use crate::diagnostics::riemann::{ExactRiemann, GasLaw, PrimitiveState};
-use crate::driver::model::{FieldSet, Geometry, Values};
+use crate::driver::model::{FieldSet, Geometry};
 use crate::driver::{run_scene_keep, KeptRun, RunOptions};
 use crate::scene::{parse_with, EosKind, Override, Scene};
 use harness::{Point, Series, StudyResult};
@@ -222,7 +222,7 @@ fn refined(text: &str, ovs: &[Override], base: &Scene, k: usize) -> Result<Scene
 
 /// `cells.mixture_density` where the runs have cells, else
 /// `particles.velocity`.
-fn default_field(sets: &[FieldSet]) -> Result<String> {
+fn default_field(sets: &[FieldSet<'_>]) -> Result<String> {
     for (set, field) in [("cells", "mixture_density"), ("particles", "velocity")] {
         if find(sets, set, field).is_some() {
             return Ok(format!("{set}.{field}"));
@@ -234,13 +234,17 @@ fn default_field(sets: &[FieldSet]) -> Result<String> {
     )
 }
 
-fn find<'a>(sets: &'a [FieldSet], set: &str, field: &str) -> Option<(&'a FieldSet, usize)> {
+fn find<'a, 'm>(
+    sets: &'a [FieldSet<'m>],
+    set: &str,
+    field: &str,
+) -> Option<(&'a FieldSet<'m>, usize)> {
     let s = sets.iter().find(|s| s.name == set)?;
     let i = s.fields.iter().position(|f| f.name == field)?;
     Some((s, i))
 }
 
-fn available(sets: &[FieldSet]) -> String {
+fn available(sets: &[FieldSet<'_>]) -> String {
     sets.iter()
         .filter(|s| {
             matches!(s.geometry, Geometry::Points(_))
@@ -262,7 +266,7 @@ struct Sampled {
     ncomp: usize,
 }
 
-fn sample(sets: &[FieldSet], field: &str) -> Result<Sampled> {
+fn sample(sets: &[FieldSet<'_>], field: &str) -> Result<Sampled> {
     let (set, name) = field.split_once('.').with_context(|| {
         format!(
             "--field `{field}` is not SET.FIELD; one of {}",
@@ -287,11 +291,14 @@ fn sample(sets: &[FieldSet], field: &str) -> Result<Sampled> {
             available(sets)
         ),
     };
-    let (vals, ncomp) = match &s.fields[i].values {
-        Values::Scalar(v) => (v.clone(), 1),
-        Values::Vector(v) => (v.iter().flatten().copied().collect(), 3),
-        Values::Tensor(v) => (v.iter().flatten().copied().collect(), 9),
-    };
+    let v = &s.fields[i].values;
+    let ncomp = v.components();
+    let mut vals = Vec::with_capacity(v.len() * ncomp);
+    let mut t = [0.0; 9];
+    for k in 0..v.len() {
+        v.tuple(k, &mut t);
+        vals.extend_from_slice(&t[..ncomp]);
+    }
     Ok(Sampled { pos, vals, ncomp })
 }
 
@@ -451,11 +458,19 @@ fn riemann_reference(scene: &Scene, first: &KeptRun, field: &str) -> Result<Riem
     let sets = &first.initial;
     let get = |name: &str| -> Result<Vec<f64>> {
         match find(sets, "cells", name) {
-            Some((s, i)) => match &s.fields[i].values {
-                Values::Scalar(v) => Ok(v.clone()),
-                Values::Vector(v) => Ok(v.iter().map(|u| u[0]).collect()),
-                Values::Tensor(_) => bail!("cells.{name} is a tensor"),
-            },
+            Some((s, i)) => {
+                let v = &s.fields[i].values;
+                if v.components() == 9 {
+                    bail!("cells.{name} is a tensor");
+                }
+                let mut t = [0.0; 9];
+                Ok((0..v.len())
+                    .map(|k| {
+                        v.tuple(k, &mut t);
+                        t[0]
+                    })
+                    .collect())
+            }
             None => bail!("{need} (no cells.{name})"),
         }
     };

@@ -145,60 +145,44 @@ pub fn load_particles<const D: usize>(
     })
 }
 
-fn tensor9(m: &Matrix3<f64>) -> [f64; 9] {
-    std::array::from_fn(|k| m[(k / 3, k % 3)])
-}
-
 /// The particle snapshot: velocity, displacement, stress, deformation
 /// gradient, mass, volume, J, material and temperature.
-pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
+pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
     let u = per_depth(D);
-    let disp: Vec<[f64; 3]> =
-        p.x.iter()
-            .zip(&p.x0)
-            .map(|(x, x0)| pad3(&(x - x0)))
-            .collect();
+    let n = p.len();
     FieldSet {
         name: "particles",
         geometry: Geometry::Points(p.x.iter().map(pad3).collect()),
         fields: vec![
+            OutField::with_csv("velocity", Some("v"), "m/s", Values::vectors(&p.v)),
             OutField::with_csv(
-                "velocity",
-                Some("v"),
-                "m/s",
-                Values::Vector(p.v.iter().map(pad3).collect()),
+                "displacement",
+                Some("u"),
+                "m",
+                Values::computed(n, 3, |i, o| {
+                    o[..3].copy_from_slice(&pad3(&(p.x[i] - p.x0[i])))
+                }),
             ),
-            OutField::with_csv("displacement", Some("u"), "m", Values::Vector(disp)),
-            OutField::with_csv(
-                "stress",
-                Some("s"),
-                "Pa",
-                Values::Tensor(p.stress.iter().map(tensor9).collect()),
-            ),
-            OutField::with_csv(
-                "deformation_gradient",
-                None,
-                "-",
-                Values::Tensor(p.f.iter().map(tensor9).collect()),
-            ),
-            OutField::new("mass", &format!("kg{u}"), Values::Scalar(p.mass.clone())),
-            OutField::new("volume", &format!("m^3{u}"), Values::Scalar(p.vol.clone())),
+            OutField::with_csv("stress", Some("s"), "Pa", Values::tensors(&p.stress)),
+            OutField::with_csv("deformation_gradient", None, "-", Values::tensors(&p.f)),
+            OutField::new("mass", &format!("kg{u}"), Values::scalars(&p.mass)),
+            OutField::new("volume", &format!("m^3{u}"), Values::scalars(&p.vol)),
             OutField::new(
                 "J",
                 "-",
-                Values::Scalar(p.f.iter().map(|f| f.determinant()).collect()),
+                Values::computed(n, 1, |i, o| o[0] = p.f[i].determinant()),
             ),
             OutField::new(
                 "id",
                 "-",
-                Values::Scalar(p.id.iter().map(|&i| i as f64).collect()),
+                Values::computed(n, 1, |i, o| o[0] = p.id[i] as f64),
             ),
             OutField::new(
                 "material",
                 "-",
-                Values::Scalar(p.material.iter().map(|&m| m as f64).collect()),
+                Values::computed(n, 1, |i, o| o[0] = f64::from(p.material[i])),
             ),
-            OutField::new("temperature", "K", Values::Scalar(p.temperature.clone())),
+            OutField::new("temperature", "K", Values::scalars(&p.temperature)),
         ],
         csv: true,
     }
@@ -209,7 +193,7 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet {
 pub fn plastic_fields<const D: usize>(
     p: &Particles<D>,
     materials: &[SolidMaterial],
-) -> Vec<OutField> {
+) -> Vec<OutField<'static>> {
     if materials.iter().all(|m| m.plasticity().is_none()) {
         return Vec::new();
     }
@@ -225,7 +209,7 @@ pub fn plastic_fields<const D: usize>(
 pub fn failure_fields<const D: usize>(
     p: &Particles<D>,
     materials: &[SolidMaterial],
-) -> Vec<OutField> {
+) -> Vec<OutField<'static>> {
     if materials.iter().all(|m| m.failure().is_none()) {
         return Vec::new();
     }
@@ -250,7 +234,7 @@ pub fn failure_fields<const D: usize>(
 pub fn gas_point_fields<const D: usize>(
     p: &Particles<D>,
     materials: &[SolidMaterial],
-) -> Vec<OutField> {
+) -> Vec<OutField<'static>> {
     if materials.iter().all(|m| m.gas().is_none()) {
         return Vec::new();
     }
@@ -556,7 +540,7 @@ pub fn cell_watchdog<const D: usize>(s: &IceState<D>) -> Option<Violation> {
 /// The cell snapshot: pressure, equilibration pressure and mixture density,
 /// then per material its density, true density, volume fraction,
 /// temperature and velocity (names prefixed by the material's name).
-pub fn cell_fields<const D: usize>(s: &IceState<D>) -> FieldSet {
+pub fn cell_fields<const D: usize>(s: &IceState<D>) -> FieldSet<'static> {
     let l = &s.layout;
     let interior = &l.interior;
     let vol = l.cell_volume();

@@ -113,13 +113,14 @@ impl<const D: usize> Model for Coupled<D> {
         None
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         let run = &self.run;
-        // One field: its particles; several: all of them, field by field.
+        // One field: its particles (read as written); several: all of
+        // them, field by field (a joined copy, so its values are stored).
         let particles = if run.fields.len() == 1 {
             particle_fields(&run.fields[0].particles)
         } else {
-            particle_fields(&run.all_particles())
+            particle_fields(&run.all_particles()).into_owned()
         };
         vec![particles, cell_fields(&run.fluid)]
     }

@@ -135,7 +135,7 @@ impl<const D: usize> Model for Fluid<D> {
         })
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         vec![cell_fields(&self.state)]
     }
 

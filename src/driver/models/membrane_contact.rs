@@ -88,7 +88,7 @@ impl Model for MembraneContact {
         self.solid.annotate(e)
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         let mut sets = self.solid.field_sets();
         sets.extend(self.membranes.field_sets());
         sets

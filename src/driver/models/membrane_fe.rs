@@ -140,7 +140,7 @@ impl Model for MembraneFe {
         })
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         let (points, quads, node_body, elem_body) = self.geometry();
         let mut vel = Vec::new();
         let mut disp = Vec::new();

@@ -24,7 +24,7 @@ pub struct Multiphase<const D: usize> {
 impl<const D: usize> Multiphase<D> {
     /// The grid snapshot: each phase's volume fraction `theta_NAME`, their
     /// sum `theta_sum` and the gas pressure `gas_pressure` on the nodes.
-    fn grid_fields(&self) -> FieldSet {
+    fn grid_fields(&self) -> FieldSet<'_> {
         let r = &self.run;
         let g = &r.grid;
         let cells: [usize; 3] = std::array::from_fn(|d| if d < D { g.cells[d] } else { 0 });
@@ -97,7 +97,7 @@ impl<const D: usize> Model for Multiphase<D> {
         })
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         let r = &self.run;
         let all = r.all_particles();
         let mut particles = particle_fields(&all);
@@ -106,7 +106,8 @@ impl<const D: usize> Model for Multiphase<D> {
             .extend(gas_point_fields(&all, &r.materials));
         particles.fields.extend(plastic_fields(&all, &r.materials));
         particles.fields.extend(failure_fields(&all, &r.materials));
-        vec![particles, self.grid_fields()]
+        // The fields read the joined copy `all`: stored, not computed.
+        vec![particles.into_owned(), self.grid_fields()]
     }
 
     fn history_columns(&self) -> Vec<(&'static str, &'static str)> {

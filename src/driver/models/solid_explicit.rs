@@ -31,7 +31,7 @@ pub fn scene_name<T: serde::Serialize>(x: &T) -> String {
 /// Membrane point outputs (York Sec. 3.2): the tangential stress `s`
 /// (in-plane trace of σ = s t⊗t), the stretch of the point's segment
 /// (current / initial length) and the unit tangent; none without membranes.
-fn membrane_fields<const D: usize>(r: &SolidRun<D>) -> Vec<OutField> {
+fn membrane_fields<const D: usize>(r: &SolidRun<D>) -> Vec<OutField<'static>> {
     let m = &r.membranes;
     if m.is_empty() {
         return Vec::new();
@@ -107,7 +107,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         name_particle_material(e, &self.run.particles, &self.run.materials)
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         let r = &self.run;
         let g = &r.grid;
         let gs = r.grid_state();

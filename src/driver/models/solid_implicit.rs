@@ -99,7 +99,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
         })
     }
 
-    fn field_sets(&self) -> Vec<FieldSet> {
+    fn field_sets(&self) -> Vec<FieldSet<'_>> {
         vec![particle_fields(&self.run.particles)]
     }
 
