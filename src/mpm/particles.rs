@@ -92,6 +92,39 @@ impl<const D: usize> Particles<D> {
         self.id.push(self.id.last().map_or(0, |&l| l + 1));
     }
 
+    /// Makes room for exactly `n` more particles in every array (no
+    /// doubling slack).
+    pub fn reserve_exact(&mut self, n: usize) {
+        self.for_each_array(|v| v.reserve_exact(n));
+    }
+
+    /// Drops every array's unused capacity.
+    pub fn shrink_to_fit(&mut self) {
+        self.for_each_array(|v| v.shrink_to_fit());
+    }
+
+    /// Applies `op` to every per-particle array (`damage` only when it is
+    /// tracked).
+    fn for_each_array(&mut self, mut op: impl FnMut(&mut dyn ParticleArray)) {
+        op(&mut self.x);
+        op(&mut self.x0);
+        op(&mut self.v);
+        op(&mut self.mass);
+        op(&mut self.vol0);
+        op(&mut self.vol);
+        op(&mut self.half_size);
+        op(&mut self.f);
+        op(&mut self.stress);
+        op(&mut self.work);
+        op(&mut self.material);
+        op(&mut self.temperature);
+        op(&mut self.plastic_strain);
+        if !self.damage.is_empty() {
+            op(&mut self.damage);
+        }
+        op(&mut self.id);
+    }
+
     /// Sizes [`Particles::damage`] to one entry per particle (new entries
     /// undamaged); a no-op when it is sized already.
     pub fn track_damage(&mut self) {
@@ -118,30 +151,7 @@ impl<const D: usize> Particles<D> {
     /// Keeps the particles `p` with `keep[p]`, in order, in place (no
     /// allocation).
     pub fn retain(&mut self, keep: &[bool]) {
-        fn retain_by<T>(v: &mut Vec<T>, keep: &[bool]) {
-            let mut i = 0;
-            v.retain(|_| {
-                i += 1;
-                keep[i - 1]
-            });
-        }
-        retain_by(&mut self.x, keep);
-        retain_by(&mut self.x0, keep);
-        retain_by(&mut self.v, keep);
-        retain_by(&mut self.mass, keep);
-        retain_by(&mut self.vol0, keep);
-        retain_by(&mut self.vol, keep);
-        retain_by(&mut self.half_size, keep);
-        retain_by(&mut self.f, keep);
-        retain_by(&mut self.stress, keep);
-        retain_by(&mut self.work, keep);
-        retain_by(&mut self.material, keep);
-        retain_by(&mut self.temperature, keep);
-        retain_by(&mut self.plastic_strain, keep);
-        if !self.damage.is_empty() {
-            retain_by(&mut self.damage, keep);
-        }
-        retain_by(&mut self.id, keep);
+        self.for_each_array(|v| v.retain_by(keep));
     }
 
     /// Appends copies of all of `other`'s particles.
@@ -226,6 +236,30 @@ impl<const D: usize> Particles<D> {
             .zip(&self.x)
             .map(|(m, x)| m * g.dot(x))
             .sum::<f64>()
+    }
+}
+
+/// The operations [`Particles`] applies to all its arrays alike.
+trait ParticleArray {
+    fn reserve_exact(&mut self, n: usize);
+    fn shrink_to_fit(&mut self);
+    /// Keeps entry `i` where `keep[i]`, in order.
+    fn retain_by(&mut self, keep: &[bool]);
+}
+
+impl<T> ParticleArray for Vec<T> {
+    fn retain_by(&mut self, keep: &[bool]) {
+        let mut i = 0;
+        self.retain(|_| {
+            i += 1;
+            keep[i - 1]
+        });
+    }
+    fn reserve_exact(&mut self, n: usize) {
+        Vec::reserve_exact(self, n);
+    }
+    fn shrink_to_fit(&mut self) {
+        Vec::shrink_to_fit(self);
     }
 }
 

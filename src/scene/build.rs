@@ -4,7 +4,7 @@ use nalgebra::SVector;
 
 use super::schema::{
     FluidVariant, Geometry, LimiterKind, MaterialKind, MaterialSpec, Mode, NewtonSolverKind,
-    PressureSolverKind, RelaxationKind, Scene,
+    ObjectSpec, PressureSolverKind, RelaxationKind, Scene,
 };
 use crate::coupling::iteration::{CouplingIteration, Relaxation};
 use crate::error::SceneError;
@@ -215,6 +215,21 @@ fn fill_objects<const D: usize>(
 ) -> Result<(Particles<D>, Vec<std::ops::Range<usize>>), SceneError> {
     let mut ranges = Vec::with_capacity(scene.objects.len());
     let mut particles = Particles::<D>::default();
+    // Arrays of the exact size: grown by doubling they would keep up to
+    // twice the particles' memory for the whole run (issue 24).
+    let mut count = 0;
+    for obj in &scene.objects {
+        let membrane = materials
+            .iter()
+            .any(|m| m.name == obj.material && m.membrane().is_some());
+        if !membrane {
+            let ppc = obj
+                .particles_per_cell
+                .unwrap_or(scene.mpm.particles_per_cell);
+            object_positions(scene, grid, obj, ppc, |_| count += 1);
+        }
+    }
+    particles.reserve_exact(count);
     for (oi, obj) in scene.objects.iter().enumerate() {
         let mat_index = materials
             .iter()
@@ -317,46 +332,22 @@ fn fill_objects<const D: usize>(
         let vol = grid.cell_volume() / (ppc as f64).powi(D as i32);
         let half = grid.h / (2.0 * ppc as f64);
         let before = particles.len();
-        let per_cell = ppc.pow(D as u32);
-        for cell in 0..grid.num_cells() {
-            let mut rem = cell;
-            let c: [usize; D] = std::array::from_fn(|d| {
-                let v = rem % grid.cells[d];
-                rem /= grid.cells[d];
-                v
-            });
-            for k in 0..per_cell {
-                let mut r = k;
-                let mut x = [0.0; D];
-                for d in 0..D {
-                    let s = r % ppc;
-                    r /= ppc;
-                    x[d] =
-                        grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
-                }
-                if obj.geometry.contains(&x)
-                    && !obj
-                        .except
-                        .iter()
-                        .any(|&e| scene.objects[e].geometry.contains(&x))
-                {
-                    let vol = if grid.axisymmetric { vol * x[0] } else { vol };
-                    particles.push(
-                        SVector::from(x),
-                        vel,
-                        rho * vol,
-                        vol,
-                        half,
-                        mat_index as u16,
-                    );
-                    if gas.is_some() || obj.pressure.is_some() {
-                        let p = particles.len() - 1;
-                        particles.work[p] = gas_work;
-                        particles.stress[p] = gas_stress;
-                    }
-                }
+        object_positions(scene, grid, obj, ppc, |x| {
+            let vol = if grid.axisymmetric { vol * x[0] } else { vol };
+            particles.push(
+                SVector::from(x),
+                vel,
+                rho * vol,
+                vol,
+                half,
+                mat_index as u16,
+            );
+            if gas.is_some() || obj.pressure.is_some() {
+                let p = particles.len() - 1;
+                particles.work[p] = gas_work;
+                particles.stress[p] = gas_stress;
             }
-        }
+        });
         if particles.len() == before {
             return Err(SceneError::new(
                 format!("objects[{oi}].geometry"),
@@ -366,7 +357,49 @@ fn fill_objects<const D: usize>(
         }
         ranges.push(before..particles.len());
     }
+    // Membrane points were not counted ahead.
+    particles.shrink_to_fit();
     Ok((particles, ranges))
+}
+
+/// Calls `f` with each particle position of the filled object `obj`, in
+/// creation order: `ppc` points per cell and axis at the centres of the
+/// cell's sub-cells, kept where `obj.geometry` contains them and no object
+/// of `obj.except` does (not for membranes, whose points follow their
+/// polyline).
+fn object_positions<const D: usize>(
+    scene: &Scene,
+    grid: &Grid<D>,
+    obj: &ObjectSpec,
+    ppc: usize,
+    mut f: impl FnMut([f64; D]),
+) {
+    let per_cell = ppc.pow(D as u32);
+    for cell in 0..grid.num_cells() {
+        let mut rem = cell;
+        let c: [usize; D] = std::array::from_fn(|d| {
+            let v = rem % grid.cells[d];
+            rem /= grid.cells[d];
+            v
+        });
+        for k in 0..per_cell {
+            let mut r = k;
+            let mut x = [0.0; D];
+            for d in 0..D {
+                let s = r % ppc;
+                r /= ppc;
+                x[d] = grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
+            }
+            if obj.geometry.contains(&x)
+                && !obj
+                    .except
+                    .iter()
+                    .any(|&e| scene.objects[e].geometry.contains(&x))
+            {
+                f(x);
+            }
+        }
+    }
 }
 
 /// Builds the implicit (Newmark + Newton, or quasistatic) solid run of a
