@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
         let p = &run.fields[0].particles;
         let mut bands = [(0.0, 0usize); 3];
         for i in 0..p.len() {
-            let e = eq43_particle_error(&p.stress[i], target);
+            let e = eq43_particle_error(&p.stress.get(i), target);
             let r0 = p.x0[i].norm();
             let b = if r0 < 0.5 + dx {
                 0
@@ -75,7 +75,7 @@ fn main() -> anyhow::Result<()> {
             if k < rows {
                 let x = p.x[i];
                 let (c, s) = (x[0] / x.norm(), x[1] / x.norm());
-                let st = &p.stress[i];
+                let st = &p.stress.get(i);
                 acc[k].0 += c * c * st[(0, 0)] + 2.0 * c * s * st[(0, 1)] + s * s * st[(1, 1)];
                 acc[k].1 += s * s * st[(0, 0)] - 2.0 * c * s * st[(0, 1)] + c * c * st[(1, 1)];
                 acc[k].2 += eq43_particle_error(st, target);

@@ -115,7 +115,7 @@ fn solid_in_tension_next_to_gas_runs_without_nan() {
     let (mut tension, mut p_min) = (f64::NEG_INFINITY, f64::INFINITY);
     for _ in 0..300 {
         run.step(f64::INFINITY).unwrap();
-        for s in &run.fields[0].particles.stress {
+        for s in run.fields[0].particles.stress.iter() {
             tension = tension.max(s[(0, 0)] + s[(1, 1)]);
         }
         for &c in &run.fluid.layout.interior {

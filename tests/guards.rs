@@ -674,8 +674,16 @@ fn the_particle_watchdog_finds_every_impossible_value() {
         ("velocity", |p, i| p.v[i][0] = f64::NAN),
         ("mass", |p, i| p.mass[i] = 0.0),
         ("volume", |p, i| p.vol[i] = -1.0),
-        ("J", |p, i| p.f[i][(0, 0)] = -p.f[i][(0, 0)]),
-        ("stress", |p, i| p.stress[i][(2, 2)] = f64::NAN),
+        ("J", |p, i| {
+            let mut f = p.f.get(i);
+            f[(0, 0)] = -f[(0, 0)];
+            p.f.set(i, &f);
+        }),
+        ("stress", |p, i| {
+            let mut s = p.stress.get(i);
+            s[(2, 2)] = f64::NAN;
+            p.stress.set(i, &s);
+        }),
         ("temperature", |p, i| p.temperature[i] = f64::NAN),
         ("plastic_strain", |p, i| p.plastic_strain[i] = -1e-9),
         ("damage", |p, i| p.damage[i] = 1.5),

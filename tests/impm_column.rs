@@ -193,7 +193,7 @@ fn three_dimensional_column_runs_and_matches_the_exact_stress() {
     let scale = col.rho * col.g * col.height;
     let mut num = 0.0;
     for i in 0..p.len() {
-        let e = (p.stress[i][(2, 2)] - col.sigma_yy(p.x0[i][2])) / scale;
+        let e = (p.stress.get(i)[(2, 2)] - col.sigma_yy(p.x0[i][2])) / scale;
         num += e * e;
     }
     let rms = (num / p.len() as f64).sqrt();

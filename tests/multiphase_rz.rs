@@ -67,7 +67,7 @@ fn run_changes(src: &str, w: f64, scale: f64) -> (f64, f64, u64) {
         for ph in &run.phases {
             let p = &ph.particles;
             for i in 0..p.len() {
-                let pr = -p.stress[i].trace() / 3.0;
+                let pr = -p.stress.get(i).trace() / 3.0;
                 dp = dp.max((pr - 1e5).abs() / 1e5);
                 let dvi = (p.v[i][0].powi(2) + (p.v[i][1] - w).powi(2)).sqrt();
                 dv = dv.max(dvi / scale);
@@ -212,7 +212,7 @@ pressure = 1.0e5
     let p = &run.phases[cu].particles;
     let (mut top, mut bottom) = (f64::MIN, f64::MAX);
     for i in 0..p.len() {
-        let a = p.f[i][(1, 1)] * p.half_size[i][1];
+        let a = p.f.get(i)[(1, 1)] * p.half_size[i][1];
         top = top.max(p.x[i][1] + a);
         bottom = bottom.min(p.x[i][1] - a);
     }

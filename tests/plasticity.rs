@@ -79,9 +79,9 @@ fn homogeneous_uniaxial_strain_follows_the_closed_form() {
             reverse = peak - q_max / mu;
         }
         // The strain increment the point's update saw: F ← (1 + Δt L) F.
-        let f_old = run.particles.f[mid][(0, 0)];
+        let f_old = run.particles.f.get(mid)[(0, 0)];
         run.step_dt(1e-4).expect("step");
-        eps += run.particles.f[mid][(0, 0)] / f_old - 1.0;
+        eps += run.particles.f.get(mid)[(0, 0)] / f_old - 1.0;
         let (q, eb) = if loading {
             if eps <= eps_y {
                 (2.0 * mu * eps, 0.0)
@@ -95,7 +95,7 @@ fn homogeneous_uniaxial_strain_follows_the_closed_form() {
             let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
             (-(sy + h * eb), eb)
         };
-        let s = run.particles.stress[mid];
+        let s = run.particles.stress.get(mid);
         let err = ((s[(0, 0)] - (k * eps + 2.0 * q / 3.0)).abs()
             + (s[(1, 1)] - (k * eps - q / 3.0)).abs())
             / sy

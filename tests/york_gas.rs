@@ -69,7 +69,7 @@ fn run_to_end(run: &mut SolidRun<2>) {
 
 /// Pressure of particle `i` (gas points: −tr σ/3 − q = p with q = 0 here).
 fn mean_stress(run: &SolidRun<2>, i: usize) -> f64 {
-    -run.particles.stress[i].trace() / 3.0
+    -run.particles.stress.get(i).trace() / 3.0
 }
 
 #[test]
@@ -199,7 +199,7 @@ velocity = [1.0, 0.0]
     // The block starts in equilibrium with the gas around it.
     for i in 0..run.particles.len() {
         if run.particles.material[i] == block {
-            run.particles.stress[i] = -nalgebra::Matrix3::identity();
+            run.particles.stress.set(i, &-nalgebra::Matrix3::identity());
         }
     }
     run_to_end(&mut run);

@@ -518,7 +518,7 @@ fn axisym_lame(quick: bool, out: &Path) -> anyhow::Result<()> {
                 LameShape::Cylinder => (x0[0], [1.0, 0.0]),
                 LameShape::Sphere => (x0.norm(), [x0[0] / x0.norm(), x0[1] / x0.norm()]),
             };
-            let s = &p.stress[i];
+            let s = &p.stress.get(i);
             let rad = er[0] * er[0] * s[(0, 0)]
                 + 2.0 * er[0] * er[1] * s[(0, 1)]
                 + er[1] * er[1] * s[(1, 1)];

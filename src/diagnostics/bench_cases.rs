@@ -158,7 +158,7 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
                 // York Eq. 22: ρ_ref e = p/(γ − 1) per unit reference volume.
                 let k = p.len() - 1;
                 p.work[k] = p0 / (gamma - 1.0);
-                p.stress[k] = nalgebra::Matrix3::identity() * -p0;
+                p.stress.set(k, &(nalgebra::Matrix3::identity() * -p0));
             }
         }
     }

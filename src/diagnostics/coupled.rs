@@ -453,7 +453,7 @@ pub fn measure_cylinder(run: &CoupledRun<2>, r_inner: f64, p_ref: f64) -> Cylind
     let y_min = p.x0.iter().map(|x| x[1]).fold(f64::INFINITY, f64::min);
     let mut row = Vec::new();
     for i in 0..p.len() {
-        let s = &p.stress[i];
+        let s = &p.stress.get(i);
         e43 += eq43_particle_error(s, target);
         if p.x0[i][1] <= y_min * (1.0 + 1e-9) {
             let x = p.x[i];

@@ -226,7 +226,7 @@ fn multiphase_block_changes(run: &MultiphaseRun<2>) -> (f64, f64) {
         let p = &ph.particles;
         for i in 0..p.len() {
             if Some(k) == run.gas {
-                let pr = -p.stress[i].trace() / 3.0;
+                let pr = -p.stress.get(i).trace() / 3.0;
                 dp = dp.max((pr - P1).abs() / P1);
             }
             dv = dv.max((p.v[i] - u).norm() / speed());

@@ -136,7 +136,7 @@ impl Column {
         let scale = self.rho * self.g * self.height;
         let (mut num, mut den, mut max) = (0.0, 0.0, 0.0f64);
         for i in 0..p.len() {
-            let e = (p.stress[i][(1, 1)] - self.sigma_yy(p.x0[i][1])) / scale;
+            let e = (p.stress.get(i)[(1, 1)] - self.sigma_yy(p.x0[i][1])) / scale;
             num += p.vol0[i] * e * e;
             den += p.vol0[i];
             max = max.max(e.abs());
@@ -271,7 +271,7 @@ impl Cylinder {
         let mut e43 = 0.0;
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..p.len() {
-            let s = p.stress[i][(0, 0)] + p.stress[i][(1, 1)];
+            let s = p.stress.get(i)[(0, 0)] + p.stress.get(i)[(1, 1)];
             e43 += ((s.abs() - target) / target).abs();
             let r0 = p.x0[i].norm();
             let ur = (p.x[i] - p.x0[i]).dot(&(p.x0[i] / r0));
@@ -664,9 +664,9 @@ impl GripBar {
         let (mut ef, mut eyy, mut exx, mut eg) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for i in 0..p.len() {
             if p.x0[i][1] < gauge {
-                ef = ef.max((p.f[i][(1, 1)] - s).abs());
-                eyy = eyy.max((p.stress[i][(1, 1)] - syy).abs() / syy.abs());
-                exx = exx.max((p.stress[i][(0, 0)] - sxx).abs() / syy.abs());
+                ef = ef.max((p.f.get(i)[(1, 1)] - s).abs());
+                eyy = eyy.max((p.stress.get(i)[(1, 1)] - syy).abs() / syy.abs());
+                exx = exx.max((p.stress.get(i)[(0, 0)] - sxx).abs() / syy.abs());
             } else {
                 let u = p.x[i] - p.x0[i];
                 eg = eg.max((u - SVector::from([0.0, delta])).norm() / delta.abs());

@@ -141,8 +141,8 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
     let (mut max_eps, mut max_d, mut failed) = (0.0f64, 0.0f64, 0);
     for i in 0..p.len() {
         let m = &run.materials[p.material[i] as usize];
-        let az = p.f[i][(1, 1)] * p.half_size[i][1];
-        let ar = p.f[i][(0, 0)] * p.half_size[i][0];
+        let az = p.f.get(i)[(1, 1)] * p.half_size[i][1];
+        let ar = p.f.get(i)[(0, 0)] * p.half_size[i][0];
         top = top.max(p.x[i][1] + az);
         bottom = bottom.min(p.x[i][1] - az);
         rmax = rmax.max(p.x[i][0] + ar);
@@ -151,7 +151,7 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
         }
         let k = m.elastic.bulk();
         let mu = m.elastic.mu;
-        let s = &p.stress[i];
+        let s = &p.stress.get(i);
         let pr = s.trace() / 3.0;
         let q = von_mises(s);
         elastic += p.vol[i] * (pr * pr / (2.0 * k) + q * q / (6.0 * mu));

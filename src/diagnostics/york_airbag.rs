@@ -86,8 +86,8 @@ pub fn revolution_measures(
         let d = p.x[i] - Vector2::new(center[0], center[1]);
         m_sum += m;
         r_sum += m * d.norm();
-        s_sum += m * (p.stress[i][(0, 0)] + p.stress[i][(1, 1)]);
-        h_sum += m * p.stress[i][(2, 2)];
+        s_sum += m * (p.stress.get(i)[(0, 0)] + p.stress.get(i)[(1, 1)]);
+        h_sum += m * p.stress.get(i)[(2, 2)];
         strain += p.vol0[i] * p.work[i];
     }
     let volume = volume_of_revolution(&poly);
@@ -515,7 +515,7 @@ fn material_totals(run: &SolidRun<2>, m: usize) -> (f64, f64, f64, f64, f64) {
     let (mut ke, mut se, mut mass, mut mv, mut mz) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for i in (0..p.len()).filter(|&i| p.material[i] as usize == m) {
         ke += 0.5 * p.mass[i] * p.v[i].norm_squared();
-        se += p.vol0[i] * run.materials[m].strain_energy_density(&p.f[i], p.work[i]);
+        se += p.vol0[i] * run.materials[m].strain_energy_density(&p.f.get(i), p.work[i]);
         mass += p.mass[i];
         mv += p.mass[i] * p.v[i][1];
         mz += p.mass[i] * p.x[i][1];

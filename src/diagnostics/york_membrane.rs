@@ -63,7 +63,7 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
     let rel = |x: &nalgebra::Vector2<f64>| [x[0] - center[0], x[1] - center[1]];
     let mean_radius = pts.iter().map(|x| rel(x)[0].hypot(rel(x)[1])).sum::<f64>() / n;
     let stress: Vec<f64> = (c.first..c.first + c.count)
-        .map(|i| p.stress[i][(0, 0)] + p.stress[i][(1, 1)])
+        .map(|i| p.stress.get(i)[(0, 0)] + p.stress.get(i)[(1, 1)])
         .collect();
     // Farthest crossing of the ray from the centre along axis `a`.
     let ray = |a: usize| {

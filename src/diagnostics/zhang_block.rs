@@ -158,7 +158,7 @@ pub fn block_changes<const D: usize>(run: &MultiphaseRun<D>, u: &[f64; 3]) -> (f
     for ph in &run.phases {
         let p = &ph.particles;
         for i in 0..p.len() {
-            let pr = -p.stress[i].trace() / 3.0;
+            let pr = -p.stress.get(i).trace() / 3.0;
             dp = dp.max((pr - 1e5).abs() / 1e5);
             let e = (0..D)
                 .map(|d| (p.v[i][d] - u[d]).powi(2))

@@ -98,9 +98,23 @@ impl MemoryEstimate {
         } else {
             0.0
         };
-        // Particle arrays (2 tensors, 4 vectors, 7 scalars), the step's
-        // scratch (offsets, half-widths, bins) and the output copies.
-        let particle_bytes = particles * F64 * (40.0 + 10.0 * dimf);
+        // One particle's arrays: F and σ (3, 5 or 9 stored entries each in
+        // 1D, 2D, 3D), 4 vectors, 7 scalars and a 2-byte material index.
+        let tensor = match dim {
+            1 => 3.0,
+            2 => 5.0,
+            _ => 9.0,
+        };
+        let state = 2.0 * tensor + 4.0 * dimf + 7.25;
+        // The arrays and the step's scratch (offsets and half-widths: two
+        // vectors; the bins: one value); in implicit mode also the weights,
+        // gradients, node indices and signs of the 3^dim support nodes and
+        // the Newton step's per-particle F increment, stress and J.
+        let mut per_particle = state + 2.0 * dimf + 1.0;
+        if scene.time.mode == Mode::Implicit {
+            per_particle += 3f64.powi(dim as i32) * (2.0 + 2.0 * dimf) + 2.0 * 9.0 + 1.0;
+        }
+        let particle_bytes = particles * F64 * per_particle;
         // Per material: mass, velocity, temperature, specific volume,
         // volume fraction, their Lagrangian and advected copies and face
         // values; per cell: pressures, the exchange and pressure-solver
@@ -114,10 +128,15 @@ impl MemoryEstimate {
             }
         }
         let cell_bytes = padded * per_cell;
-        // The last good state: particle arrays (2 tensors, 4 vectors, 8
-        // scalars) and per material and cell its state; the snapshot: about
-        // 40 values a particle and 12 a material and cell.
-        let mut run_bytes = particles * F64 * (26.0 + 4.0 * dimf + 40.0)
+        // The last good state: the particle arrays (the material index as a
+        // u64) and per material and cell its state. The snapshot reads the
+        // particle fields in place and copies their positions (3 values); a
+        // run of several solid fields or phases joins them into one copy
+        // first (the arrays and about 33 field values); cells: about 12
+        // values a material and cell.
+        let joined = scene.multiphase.is_some() || (fluids > 0.0 && solids > 1.0);
+        let snapshot = if joined { state + 33.0 } else { 3.0 };
+        let mut run_bytes = particles * F64 * (state + 0.75 + snapshot)
             + padded * materials_in_cells * F64 * (6.0 + dimf + 12.0);
         if scene.time.mode == Mode::Implicit {
             // Rows of the Newton matrix: dim DOFs a node, coupled to the 5^dim
@@ -268,9 +287,11 @@ pub fn peak_resident_bytes() -> Option<u64> {
 
 /// The share of the memory limit a scene's estimate may take: the
 /// estimate leaves out the program, its threads and the allocator's slack
-/// (20-step runs of `cases/` peaked at 1.1–1.6× the estimate above the
-/// program's own 3.5 MiB: shock_helium_bubble 26.9 MiB for 23.3,
-/// pressurized_cylinder_impm 24.1 for 22.6, two_disks 9.7 for 6.5).
+/// (the peak resident memory of 20-step runs, `summary.json`'s
+/// `peak_memory_bytes`, less the program's own 9.6 MiB, was 0.75–0.93 of
+/// the estimate: bench/block_1m 490 MiB for 526, two_disks at 256² 35.5
+/// for 47.2, pressurized_cylinder_impm 17.9 for 22.5, shock_helium_bubble
+/// 18.9 for 23.3).
 pub const MEMORY_SHARE: f64 = 0.6;
 
 /// Refuses `scene` when its estimate exceeds [`MEMORY_SHARE`] of `limit`

@@ -149,10 +149,11 @@ impl<'a> Values<'a> {
     }
 
     /// A tensor field read from `m` (row-major) as it is written.
-    pub fn tensors(m: &'a [nalgebra::Matrix3<f64>]) -> Self {
-        Self::computed(m.len(), 9, move |i, o| {
+    pub fn tensors<const D: usize>(t: &'a crate::mpm::Tensors<D>) -> Self {
+        Self::computed(t.len(), 9, move |i, o| {
+            let m = t.get(i);
             for (k, x) in o[..9].iter_mut().enumerate() {
-                *x = m[i][(k / 3, k % 3)];
+                *x = m[(k / 3, k % 3)];
             }
         })
     }
@@ -535,10 +536,11 @@ mod tests {
     #[test]
     fn computed_values_equal_their_stored_form() {
         let v = [SVector::from([1.0, -2.0]), SVector::from([0.5, 1e-300])];
-        let m = [
+        let m = crate::mpm::Tensors::<3>::try_from_matrices(&[
             Matrix3::from_fn(|i, j| (3 * i + j) as f64),
             Matrix3::identity(),
-        ];
+        ])
+        .expect("3D tensors");
         let s = [0.25, -7.0];
         let stored_v = Values::Vector(vec![[1.0, -2.0, 0.0], [0.5, 1e-300, 0.0]]);
         let stored_m = Values::Tensor(vec![

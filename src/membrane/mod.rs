@@ -17,7 +17,9 @@
 pub mod element;
 pub mod quad_mesh;
 
-use nalgebra::{Matrix3, SVector};
+use nalgebra::SVector;
+
+use crate::mpm::Tensors;
 
 /// The particles of one membrane: `first .. first + count`, in order along
 /// the contour.
@@ -101,7 +103,7 @@ impl<const D: usize> Membranes<D> {
     pub fn update_frames(
         &mut self,
         x: &[SVector<f64, D>],
-        stress: &mut [Matrix3<f64>],
+        stress: &mut Tensors<D>,
     ) -> Result<(), usize> {
         for c in &self.chains {
             for k in 0..c.count {
@@ -117,13 +119,14 @@ impl<const D: usize> Membranes<D> {
                 let d = x[b] - x[a];
                 let t = d / d.norm();
                 self.tangent[p] = t;
-                let sp = &mut stress[p];
+                let mut sp = stress.get(p);
                 let s: f64 = (0..D).map(|i| sp[(i, i)]).sum();
                 for i in 0..D {
                     for j in 0..D {
                         sp[(i, j)] = s * t[i] * t[j];
                     }
                 }
+                stress.set(p, &sp);
             }
         }
         Ok(())

@@ -186,7 +186,7 @@ pub fn particle_dt_limit<const D: usize>(
         vol: particles.vol[p],
         vol0: particles.vol0[p],
         work: particles.work[p],
-        stress: &particles.stress[p],
+        stress: &particles.stress.get(p),
         speed: particles.v[p].norm(),
     };
     let limit = materials[particles.material[p] as usize].dt_limit(hmin, &state, c_max);
@@ -815,11 +815,13 @@ fn prepare<const D: usize>(
     if ctx.params.shape.uses_particle_domain() {
         let inv_h = ctx.grid.inv_h;
         scratch.lp.resize(particles.len(), SVector::zeros());
+        let f = &particles.f;
         scratch
             .lp
             .par_iter_mut()
-            .zip(particles.half_size.par_iter().zip(particles.f.par_iter()))
-            .for_each(|(lp, (l0, f))| *lp = gimp_half_width(l0, f, &inv_h));
+            .zip(particles.half_size.par_iter())
+            .enumerate()
+            .for_each(|(p, (lp, l0))| *lp = gimp_half_width(l0, &f.get(p), &inv_h));
     } else {
         scratch.lp.clear();
     }
@@ -946,7 +948,7 @@ fn p2g<
             if let Some(b) = body {
                 fb = b.accel(&particles.x0[p], &particles.x[p], t) * mp;
             }
-            let mut sigma = particles.stress[p];
+            let mut sigma = particles.stress.get(p);
             if let Some((pn, p_ref)) = ctx.pressure {
                 // Guilkey Sec. 3.3 step 7: ICE applies −θ∇p to the solid, so
                 // the particle stress carries σ + (p − p_ref) I (the
@@ -1154,8 +1156,8 @@ fn g2p<
         let temp = SharedMut::new(&mut particles.temperature);
         let x = SharedMut::new(&mut particles.x);
         let v = SharedMut::new(&mut particles.v);
-        let fgrad = SharedMut::new(&mut particles.f);
-        let stress = SharedMut::new(&mut particles.stress);
+        let fgrad = particles.f.shared();
+        let stress = particles.stress.shared();
         let work = SharedMut::new(&mut particles.work);
         let vol = SharedMut::new(&mut particles.vol);
         let dxs = SharedMut::new(dx_store);
@@ -1215,7 +1217,7 @@ fn g2p<
                     }
                 }
                 // SAFETY: as above.
-                let (fp, sp, wp, vp_vol) =
+                let (fp, mut sp, wp, vp_vol) =
                     unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
                 if has_membrane {
                     if let Some(m) = ctx.materials[mat[p] as usize].membrane() {
@@ -1230,23 +1232,25 @@ fn g2p<
                                 eps_hoop,
                                 dt,
                                 vol0[p],
-                                sp,
+                                &mut sp,
                                 wp,
                                 vp_vol,
                             )
                         {
                             failed.fetch_min(p, Ordering::Relaxed);
                         }
+                        // SAFETY: as above.
+                        unsafe { stress.set(p, &sp) };
                         return;
                     }
                 }
                 // Plane strain: L lives in the D×D block, so F stays
                 // diag(F_D, I) and only that block changes: F_D ← (I + Δt L)
                 // F_D, J = det F_D. Axisymmetric: F₃₃ follows the hoop rate.
-                let fd = block::<D>(fp);
+                let fd = block::<D>(&fp);
                 let fd_new = fd + (l * fd) * dt;
                 let mut j = det_small(&fd_new);
-                let mut f_new = *fp;
+                let mut f_new = fp;
                 for a in 0..D {
                     for b in 0..D {
                         f_new[(a, b)] = fd_new[(a, b)];
@@ -1268,7 +1272,8 @@ fn g2p<
                     j_old: *vp_vol / vol0[p],
                     c_max,
                 };
-                *fp = f_new;
+                // SAFETY: as above.
+                unsafe { fgrad.set(p, &f_new) };
                 *vp_vol = j * vol0[p];
                 let material = &ctx.materials[mat[p] as usize];
                 // SAFETY: as above.
@@ -1287,7 +1292,9 @@ fn g2p<
                     // SAFETY: as above.
                     state.damage = unsafe { *damage.get(p) };
                 }
-                material.update_stress(&l3, &f_new, j, dt, &gas, sp, wp, &mut state);
+                material.update_stress(&l3, &f_new, j, dt, &gas, &mut sp, wp, &mut state);
+                // SAFETY: as above.
+                unsafe { stress.set(p, &sp) };
                 if plastic {
                     // SAFETY: as above.
                     unsafe {

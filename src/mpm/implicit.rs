@@ -1115,7 +1115,7 @@ impl<const D: usize> ImplicitRun<D> {
                 // uGIMP half-width in cell units from the domain stretched by
                 // Fⁿ, l = l⁰ |F_dd| ≤ h/2, frozen over the step (the explicit
                 // step's rule); ignored by the other kernels.
-                let f = &parts.f[p];
+                let f = &parts.f.get(p);
                 let lp = SVector::<f64, D>::from_fn(|d, _| {
                     (parts.half_size[p][d] * f[(d, d)].abs() * grid.inv_h[d]).min(0.5)
                 });
@@ -1511,14 +1511,14 @@ impl<const D: usize> ImplicitRun<D> {
                 }
             }
             let jd = df.determinant();
-            let f_new: Matrix3<f64> = df * parts.f[p];
+            let f_new: Matrix3<f64> = df * parts.f.get(p);
             let j = f_new.determinant();
             if !(jd > 0.0 && j > 0.0 && j.is_finite()) {
                 fail(p, "deformation gradient inverted or not finite (J ≤ 0)");
                 return;
             }
             let mat = &materials[parts.material[p] as usize];
-            let sigma = mat.implicit_stress(&df, &f_new, j, &parts.stress[p]);
+            let sigma = mat.implicit_stress(&df, &f_new, j, &parts.stress.get(p));
             let v = jd * parts.vol[p];
             let Some(inv3) = df.try_inverse() else {
                 fail(p, "singular incremental deformation gradient");
@@ -1746,9 +1746,9 @@ impl<const D: usize> ImplicitRun<D> {
         for p in 0..np {
             parts.x[p] += dx[p];
             let mat = &self.materials[parts.material[p] as usize];
-            let old = parts.stress[p];
-            parts.f[p] = ev.df[p] * parts.f[p];
-            parts.stress[p] = ev.stress[p];
+            let old = parts.stress.get(p);
+            parts.f.set(p, &(ev.df[p] * parts.f.get(p)));
+            parts.stress.set(p, &ev.stress[p]);
             parts.vol[p] = ev.j[p] * parts.vol0[p];
             if mat.model == crate::material::SolidModel::LinearElastic {
                 let g = ev.df[p] - Matrix3::identity();

@@ -6,6 +6,7 @@ pub mod explicit;
 pub mod implicit;
 pub mod particles;
 mod scatter;
+pub mod tensors;
 
 pub use explicit::{
     explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes,
@@ -16,3 +17,4 @@ pub use implicit::{
     SurfaceLoad,
 };
 pub use particles::Particles;
+pub use tensors::{SharedTensors, Tensors};

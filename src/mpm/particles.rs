@@ -2,6 +2,7 @@
 
 use nalgebra::{Matrix3, SVector};
 
+use super::tensors::Tensors;
 use crate::material::SolidMaterial;
 
 /// Material points of every solid material in a scene.
@@ -21,10 +22,11 @@ pub struct Particles<const D: usize> {
     pub vol: Vec<f64>,
     /// Initial half-size per direction (physical units), for GIMP.
     pub half_size: Vec<SVector<f64, D>>,
-    /// Deformation gradient F (3×3; plane strain / uniaxial strain in 2D/1D).
-    pub f: Vec<Matrix3<f64>>,
-    /// Cauchy stress σ (3×3).
-    pub stress: Vec<Matrix3<f64>>,
+    /// Deformation gradient F (3×3; plane strain / uniaxial strain in 2D/1D,
+    /// stored without the entries those keep zero).
+    pub f: Tensors<D>,
+    /// Cauchy stress σ (3×3, stored as [`Particles::f`]).
+    pub stress: Tensors<D>,
     /// Accumulated stress work per unit reference volume (rate models).
     pub work: Vec<f64>,
     /// Index into the scene's solid materials.
@@ -80,8 +82,8 @@ impl<const D: usize> Particles<D> {
         self.vol0.push(vol);
         self.vol.push(vol);
         self.half_size.push(half_size);
-        self.f.push(Matrix3::identity());
-        self.stress.push(Matrix3::zeros());
+        self.f.push(&Matrix3::identity());
+        self.stress.push(&Matrix3::zeros());
         self.work.push(0.0);
         self.material.push(material);
         self.temperature.push(Self::INITIAL_TEMPERATURE);
@@ -170,8 +172,8 @@ impl<const D: usize> Particles<D> {
         self.vol0.push(other.vol0[p]);
         self.vol.push(other.vol[p]);
         self.half_size.push(other.half_size[p]);
-        self.f.push(other.f[p]);
-        self.stress.push(other.stress[p]);
+        self.f.push(&other.f.get(p));
+        self.stress.push(&other.stress.get(p));
         self.work.push(other.work[p]);
         self.material.push(other.material[p]);
         self.temperature.push(other.temperature[p]);
@@ -223,7 +225,7 @@ impl<const D: usize> Particles<D> {
             .map(|p| {
                 self.vol0[p]
                     * materials[self.material[p] as usize]
-                        .strain_energy_density(&self.f[p], self.work[p])
+                        .strain_energy_density(&self.f.get(p), self.work[p])
             })
             .sum()
     }
@@ -240,7 +242,7 @@ impl<const D: usize> Particles<D> {
 }
 
 /// The operations [`Particles`] applies to all its arrays alike.
-trait ParticleArray {
+pub(crate) trait ParticleArray {
     fn reserve_exact(&mut self, n: usize);
     fn shrink_to_fit(&mut self);
     /// Keeps entry `i` where `keep[i]`, in order.
@@ -260,6 +262,25 @@ impl<T> ParticleArray for Vec<T> {
     }
     fn shrink_to_fit(&mut self) {
         Vec::shrink_to_fit(self);
+    }
+}
+
+impl<const D: usize> ParticleArray for Tensors<D> {
+    fn reserve_exact(&mut self, n: usize) {
+        self.values_mut().reserve_exact(n * Self::STRIDE);
+    }
+    fn shrink_to_fit(&mut self) {
+        self.values_mut().shrink_to_fit();
+    }
+    fn retain_by(&mut self, keep: &[bool]) {
+        let s = Self::STRIDE;
+        let v = self.values_mut();
+        let mut kept = 0;
+        for (i, _) in keep.iter().enumerate().filter(|(_, &k)| k) {
+            v.copy_within(i * s..(i + 1) * s, kept * s);
+            kept += 1;
+        }
+        v.truncate(kept * s);
     }
 }
 

@@ -319,7 +319,7 @@ impl<const D: usize> MultiphaseRun<D> {
                 .zip(node_tmp.iter().zip(node_volume.iter()))
                 .for_each(|(c, (q, v))| *c += q / v);
             sum_vk += ph.point.iter().sum::<f64>();
-            for (q, s) in ph.point.iter_mut().zip(&p.stress) {
+            for (q, s) in ph.point.iter_mut().zip(p.stress.iter()) {
                 *q *= -s.trace() / 3.0;
             }
             sum_vkp += ph.point.iter().sum::<f64>();
@@ -617,7 +617,7 @@ fn gas_pressure_failure<const D: usize>(
         (0..p.len())
             .find(|&i| {
                 let k = p.vol[i] * compressibility(m, p, i);
-                !(k.is_finite() && (k * p.stress[i].trace()).is_finite())
+                !(k.is_finite() && (k * p.stress.get(i).trace()).is_finite())
             })
             .map(|i| (i, m.name.as_str()))
     });

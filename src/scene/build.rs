@@ -303,8 +303,10 @@ fn fill_objects<const D: usize>(
                 let p = particles.len() - 1;
                 // The prestress as an in-plane trace; the first frame update
                 // turns it along the tangent.
-                particles.stress[p][(0, 0)] = s0;
-                particles.stress[p][(2, 2)] = s0_3;
+                let mut s = nalgebra::Matrix3::zeros();
+                s[(0, 0)] = s0;
+                s[(2, 2)] = s0_3;
+                particles.stress.set(p, &s);
                 particles.work[p] = law.energy_of([s0, s0_3]);
             }
             if let Some(q) = (before..particles.len()).find(|&q| {
@@ -345,7 +347,7 @@ fn fill_objects<const D: usize>(
             if gas.is_some() || obj.pressure.is_some() {
                 let p = particles.len() - 1;
                 particles.work[p] = gas_work;
-                particles.stress[p] = gas_stress;
+                particles.stress.set(p, &gas_stress);
             }
         });
         if particles.len() == before {

@@ -11,7 +11,7 @@ use crate::driver::outputs::{pad3, per_depth};
 use crate::ice::{IceState, MaterialCells};
 use crate::material::eos::EquationOfState;
 use crate::material::SolidMaterial;
-use crate::mpm::Particles;
+use crate::mpm::{Particles, Tensors};
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 
 /// Stores `D`-vectors as an `[n, D]` array.
@@ -36,16 +36,37 @@ pub fn take_vectors<const D: usize>(
         .collect())
 }
 
-/// Stores 3×3 matrices as an `[n, 3, 3]` array (row-major, as NumPy reads
-/// it).
-pub fn put_matrices(ck: &mut Checkpoint, name: &str, m: &[Matrix3<f64>]) {
-    // Row-major: nalgebra stores columns, so each matrix goes out
-    // transposed.
-    ck.put_f64_with(name, vec![m.len(), 3, 3], |buf| {
-        for a in m {
-            buf.extend_from_slice(a.transpose().as_slice());
-        }
+/// Stores particle tensors as an `[n, k]` array of their stored entries,
+/// `k` = [`Tensors::STRIDE`] in the order of [`Tensors::ENTRIES`] (1D: xx,
+/// yy, zz; 2D: xx, xy, yx, yy, zz; 3D: all nine, row-major).
+pub fn put_tensors<const D: usize>(ck: &mut Checkpoint, name: &str, t: &Tensors<D>) {
+    ck.put_f64_with(name, vec![t.len(), Tensors::<D>::STRIDE], |buf| {
+        buf.extend_from_slice(t.values())
     });
+}
+
+/// Reads `n` tensors saved by [`put_tensors`], or saved as full `[n, 3, 3]`
+/// row-major matrices (checkpoints before the packed layout), whose entries
+/// the dimension does not keep must then be zero.
+pub fn take_tensors<const D: usize>(
+    ck: &mut Checkpoint,
+    name: &str,
+    n: usize,
+) -> Result<Tensors<D>, CheckpointError> {
+    let malformed = |reason: String| CheckpointError::Malformed {
+        what: name.to_string(),
+        reason,
+    };
+    if ck.shape(name) == Some(&[n, 3, 3][..]) {
+        let m = take_matrices(ck, name, n)?;
+        return Tensors::try_from_matrices(&m).map_err(|p| {
+            malformed(format!(
+                "particle {p} has a non-zero entry that a {D}D run keeps zero"
+            ))
+        });
+    }
+    let data = ck.take_f64(name, Some(&[n, Tensors::<D>::STRIDE]))?;
+    Tensors::from_values(data).ok_or_else(|| malformed("not whole tensors".to_string()))
 }
 
 /// Reads an `[n, 3, 3]` array back into matrices.
@@ -91,8 +112,8 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     put_scalars(ck, &n("vol0"), &p.vol0);
     put_scalars(ck, &n("vol"), &p.vol);
     put_vectors(ck, &n("half_size"), &p.half_size);
-    put_matrices(ck, &n("f"), &p.f);
-    put_matrices(ck, &n("stress"), &p.stress);
+    put_tensors(ck, &n("f"), &p.f);
+    put_tensors(ck, &n("stress"), &p.stress);
     put_scalars(ck, &n("work"), &p.work);
     ck.put_u64_with(&n("material"), vec![p.len()], |buf| {
         buf.extend(p.material.iter().map(|&m| m as u64));
@@ -129,8 +150,8 @@ pub fn load_particles<const D: usize>(
         vol0: take_scalars(ck, &n("vol0"), len)?,
         vol: take_scalars(ck, &n("vol"), len)?,
         half_size: take_vectors(ck, &n("half_size"), len)?,
-        f: take_matrices(ck, &n("f"), len)?,
-        stress: take_matrices(ck, &n("stress"), len)?,
+        f: take_tensors(ck, &n("f"), len)?,
+        stress: take_tensors(ck, &n("stress"), len)?,
         work: take_scalars(ck, &n("work"), len)?,
         material: material.into_iter().map(|m| m as u16).collect(),
         temperature: take_scalars(ck, &n("temperature"), len)?,
@@ -170,7 +191,7 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
             OutField::new(
                 "J",
                 "-",
-                Values::computed(n, 1, |i, o| o[0] = p.f[i].determinant()),
+                Values::computed(n, 1, |i, o| o[0] = p.f.get(i).determinant()),
             ),
             OutField::new(
                 "id",
@@ -248,10 +269,10 @@ pub fn gas_point_fields<const D: usize>(
     for i in 0..n {
         let r = p.mass[i] / p.vol[i];
         let ei = p.work[i] * p.vol0[i] / p.mass[i];
-        let mean = -p.stress[i].trace() / 3.0;
+        let mean = -p.stress.get(i).trace() / 3.0;
         let (pi, qi) = match materials[p.material[i] as usize].gas() {
             Some(g) => {
-                let qi = g.q_of(&p.stress[i], r, ei);
+                let qi = g.q_of(&p.stress.get(i), r, ei);
                 (mean - qi, qi)
             }
             None => (mean, 0.0),
@@ -294,11 +315,11 @@ fn particle_violation<const D: usize>(
             return Some((field, x, POS));
         }
     }
-    let j = p.f[i].determinant();
+    let j = p.f.get(i).determinant();
     if !(j.is_finite() && j > 0.0) {
         return Some(("J", j, POS));
     }
-    if let Some(&x) = p.stress[i].iter().find(|x| !x.is_finite()) {
+    if let Some(&x) = p.stress.get(i).iter().find(|x| !x.is_finite()) {
         return Some(("stress", x, FIN));
     }
     let t = p.temperature[i];
@@ -335,13 +356,15 @@ fn particles_pass<const D: usize>(p: &Particles<D>, materials: &[SolidMaterial])
     let any_gas = materials.iter().any(|m| m.gas().is_some());
     (0..p.len().div_ceil(CHUNK)).into_par_iter().all(|c| {
         let r = c * CHUNK..((c + 1) * CHUNK).min(p.len());
-        let j_ok = p.f[r.clone()].iter().fold(true, |ok, f| {
-            let j = f.determinant();
+        let j_ok = r.clone().fold(true, |ok, i| {
+            let j = p.f.get(i).determinant();
             ok & (j > 0.0) & (j <= f64::MAX)
         });
-        let stress_ok = p.stress[r.clone()].iter().fold(true, |ok, s| {
-            ok & s.iter().fold(true, |o, &x| o & (x.abs() <= f64::MAX))
-        });
+        // The entries a dimension keeps zero are not stored.
+        let k = Tensors::<D>::STRIDE;
+        let stress_ok = p.stress.values()[k * r.start..k * r.end]
+            .iter()
+            .fold(true, |o, &x| o & (x.abs() <= f64::MAX));
         let damage_ok = p
             .damage
             .get(r.clone())
@@ -652,7 +675,7 @@ pub fn particle_material_totals<const D: usize>(
         t.mass += p.mass[i];
         mom += p.v[i] * p.mass[i];
         t.kinetic += 0.5 * p.mass[i] * p.v[i].norm_squared();
-        t.internal += p.vol0[i] * materials[k].strain_energy_density(&p.f[i], p.work[i]);
+        t.internal += p.vol0[i] * materials[k].strain_energy_density(&p.f.get(i), p.work[i]);
     }
     t.momentum = pad3(&mom);
     t
@@ -694,5 +717,37 @@ pub fn particle_conserved<const D: usize>(
             .collect(),
         energies,
         momentum_scale: p.momentum_scale(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Particle tensors round-trip through a checkpoint in the packed
+    /// layout, and the full `[n, 3, 3]` layout of older checkpoints still
+    /// loads unless it holds an entry the dimension keeps zero.
+    #[test]
+    fn tensors_load_from_the_packed_and_the_full_layout() {
+        let plane = Matrix3::new(1.1, 0.2, 0.0, -0.3, 0.9, 0.0, 0.0, 0.0, 1.05);
+        let t = Tensors::<2>::try_from_matrices(&[Matrix3::identity(), plane]).expect("2D");
+        let mut ck = Checkpoint::new("test", "", 0, 0.0);
+        put_tensors(&mut ck, "f", &t);
+        assert_eq!(ck.shape("f"), Some(&[2, 5][..]));
+        assert_eq!(take_tensors::<2>(&mut ck, "f", 2).expect("packed"), t);
+        let full = |m: &[Matrix3<f64>], ck: &mut Checkpoint| {
+            ck.put_f64_with("f", vec![m.len(), 3, 3], |buf| {
+                for a in m {
+                    buf.extend_from_slice(a.transpose().as_slice());
+                }
+            })
+        };
+        full(&[Matrix3::identity(), plane], &mut ck);
+        assert_eq!(take_tensors::<2>(&mut ck, "f", 2).expect("full"), t);
+        let mut bent = plane;
+        bent[(0, 2)] = 1e-3;
+        full(&[plane, bent], &mut ck);
+        let err = take_tensors::<2>(&mut ck, "f", 2).expect_err("out of plane");
+        assert!(err.to_string().contains("particle 1"), "{err}");
     }
 }

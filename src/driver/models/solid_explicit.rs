@@ -40,7 +40,7 @@ fn membrane_fields<const D: usize>(r: &SolidRun<D>) -> Vec<OutField<'static>> {
     let s = (0..p.len())
         .map(|i| {
             if m.segment0[i] > 0.0 {
-                (0..D).map(|d| p.stress[i][(d, d)]).sum()
+                (0..D).map(|d| p.stress.get(i)[(d, d)]).sum()
             } else {
                 0.0
             }
