@@ -665,8 +665,14 @@ fn the_particle_watchdog_finds_every_impossible_value() {
     use mpmice::driver::models::arrays::particle_watchdog;
     let mut run = mpmice::scene::build_solid_run::<2>(&case("two_disks.toml")).expect("solid");
     let n = run.particles.len();
-    run.particles.damage = vec![0.0; n];
     let mats = run.materials.clone();
+    // Untracked optional arrays (an elastic run's temperature, plastic
+    // strain and damage) pass; tracked, each entry is checked.
+    assert!(run.particles.temperature.is_empty() && run.particles.damage.is_empty());
+    assert!(particle_watchdog(&run.particles, &mats).is_none());
+    run.particles.damage = vec![0.0; n];
+    run.particles.track_temperature();
+    run.particles.track_plastic_strain();
     assert!(particle_watchdog(&run.particles, &mats).is_none());
     type Poison = fn(&mut mpmice::mpm::Particles<2>, usize);
     let cases: [(&str, Poison); 9] = [

@@ -480,6 +480,7 @@ impl<const D: usize> CoupledRun<D> {
             .enumerate()
             .map(|(i, spec)| {
                 let mut particles = spec.particles;
+                particles.track_temperature();
                 particles.temperature.fill(coupling.solid_temperature);
                 SolidField {
                     ice_material: nf + i,

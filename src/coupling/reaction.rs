@@ -351,7 +351,7 @@ pub fn burn<const D: usize>(
     let vol = layout.cell_volume();
     let temperature_of = |p: usize, particles: &Particles<D>| match uniform_t {
         Some(t) => t,
-        None => particles.temperature[p],
+        None => particles.temperature_of(p),
     };
     for p in 0..particles.len() {
         let c = cell_containing(layout, &particles.x[p]);
@@ -501,6 +501,7 @@ mod tests {
             }
             x += h;
         }
+        p.track_temperature();
         p.temperature.iter_mut().enumerate().for_each(|(i, t)| {
             *t = 600.0 + i as f64;
         });

@@ -129,6 +129,7 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
     let mut run = build_solid_run::<2>(&scene)?;
     let h = R0 / n as f64;
     let kinetic0 = run.particles.kinetic_energy();
+    run.particles.track_temperature();
     let t0 = run.particles.temperature.clone();
     let clock = Instant::now();
     while !run.finished() {
@@ -157,11 +158,11 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
         elastic += p.vol[i] * (pr * pr / (2.0 * k) + q * q / (6.0 * mu));
         if let Some(j2) = m.plasticity() {
             if j2.taylor_quinney > 0.0 {
-                plastic +=
-                    p.mass[i] * j2.specific_heat * (p.temperature[i] - t0[i]) / j2.taylor_quinney;
+                plastic += p.mass[i] * j2.specific_heat * (p.temperature_of(i) - t0[i])
+                    / j2.taylor_quinney;
             }
         }
-        max_eps = max_eps.max(p.plastic_strain[i]);
+        max_eps = max_eps.max(p.plastic_strain_of(i));
         if let Some(&d) = p.damage.get(i) {
             max_d = max_d.max(d);
             failed += usize::from(d >= 1.0);

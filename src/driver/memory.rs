@@ -99,7 +99,9 @@ impl MemoryEstimate {
             0.0
         };
         // One particle's arrays: F and σ (3, 5 or 9 stored entries each in
-        // 1D, 2D, 3D), 4 vectors, 7 scalars and a 2-byte material index.
+        // 1D, 2D, 3D), 4 vectors, 7 scalars (temperature and plastic strain
+        // counted whether a run tracks them or not) and a 2-byte material
+        // index.
         let tensor = match dim {
             1 => 3.0,
             2 => 5.0,

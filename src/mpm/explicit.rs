@@ -1149,6 +1149,12 @@ fn g2p<
         // Sized once, at the first step of a run with failure.
         particles.track_damage();
     }
+    if plastic {
+        // Sized once, at the first step of a run with plasticity (plastic
+        // work heats the particles).
+        particles.track_plastic_strain();
+        particles.track_temperature();
+    }
     {
         let mass = &particles.mass;
         let eps_p = SharedMut::new(&mut particles.plastic_strain);

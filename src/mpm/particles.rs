@@ -31,13 +31,18 @@ pub struct Particles<const D: usize> {
     pub work: Vec<f64>,
     /// Index into the scene's solid materials.
     pub material: Vec<u16>,
-    /// Temperature T_p \[K\]. Only the solid–fluid heat exchange of a coupled
-    /// run changes it (Guilkey Sec. 3.3 step 10: the exchange's change goes
-    /// from the cells to the nodes and then to the particles); elsewhere it
-    /// stays at its initial value ([`Particles::INITIAL_TEMPERATURE`] unless
-    /// set).
+    /// Temperature T_p \[K\]: empty unless a run changes it, then one per
+    /// particle ([`Particles::track_temperature`]; read it with
+    /// [`Particles::temperature_of`]). The solid–fluid heat exchange of a
+    /// coupled run (Guilkey Sec. 3.3 step 10: the exchange's change goes
+    /// from the cells to the nodes and then to the particles) and plastic
+    /// heating change it; elsewhere every particle is at
+    /// [`Particles::INITIAL_TEMPERATURE`], and storing that would cost 8
+    /// bytes a particle for nothing (issue 24).
     pub temperature: Vec<f64>,
-    /// Equivalent plastic strain ε̄ (plastic materials; 0 elsewhere).
+    /// Equivalent plastic strain ε̄: empty unless a material is plastic,
+    /// then one per particle (0 for elastic materials; the explicit step
+    /// sizes it at its first step).
     pub plastic_strain: Vec<f64>,
     /// Damage D ∈ [0, 1] (1: failed; [`crate::material::failure`]): empty
     /// unless a material has a failure model, then one per particle (the
@@ -86,10 +91,14 @@ impl<const D: usize> Particles<D> {
         self.stress.push(&Matrix3::zeros());
         self.work.push(0.0);
         self.material.push(material);
-        self.temperature.push(Self::INITIAL_TEMPERATURE);
-        self.plastic_strain.push(0.0);
-        if !self.damage.is_empty() {
-            self.damage.push(0.0);
+        for (v, value) in [
+            (&mut self.temperature, Self::INITIAL_TEMPERATURE),
+            (&mut self.plastic_strain, 0.0),
+            (&mut self.damage, 0.0),
+        ] {
+            if !v.is_empty() {
+                v.push(value);
+            }
         }
         self.id.push(self.id.last().map_or(0, |&l| l + 1));
     }
@@ -119,12 +128,49 @@ impl<const D: usize> Particles<D> {
         op(&mut self.stress);
         op(&mut self.work);
         op(&mut self.material);
-        op(&mut self.temperature);
-        op(&mut self.plastic_strain);
-        if !self.damage.is_empty() {
-            op(&mut self.damage);
+        for v in [
+            &mut self.temperature,
+            &mut self.plastic_strain,
+            &mut self.damage,
+        ] {
+            if !v.is_empty() {
+                op(v);
+            }
         }
         op(&mut self.id);
+    }
+
+    /// Sizes [`Particles::temperature`] to one entry per particle (new
+    /// entries at [`Particles::INITIAL_TEMPERATURE`]); a no-op when it is
+    /// sized already.
+    pub fn track_temperature(&mut self) {
+        if self.temperature.len() != self.len() {
+            self.temperature
+                .resize(self.len(), Self::INITIAL_TEMPERATURE);
+        }
+    }
+
+    /// Sizes [`Particles::plastic_strain`] to one entry per particle (new
+    /// entries 0); a no-op when it is sized already.
+    pub fn track_plastic_strain(&mut self) {
+        if self.plastic_strain.len() != self.len() {
+            self.plastic_strain.resize(self.len(), 0.0);
+        }
+    }
+
+    /// Temperature of particle `p` (tracked or not).
+    #[inline]
+    pub fn temperature_of(&self, p: usize) -> f64 {
+        self.temperature
+            .get(p)
+            .copied()
+            .unwrap_or(Self::INITIAL_TEMPERATURE)
+    }
+
+    /// Equivalent plastic strain of particle `p` (tracked or not).
+    #[inline]
+    pub fn plastic_strain_of(&self, p: usize) -> f64 {
+        self.plastic_strain.get(p).copied().unwrap_or(0.0)
     }
 
     /// Sizes [`Particles::damage`] to one entry per particle (new entries
@@ -176,14 +222,24 @@ impl<const D: usize> Particles<D> {
         self.stress.push(&other.stress.get(p));
         self.work.push(other.work[p]);
         self.material.push(other.material[p]);
-        self.temperature.push(other.temperature[p]);
-        self.plastic_strain.push(other.plastic_strain[p]);
-        if !other.damage.is_empty() {
-            // Keep `damage` empty or full: size it before the first copy.
-            self.damage.resize(self.len() - 1, 0.0);
-            self.damage.push(other.damage[p]);
-        } else if !self.damage.is_empty() {
-            self.damage.push(0.0);
+        let before = self.len() - 1;
+        for (v, src, untracked) in [
+            (
+                &mut self.temperature,
+                &other.temperature,
+                Self::INITIAL_TEMPERATURE,
+            ),
+            (&mut self.plastic_strain, &other.plastic_strain, 0.0),
+            (&mut self.damage, &other.damage, 0.0),
+        ] {
+            // Keep each optional array empty or full: size it before the
+            // first tracked copy.
+            if !src.is_empty() {
+                v.resize(before, untracked);
+                v.push(src[p]);
+            } else if !v.is_empty() {
+                v.push(untracked);
+            }
         }
         self.id.push(other.id[p]);
     }

@@ -118,10 +118,15 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     ck.put_u64_with(&n("material"), vec![p.len()], |buf| {
         buf.extend(p.material.iter().map(|&m| m as u64));
     });
-    put_scalars(ck, &n("temperature"), &p.temperature);
-    put_scalars(ck, &n("plastic_strain"), &p.plastic_strain);
-    if !p.damage.is_empty() {
-        put_scalars(ck, &n("damage"), &p.damage);
+    // The optional arrays, where a run tracks them.
+    for (name, v) in [
+        ("temperature", &p.temperature),
+        ("plastic_strain", &p.plastic_strain),
+        ("damage", &p.damage),
+    ] {
+        if !v.is_empty() {
+            put_scalars(ck, &n(name), v);
+        }
     }
     ck.put_u64_with(&n("id"), vec![p.len()], |buf| buf.extend(&p.id));
 }
@@ -142,6 +147,13 @@ pub fn load_particles<const D: usize>(
             reason: format!("material index {m}, the scene has {n_materials} solid materials"),
         });
     }
+    let optional = |ck: &mut Checkpoint, name: &str| {
+        if ck.shape(&n(name)).is_some() {
+            take_scalars(ck, &n(name), len)
+        } else {
+            Ok(Vec::new())
+        }
+    };
     Ok(Particles {
         x: take_vectors(ck, &n("x"), len)?,
         x0: take_vectors(ck, &n("x0"), len)?,
@@ -154,14 +166,10 @@ pub fn load_particles<const D: usize>(
         stress: take_tensors(ck, &n("stress"), len)?,
         work: take_scalars(ck, &n("work"), len)?,
         material: material.into_iter().map(|m| m as u16).collect(),
-        temperature: take_scalars(ck, &n("temperature"), len)?,
-        plastic_strain: take_scalars(ck, &n("plastic_strain"), len)?,
-        // Present when the run had started to track damage.
-        damage: if ck.shape(&n("damage")).is_some() {
-            take_scalars(ck, &n("damage"), len)?
-        } else {
-            Vec::new()
-        },
+        // Each present when the run had started to track it.
+        temperature: optional(ck, "temperature")?,
+        plastic_strain: optional(ck, "plastic_strain")?,
+        damage: optional(ck, "damage")?,
         id: ck.take_u64(&n("id"), Some(&[len]))?,
     })
 }
@@ -203,7 +211,11 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
                 "-",
                 Values::computed(n, 1, |i, o| o[0] = f64::from(p.material[i])),
             ),
-            OutField::new("temperature", "K", Values::scalars(&p.temperature)),
+            OutField::new(
+                "temperature",
+                "K",
+                Values::computed(n, 1, |i, o| o[0] = p.temperature_of(i)),
+            ),
         ],
         csv: true,
     }
@@ -221,7 +233,7 @@ pub fn plastic_fields<const D: usize>(
     vec![OutField::new(
         "plastic_strain",
         "-",
-        Values::Scalar(p.plastic_strain.clone()),
+        Values::Scalar((0..p.len()).map(|i| p.plastic_strain_of(i)).collect()),
     )]
 }
 
@@ -322,11 +334,11 @@ fn particle_violation<const D: usize>(
     if let Some(&x) = p.stress.get(i).iter().find(|x| !x.is_finite()) {
         return Some(("stress", x, FIN));
     }
-    let t = p.temperature[i];
+    let t = p.temperature_of(i);
     if !(t.is_finite() && t > 0.0) {
         return Some(("temperature", t, POS));
     }
-    let ep = p.plastic_strain[i];
+    let ep = p.plastic_strain_of(i);
     if !(ep.is_finite() && ep >= 0.0) {
         return Some(("plastic_strain", ep, "finite and ≥ 0"));
     }
@@ -375,8 +387,8 @@ fn particles_pass<const D: usize>(p: &Particles<D>, materials: &[SolidMaterial])
             && all_positive(&p.vol[r.clone()])
             && j_ok
             && stress_ok
-            && all_positive(&p.temperature[r.clone()])
-            && all_nonnegative(&p.plastic_strain[r.clone()])
+            && p.temperature.get(r.clone()).is_none_or(all_positive)
+            && p.plastic_strain.get(r.clone()).is_none_or(all_nonnegative)
             && damage_ok
             && (!any_gas
                 || r.into_iter()
