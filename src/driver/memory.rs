@@ -132,12 +132,11 @@ impl MemoryEstimate {
         let cell_bytes = padded * per_cell;
         // The last good state: the particle arrays (the material index as a
         // u64) and per material and cell its state. The snapshot reads the
-        // particle fields in place and copies their positions (3 values); a
-        // run of several solid fields or phases joins them into one copy
-        // first (the arrays and about 33 field values); cells: about 12
-        // values a material and cell.
+        // particle fields in place; a run of several solid fields or phases
+        // joins them into one copy first (the arrays and about 36 field
+        // values); cells: about 12 values a material and cell.
         let joined = scene.multiphase.is_some() || (fluids > 0.0 && solids > 1.0);
-        let snapshot = if joined { state + 33.0 } else { 3.0 };
+        let snapshot = if joined { state + 36.0 } else { 0.0 };
         let mut run_bytes = particles * F64 * (state + 0.75 + snapshot)
             + padded * materials_in_cells * F64 * (6.0 + dimf + 12.0);
         if scene.time.mode == Mode::Implicit {
@@ -290,10 +289,10 @@ pub fn peak_resident_bytes() -> Option<u64> {
 /// The share of the memory limit a scene's estimate may take: the
 /// estimate leaves out the program, its threads and the allocator's slack
 /// (the peak resident memory of 20-step runs, `summary.json`'s
-/// `peak_memory_bytes`, less the program's own 9.6 MiB, was 0.75–0.93 of
-/// the estimate: bench/block_1m 490 MiB for 526, two_disks at 256² 35.5
-/// for 47.2, pressurized_cylinder_impm 17.9 for 22.5, shock_helium_bubble
-/// 18.9 for 23.3).
+/// `peak_memory_bytes`, less the program's own 9.6 MiB, was 0.72–0.97 of
+/// the estimate: bench/block_1m 434 MiB for 502, two_disks at 256² 32.4
+/// for 45.2, pressurized_cylinder_impm 17.5 for 22.3, shock_helium_bubble
+/// 18.9 for 23.3, taylor_anvil at 160 × 320 34.2 for 35.2).
 pub const MEMORY_SHARE: f64 = 0.6;
 
 /// Refuses `scene` when its estimate exceeds [`MEMORY_SHARE`] of `limit`

@@ -288,9 +288,10 @@ impl<'a> OutField<'a> {
 
 /// Where a field set lives.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Geometry {
-    /// Scattered points (particles): positions padded to 3D.
-    Points(Vec<[f64; 3]>),
+pub enum Geometry<'a> {
+    /// Scattered points (particles): positions padded to 3D (3-component
+    /// values, read from the model as they are written where it can).
+    Points(Values<'a>),
     /// A structured grid; the fields are on its nodes or on its cells.
     Image {
         /// Lower corner.
@@ -325,7 +326,7 @@ pub struct FieldSet<'a> {
     /// File stem: `particles`, `grid`, `cells`, ….
     pub name: &'static str,
     /// Points or grid.
-    pub geometry: Geometry,
+    pub geometry: Geometry<'a>,
     /// The fields.
     pub fields: Vec<OutField<'a>>,
     /// Whether to write a CSV table too (when the scene asks for CSV).
@@ -338,7 +339,33 @@ impl FieldSet<'_> {
     pub fn into_owned(self) -> FieldSet<'static> {
         FieldSet {
             name: self.name,
-            geometry: self.geometry,
+            geometry: match self.geometry {
+                Geometry::Points(x) => Geometry::Points(x.into_owned()),
+                Geometry::Image {
+                    origin,
+                    spacing,
+                    cells,
+                    on_cells,
+                    centres,
+                } => Geometry::Image {
+                    origin,
+                    spacing,
+                    cells,
+                    on_cells,
+                    centres,
+                },
+                Geometry::Quads {
+                    points,
+                    quads,
+                    on_cells,
+                    centres,
+                } => Geometry::Quads {
+                    points,
+                    quads,
+                    on_cells,
+                    centres,
+                },
+            },
             fields: self
                 .fields
                 .into_iter()

@@ -13,7 +13,7 @@ use crate::driver::model::{FieldSet, Geometry, Values};
 use crate::error::{Error, Result};
 use crate::output::csv::write_rows;
 use crate::output::vtk::{
-    write_vti, write_vtu_points, write_vtu_quads, Field, FieldData, PvdSeries,
+    write_vti, write_vtu_point_data, write_vtu_quads, Field, FieldData, PvdSeries,
 };
 use crate::scene::Format;
 
@@ -185,21 +185,26 @@ impl Outputs {
     }
 }
 
+/// The VTK writer's view of `v`.
+fn field_data<'s>(v: &'s Values<'_>) -> FieldData<'s> {
+    match v {
+        Values::Scalar(v) => FieldData::Scalar(v),
+        Values::Vector(v) => FieldData::Vector(v),
+        Values::Tensor(v) => FieldData::Tensor(v),
+        Values::Computed(c) => FieldData::Computed {
+            n: c.n,
+            components: c.components,
+            f: &*c.f,
+        },
+    }
+}
+
 fn vtk_fields<'s>(set: &'s FieldSet<'_>) -> Vec<Field<'s>> {
     set.fields
         .iter()
-        .map(|f| match &f.values {
-            Values::Scalar(v) => Field::scalar(&f.name, v),
-            Values::Vector(v) => Field::vector(&f.name, v),
-            Values::Tensor(v) => Field::tensor(&f.name, v),
-            Values::Computed(c) => Field {
-                name: &f.name,
-                data: FieldData::Computed {
-                    n: c.n,
-                    components: c.components,
-                    f: &*c.f,
-                },
-            },
+        .map(|f| Field {
+            name: &f.name,
+            data: field_data(&f.values),
         })
         .collect()
 }
@@ -207,7 +212,7 @@ fn vtk_fields<'s>(set: &'s FieldSet<'_>) -> Vec<Field<'s>> {
 fn write_vtk(path: &Path, set: &FieldSet<'_>) -> std::io::Result<()> {
     let fields = vtk_fields(set);
     match &set.geometry {
-        Geometry::Points(x) => write_vtu_points(path, x, &fields),
+        Geometry::Points(x) => write_vtu_point_data(path, field_data(x), &fields),
         Geometry::Quads {
             points,
             quads,
@@ -249,8 +254,9 @@ fn tensor_components(dim: usize) -> &'static [(usize, usize)] {
 /// field's components), computing no column ahead.
 fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()> {
     const AXES: [&str; 3] = ["x", "y", "z"];
-    let coords: &[[f64; 3]] = match &set.geometry {
-        Geometry::Points(x) => x,
+    // The row coordinates: stored, or the points' values.
+    let (stored, points): (&[[f64; 3]], Option<&Values<'_>>) = match &set.geometry {
+        Geometry::Points(x) => (&[], Some(x)),
         Geometry::Quads {
             points,
             on_cells,
@@ -258,13 +264,14 @@ fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()>
             ..
         } => {
             if *on_cells {
-                centres
+                (centres, None)
             } else {
-                points
+                (points, None)
             }
         }
-        Geometry::Image { centres, .. } => centres,
+        Geometry::Image { centres, .. } => (centres, None),
     };
+    let rows = points.map_or(stored.len(), Values::len);
     let mut header: Vec<String> = (0..dim).map(|d| format!("{} [m]", AXES[d])).collect();
     // Per CSV field: its values and the tuple entries that are columns.
     let mut columns: Vec<(&Values<'_>, Vec<usize>)> = Vec::new();
@@ -290,14 +297,14 @@ fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()>
                 })
                 .collect(),
         };
-        if f.values.len() != coords.len() {
+        if f.values.len() != rows {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
                 format!(
                     "field \"{}\" has {} values for {} rows",
                     f.name,
                     f.values.len(),
-                    coords.len()
+                    rows
                 ),
             ));
         }
@@ -305,8 +312,14 @@ fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()>
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
     let mut t = [0.0; 9];
-    write_rows(path, &h, coords.len(), |i, row| {
-        row.extend_from_slice(&coords[i][..dim]);
+    write_rows(path, &h, rows, |i, row| {
+        match points {
+            Some(x) => {
+                x.tuple(i, &mut t);
+                row.extend_from_slice(&t[..dim]);
+            }
+            None => row.extend_from_slice(&stored[i][..dim]),
+        }
         for (v, picks) in &columns {
             v.tuple(i, &mut t);
             row.extend(picks.iter().map(|&k| t[k]));

@@ -368,6 +368,26 @@ impl<'a> Doc<'a> {
 /// differs from `points.len()`, a name is empty, duplicated or contains
 /// control characters; otherwise any I/O error of the write.
 pub fn write_vtu_points(path: &Path, points: &[[f64; 3]], point_data: &[Field]) -> io::Result<()> {
+    write_vtu_point_data(path, FieldData::Vector(points), point_data)
+}
+
+/// [`write_vtu_points`] with the positions given as 3-component field data
+/// (e.g. computed as they are written).
+///
+/// # Errors
+/// As [`write_vtu_points`]; also [`io::ErrorKind::InvalidInput`] when
+/// `points` has other than 3 components.
+pub fn write_vtu_point_data(
+    path: &Path,
+    points: FieldData<'_>,
+    point_data: &[Field],
+) -> io::Result<()> {
+    if points.components() != 3 {
+        return Err(invalid(format!(
+            "points have {} components, not 3",
+            points.components()
+        )));
+    }
     let n = points.len();
     check_fields("point", point_data, n)?;
     let mut doc = Doc::new("UnstructuredGrid");
@@ -379,7 +399,7 @@ pub fn write_vtu_points(path: &Path, points: &[[f64; 3]], point_data: &[Field]) 
     doc.fields(3, "PointData", point_data)?;
     doc.line(3, "<CellData/>");
     doc.line(3, "<Points>");
-    doc.array(4, "Float64", "Points", 3, Block::Points(points))?;
+    doc.array(4, "Float64", "Points", 3, Block::Field(points))?;
     doc.line(3, "</Points>");
     doc.line(3, "<Cells>");
     doc.array(4, "Int64", "connectivity", 1, Block::Iota { n, start: 0 })?;

@@ -280,7 +280,15 @@ fn sample(sets: &[FieldSet<'_>], field: &str) -> Result<Sampled> {
         );
     };
     let pos = match &s.geometry {
-        Geometry::Points(p) => p.clone(),
+        Geometry::Points(p) => {
+            let mut t = [0.0; 9];
+            (0..p.len())
+                .map(|i| {
+                    p.tuple(i, &mut t);
+                    [t[0], t[1], t[2]]
+                })
+                .collect()
+        }
         Geometry::Image {
             on_cells: true,
             centres,

@@ -181,7 +181,7 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
     let n = p.len();
     FieldSet {
         name: "particles",
-        geometry: Geometry::Points(p.x.iter().map(pad3).collect()),
+        geometry: Geometry::Points(Values::vectors(&p.x)),
         fields: vec![
             OutField::with_csv("velocity", Some("v"), "m/s", Values::vectors(&p.v)),
             OutField::with_csv(
