@@ -144,7 +144,9 @@ impl<'a> Values<'a> {
     /// written.
     pub fn vectors<const D: usize>(v: &'a [nalgebra::SVector<f64, D>]) -> Self {
         Self::computed(v.len(), 3, move |i, o| {
-            o[..3].copy_from_slice(&crate::driver::outputs::pad3(&v[i]))
+            for (k, x) in o[..3].iter_mut().enumerate() {
+                *x = if k < D { v[i][k] } else { 0.0 };
+            }
         })
     }
 
