@@ -114,8 +114,8 @@ impl<const D: usize> Particles<D> {
         self.for_each_array(|v| v.shrink_to_fit());
     }
 
-    /// Applies `op` to every per-particle array (`damage` only when it is
-    /// tracked).
+    /// Applies `op` to every per-particle array (temperature, plastic strain
+    /// and damage only where tracked).
     fn for_each_array(&mut self, mut op: impl FnMut(&mut dyn ParticleArray)) {
         op(&mut self.x);
         op(&mut self.x0);
