@@ -77,17 +77,6 @@ impl<const D: usize> Tensors<D> {
         self.data.chunks_exact(Self::STRIDE).map(unpack::<D>)
     }
 
-    /// `n` copies of `m`.
-    pub fn repeat(n: usize, m: &Matrix3<f64>) -> Self {
-        let mut t = Self {
-            data: Vec::with_capacity(n * Self::STRIDE),
-        };
-        for _ in 0..n {
-            t.push(m);
-        }
-        t
-    }
-
     /// The tensors of `m` (entries outside [`Self::ENTRIES`] zero), or the
     /// index of the first that has a non-zero one there.
     pub fn try_from_matrices(m: &[Matrix3<f64>]) -> Result<Self, usize> {
@@ -223,6 +212,5 @@ mod tests {
         assert_eq!(Tensors::<1>::try_from_matrices(&[plane]), Err(0));
         let t = Tensors::<2>::try_from_matrices(&[plane, diag]).expect("in plane");
         assert_eq!(t.iter().collect::<Vec<_>>(), vec![plane, diag]);
-        assert_eq!(Tensors::<3>::repeat(2, &full).get(1), full);
     }
 }

@@ -223,39 +223,43 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
 
 /// The plastic snapshot field `plastic_strain` (equivalent plastic strain
 /// ε̄, 0 for elastic materials); empty when no material is plastic.
-pub fn plastic_fields<const D: usize>(
-    p: &Particles<D>,
+pub fn plastic_fields<'a, const D: usize>(
+    p: &'a Particles<D>,
     materials: &[SolidMaterial],
-) -> Vec<OutField<'static>> {
+) -> Vec<OutField<'a>> {
     if materials.iter().all(|m| m.plasticity().is_none()) {
         return Vec::new();
     }
     vec![OutField::new(
         "plastic_strain",
         "-",
-        Values::Scalar((0..p.len()).map(|i| p.plastic_strain_of(i)).collect()),
+        Values::computed(p.len(), 1, |i, o| o[0] = p.plastic_strain_of(i)),
     )]
 }
 
 /// The failure snapshot fields `damage` (D ∈ [0, 1]) and `failed` (1 when
 /// D = 1, else 0); empty when no material has a failure model.
-pub fn failure_fields<const D: usize>(
-    p: &Particles<D>,
+pub fn failure_fields<'a, const D: usize>(
+    p: &'a Particles<D>,
     materials: &[SolidMaterial],
-) -> Vec<OutField<'static>> {
+) -> Vec<OutField<'a>> {
     if materials.iter().all(|m| m.failure().is_none()) {
         return Vec::new();
     }
-    let damage: Vec<f64> = (0..p.len())
-        .map(|i| p.damage.get(i).copied().unwrap_or(0.0))
-        .collect();
-    let failed = damage
-        .iter()
-        .map(|&d| if d >= 1.0 { 1.0 } else { 0.0 })
-        .collect();
+    let damage = move |i: usize| p.damage.get(i).copied().unwrap_or(0.0);
     vec![
-        OutField::new("damage", "-", Values::Scalar(damage)),
-        OutField::new("failed", "-", Values::Scalar(failed)),
+        OutField::new(
+            "damage",
+            "-",
+            Values::computed(p.len(), 1, move |i, o| o[0] = damage(i)),
+        ),
+        OutField::new(
+            "failed",
+            "-",
+            Values::computed(p.len(), 1, move |i, o| {
+                o[0] = if damage(i) >= 1.0 { 1.0 } else { 0.0 }
+            }),
+        ),
     ]
 }
 
@@ -264,41 +268,49 @@ pub fn failure_fields<const D: usize>(
 /// `density` (m/V, York Eq. 16), `internal_energy` (specific e of a gas
 /// point, York Eq. 23; the stored work per unit mass of a solid) and `q`
 /// (York Eq. 24; 0 for solids). Empty when no material is a gas point.
-pub fn gas_point_fields<const D: usize>(
-    p: &Particles<D>,
-    materials: &[SolidMaterial],
-) -> Vec<OutField<'static>> {
+pub fn gas_point_fields<'a, const D: usize>(
+    p: &'a Particles<D>,
+    materials: &'a [SolidMaterial],
+) -> Vec<OutField<'a>> {
     if materials.iter().all(|m| m.gas().is_none()) {
         return Vec::new();
     }
     let n = p.len();
-    let (mut pres, mut rho, mut e, mut q) = (
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-    );
-    for i in 0..n {
-        let r = p.mass[i] / p.vol[i];
-        let ei = p.work[i] * p.vol0[i] / p.mass[i];
-        let mean = -p.stress.get(i).trace() / 3.0;
-        let (pi, qi) = match materials[p.material[i] as usize].gas() {
+    let rho = move |i: usize| p.mass[i] / p.vol[i];
+    let e = move |i: usize| p.work[i] * p.vol0[i] / p.mass[i];
+    // (p, q) of particle i.
+    let pq = move |i: usize| {
+        let s = p.stress.get(i);
+        let mean = -s.trace() / 3.0;
+        match materials[p.material[i] as usize].gas() {
             Some(g) => {
-                let qi = g.q_of(&p.stress.get(i), r, ei);
+                let qi = g.q_of(&s, rho(i), e(i));
                 (mean - qi, qi)
             }
             None => (mean, 0.0),
-        };
-        pres.push(pi);
-        rho.push(r);
-        e.push(ei);
-        q.push(qi);
-    }
+        }
+    };
     vec![
-        OutField::new("pressure", "Pa", Values::Scalar(pres)),
-        OutField::new("density", "kg/m^3", Values::Scalar(rho)),
-        OutField::new("internal_energy", "J/kg", Values::Scalar(e)),
-        OutField::new("q", "Pa", Values::Scalar(q)),
+        OutField::new(
+            "pressure",
+            "Pa",
+            Values::computed(n, 1, move |i, o| o[0] = pq(i).0),
+        ),
+        OutField::new(
+            "density",
+            "kg/m^3",
+            Values::computed(n, 1, move |i, o| o[0] = rho(i)),
+        ),
+        OutField::new(
+            "internal_energy",
+            "J/kg",
+            Values::computed(n, 1, move |i, o| o[0] = e(i)),
+        ),
+        OutField::new(
+            "q",
+            "Pa",
+            Values::computed(n, 1, move |i, o| o[0] = pq(i).1),
+        ),
     ]
 }
 
