@@ -242,3 +242,59 @@ fn the_summary_carries_its_provenance() {
     assert_eq!(p["scene"]["materials"][0]["gamma"], 1.4);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `output.vtk_compression = "zlib"` writes zlib VTK files (smaller, the
+/// compressor named) at any level, and a bad value or level is refused
+/// naming the key and the allowed values.
+#[test]
+fn vtk_compression_keys_reach_the_writer() {
+    let size = |dir: &Path, f: &str| std::fs::metadata(dir.join(f)).unwrap().len();
+    let raw = tmp("vtk-raw");
+    let (ok, _, err) = run_sod(&raw, &["--set", "grid.cells=[400]"]);
+    assert!(ok, "{err}");
+    for level in ["1", "9"] {
+        let z = tmp(&format!("vtk-zlib{level}"));
+        let set = format!("output.vtk_compression_level={level}");
+        let (ok, _, err) = run_sod(
+            &z,
+            &[
+                "--set",
+                "grid.cells=[400]",
+                "--set",
+                "output.vtk_compression=zlib",
+                "--set",
+                &set,
+            ],
+        );
+        assert!(ok, "{err}");
+        let f = "cells_0004.vti";
+        let text = String::from_utf8_lossy(&std::fs::read(z.join(f)).unwrap()).into_owned();
+        assert!(text.contains("compressor=\"vtkZLibDataCompressor\""));
+        assert!(size(&z, f) < size(&raw, f), "level {level}");
+        let _ = std::fs::remove_dir_all(&z);
+    }
+    let _ = std::fs::remove_dir_all(&raw);
+    let s = sod();
+    let s = s.to_str().unwrap();
+    for (set, says) in [
+        (
+            vec!["output.vtk_compression=gzip"],
+            "`output.vtk_compression`: unknown variant `gzip`, expected `none` or `zlib`",
+        ),
+        (
+            vec!["output.vtk_compression_level=3"],
+            "`output.vtk_compression_level`: only with output.vtk_compression = \"zlib\"",
+        ),
+        (
+            vec!["output.vtk_compression=zlib", "output.vtk_compression_level=10"],
+            "`output.vtk_compression_level`: must be 1 (fastest) to 9 (smallest) (got 10)",
+        ),
+    ] {
+        let mut args = vec!["check", s];
+        for kv in &set {
+            args.extend(["--set", kv]);
+        }
+        let (ok, _, err) = mpmice(&args);
+        assert!(!ok && err.contains(says), "{set:?}: {err}");
+    }
+}

@@ -13,9 +13,9 @@ use crate::driver::model::{FieldSet, Geometry, Values};
 use crate::error::{Error, Result};
 use crate::output::csv::write_rows;
 use crate::output::vtk::{
-    write_vti, write_vtu_point_data, write_vtu_quads, Field, FieldData, PvdSeries,
+    write_vti, write_vtu_point_data, write_vtu_quads, Compression, Field, FieldData, PvdSeries,
 };
-use crate::scene::Format;
+use crate::scene::{Format, OutputSpec};
 
 /// Unit of a quantity per unit of the dimensions a run does not resolve
 /// (2D plane strain is per metre of depth, 1D per square metre of section).
@@ -36,6 +36,7 @@ pub fn pad3<const D: usize>(v: &nalgebra::SVector<f64, D>) -> [f64; 3] {
 pub(crate) struct Outputs {
     dir: PathBuf,
     formats: Vec<Format>,
+    compression: Compression,
     dim: usize,
     /// One `.pvd` series per field set, by set name.
     series: Vec<(&'static str, PvdSeries)>,
@@ -50,11 +51,12 @@ pub(crate) struct Outputs {
 }
 
 impl Outputs {
-    /// Creates `dir`; the history has a time column and one column per
-    /// `(quantity, unit)`, units made per depth in 2D and per area in 1D.
+    /// Creates `dir` for the snapshots `spec` asks for; the history has a
+    /// time column and one column per `(quantity, unit)`, units made per
+    /// depth in 2D and per area in 1D.
     pub fn new(
         dir: &Path,
-        formats: &[Format],
+        spec: &OutputSpec,
         dim: usize,
         columns: &[(&str, &str)],
     ) -> Result<Self> {
@@ -64,7 +66,11 @@ impl Outputs {
         header.extend(columns.iter().map(|(q, unit)| format!("{q} [{unit}{u}]")));
         Ok(Self {
             dir: dir.to_path_buf(),
-            formats: formats.to_vec(),
+            formats: spec.formats.clone(),
+            compression: match spec.zlib_level() {
+                Some(level) => Compression::Zlib { level },
+                None => Compression::None,
+            },
             dim,
             series: Vec::new(),
             times: Vec::new(),
@@ -128,7 +134,7 @@ impl Outputs {
                 };
                 let name = format!("{}_{k:04}.{ext}", set.name);
                 let path = self.dir.join(&name);
-                write_vtk(&path, set).map_err(|e| Error::io(&path, e))?;
+                write_vtk(&path, set, self.compression).map_err(|e| Error::io(&path, e))?;
                 let series = self.series_of(set.name);
                 series
                     .push(t, &name)
@@ -209,10 +215,10 @@ fn vtk_fields<'s>(set: &'s FieldSet<'_>) -> Vec<Field<'s>> {
         .collect()
 }
 
-fn write_vtk(path: &Path, set: &FieldSet<'_>) -> std::io::Result<()> {
+fn write_vtk(path: &Path, set: &FieldSet<'_>, z: Compression) -> std::io::Result<()> {
     let fields = vtk_fields(set);
     match &set.geometry {
-        Geometry::Points(x) => write_vtu_point_data(path, field_data(x), &fields),
+        Geometry::Points(x) => write_vtu_point_data(path, field_data(x), &fields, z),
         Geometry::Quads {
             points,
             quads,
@@ -220,9 +226,9 @@ fn write_vtk(path: &Path, set: &FieldSet<'_>) -> std::io::Result<()> {
             ..
         } => {
             if *on_cells {
-                write_vtu_quads(path, points, quads, &[], &fields)
+                write_vtu_quads(path, points, quads, &[], &fields, z)
             } else {
-                write_vtu_quads(path, points, quads, &fields, &[])
+                write_vtu_quads(path, points, quads, &fields, &[], z)
             }
         }
         Geometry::Image {
@@ -233,9 +239,9 @@ fn write_vtk(path: &Path, set: &FieldSet<'_>) -> std::io::Result<()> {
             ..
         } => {
             if *on_cells {
-                write_vti(path, *origin, *spacing, *cells, &[], &fields)
+                write_vti(path, *origin, *spacing, *cells, &[], &fields, z)
             } else {
-                write_vti(path, *origin, *spacing, *cells, &fields, &[])
+                write_vti(path, *origin, *spacing, *cells, &fields, &[], z)
             }
         }
     }

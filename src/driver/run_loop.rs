@@ -557,12 +557,7 @@ impl Run {
         let dir = opts.out_dir.clone();
         let cad = Cadence::of(scene);
         let hash = scene_hash(scene);
-        let mut out = Outputs::new(
-            &dir,
-            &scene.output.formats,
-            scene.dim(),
-            &model.history_columns(),
-        )?;
+        let mut out = Outputs::new(&dir, &scene.output, scene.dim(), &model.history_columns())?;
         let ls = match &opts.restart {
             Some(ck_dir) => restore(model, ck_dir, &hash, &mut out)?,
             None => {

@@ -1561,6 +1561,34 @@ pub struct OutputSpec {
     /// all).
     #[serde(default = "default_checkpoint_keep")]
     pub checkpoint_keep: usize,
+    /// How VTK files store their arrays: raw (default) or zlib-compressed.
+    #[serde(default)]
+    pub vtk_compression: VtkCompression,
+    /// zlib level, 1 (fastest, the default) to 9 (smallest); only with
+    /// `vtk_compression = "zlib"`.
+    pub vtk_compression_level: Option<u32>,
+}
+
+/// How VTK files store their arrays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtkCompression {
+    /// Raw little-endian values.
+    #[default]
+    None,
+    /// zlib blocks (`vtkZLibDataCompressor`), which ParaView, VTK and meshio
+    /// read.
+    Zlib,
+}
+
+impl OutputSpec {
+    /// The zlib level of a `vtk_compression = "zlib"` output (default 1).
+    pub fn zlib_level(&self) -> Option<u32> {
+        match self.vtk_compression {
+            VtkCompression::None => None,
+            VtkCompression::Zlib => Some(self.vtk_compression_level.unwrap_or(1)),
+        }
+    }
 }
 
 fn default_checkpoint_keep() -> usize {
@@ -1579,6 +1607,8 @@ impl Default for OutputSpec {
             history_interval: None,
             checkpoint_interval: None,
             checkpoint_keep: default_checkpoint_keep(),
+            vtk_compression: VtkCompression::None,
+            vtk_compression_level: None,
         }
     }
 }
@@ -3662,6 +3692,20 @@ impl Scene {
         }
         if let Some(iv) = out.checkpoint_interval {
             positive("output.checkpoint_interval", iv)?;
+        }
+        if let Some(level) = out.vtk_compression_level {
+            if out.vtk_compression != VtkCompression::Zlib {
+                return Err(err(
+                    "output.vtk_compression_level",
+                    "only with output.vtk_compression = \"zlib\"",
+                ));
+            }
+            if !(1..=9).contains(&level) {
+                return Err(err(
+                    "output.vtk_compression_level",
+                    format!("must be 1 (fastest) to 9 (smallest) (got {level})"),
+                ));
+            }
         }
         Ok(())
     }
