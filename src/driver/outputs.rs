@@ -317,8 +317,8 @@ fn write_csv(path: &Path, set: &FieldSet<'_>, dim: usize) -> std::io::Result<()>
         columns.push((&f.values, picks));
     }
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    let mut t = [0.0; 9];
     write_rows(path, &h, rows, |i, row| {
+        let mut t = [0.0; 9];
         match points {
             Some(x) => {
                 x.tuple(i, &mut t);

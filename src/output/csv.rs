@@ -14,7 +14,16 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use super::{atomic_write, fmt_f64};
+use rayon::prelude::*;
+
+use super::{atomic_write, push_f64};
+
+/// Rows formatted by one task of [`write_rows`].
+const ROW_CHUNK: usize = 256;
+
+/// Chunks formatted in parallel before they are written: 4096 rows, a few
+/// MiB of text held at a time.
+const CHUNK_BATCH: usize = 16;
 
 fn invalid(msg: String) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg)
@@ -45,7 +54,7 @@ fn push_row(line: &mut String, values: impl Iterator<Item = f64>) {
         if i > 0 {
             line.push(',');
         }
-        line.push_str(&fmt_f64(v));
+        push_f64(line, v);
     }
     line.push('\n');
 }
@@ -81,34 +90,55 @@ pub fn write_columns(path: &Path, header: &[&str], columns: &[&[f64]]) -> io::Re
 
 /// Writes a table atomically, row by row, without holding it: a header
 /// line, then `rows` rows, row `i` being the values `fill(i, row)` appends
-/// to the (cleared) `row`.
+/// to the (cleared) `row`. Rows are formatted in parallel, [`ROW_CHUNK`] to
+/// a task and [`CHUNK_BATCH`] tasks at a time, and written in order, so the
+/// file is the same for any thread count.
 ///
 /// # Errors
 /// [`io::ErrorKind::InvalidInput`] when a row has another number of values
-/// than the header (the file is left as it was); otherwise any I/O
-/// error of the write.
+/// than the header (the first such row is named; the file is left as it
+/// was); otherwise any I/O error of the write.
 pub fn write_rows(
     path: &Path,
     header: &[&str],
     rows: usize,
-    mut fill: impl FnMut(usize, &mut Vec<f64>),
+    fill: impl Fn(usize, &mut Vec<f64>) + Sync,
 ) -> io::Result<()> {
+    let width = header.len();
+    // One task's rows: its text, and the first row of a wrong width.
+    let format = |first: usize, text: &mut String, row: &mut Vec<f64>| -> Result<(), usize> {
+        text.clear();
+        for i in first..(first + ROW_CHUNK).min(rows) {
+            row.clear();
+            fill(i, row);
+            if row.len() != width {
+                return Err(i);
+            }
+            push_row(text, row.iter().copied());
+        }
+        Ok(())
+    };
     atomic_write(path, |w| {
         w.write_all(header_line(header).as_bytes())?;
-        let (mut line, mut row) = (String::new(), Vec::with_capacity(header.len()));
-        for i in 0..rows {
-            row.clear();
-            fill(i, &mut row);
-            if row.len() != header.len() {
+        let mut tasks = vec![(String::new(), Vec::with_capacity(width)); CHUNK_BATCH];
+        for start in (0..rows).step_by(ROW_CHUNK * CHUNK_BATCH) {
+            let n = (rows - start).div_ceil(ROW_CHUNK).min(CHUNK_BATCH);
+            let done: Vec<Result<(), usize>> = tasks[..n]
+                .par_iter_mut()
+                .enumerate()
+                .map(|(c, (text, row))| format(start + c * ROW_CHUNK, text, row))
+                .collect();
+            if let Some(&Err(i)) = done.iter().find(|r| r.is_err()) {
+                let mut row = Vec::new();
+                fill(i, &mut row);
                 return Err(invalid(format!(
-                    "row {i} has {} values for {} header names",
-                    row.len(),
-                    header.len()
+                    "row {i} has {} values for {width} header names",
+                    row.len()
                 )));
             }
-            line.clear();
-            push_row(&mut line, row.iter().copied());
-            w.write_all(line.as_bytes())?;
+            for (text, _) in &tasks[..n] {
+                w.write_all(text.as_bytes())?;
+            }
         }
         Ok(())
     })
@@ -274,6 +304,56 @@ mod tests {
         .expect_err("short row");
         assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
         assert!(err.to_string().contains("row 2"), "{err}");
+        assert!(!c.exists());
+        fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    /// A table of many batches is the same file for 1 and 2 threads and
+    /// the same as one formatted row by row; a bad row in a later batch is
+    /// the one named, the lowest of several.
+    #[test]
+    fn parallel_rows_match_serial_text_and_name_the_first_bad_row() {
+        let dir = test_dir("csv-par");
+        let rows = 3 * ROW_CHUNK * CHUNK_BATCH + 17;
+        let fill = |i: usize, r: &mut Vec<f64>| {
+            let x = i as f64;
+            r.extend([x, (x * 0.37).sin() * 1e-9, 1.0 / (x + 1.0), x * 1e17]);
+        };
+        let h = ["i", "a [m]", "b", "c [Pa]"];
+        let mut expect = header_line(&h);
+        let mut row = Vec::new();
+        for i in 0..rows {
+            row.clear();
+            fill(i, &mut row);
+            push_row(&mut expect, row.iter().copied());
+        }
+        for threads in [1, 2] {
+            let path = dir.join(format!("t{threads}.csv"));
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            pool.install(|| write_rows(&path, &h, rows, fill))
+                .expect("rows");
+            assert!(
+                fs::read_to_string(&path).expect("read") == expect,
+                "{threads} threads"
+            );
+        }
+        let bad = |i: usize, r: &mut Vec<f64>| {
+            fill(i, r);
+            if i == 2 * ROW_CHUNK * CHUNK_BATCH + 5 || i == rows - 1 {
+                r.pop();
+            }
+        };
+        let c = dir.join("c.csv");
+        let err = write_rows(&c, &h, rows, bad).expect_err("short row");
+        let first = 2 * ROW_CHUNK * CHUNK_BATCH + 5;
+        assert!(
+            err.to_string()
+                .contains(&format!("row {first} has 3 values")),
+            "{err}"
+        );
         assert!(!c.exists());
         fs::remove_dir_all(&dir).expect("cleanup");
     }

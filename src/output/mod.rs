@@ -86,12 +86,22 @@ where
 /// tiny or huge values stay short. Non-finite values print as `NaN`, `inf`
 /// and `-inf`, which `str::parse::<f64>` accepts.
 pub(crate) fn fmt_f64(x: f64) -> String {
+    let mut s = String::new();
+    push_f64(&mut s, x);
+    s
+}
+
+/// Appends [`fmt_f64`]'s text of `x` to `out` (no allocation once `out`
+/// has grown).
+pub(crate) fn push_f64(out: &mut String, x: f64) {
+    use std::fmt::Write as _;
     let a = x.abs();
-    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
-        format!("{x}")
+    // Writing to a String cannot fail.
+    let _ = if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
+        write!(out, "{x}")
     } else {
-        format!("{x:e}")
-    }
+        write!(out, "{x:e}")
+    };
 }
 
 /// A unique, empty scratch directory for unit tests (removed by the caller).
