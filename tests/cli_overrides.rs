@@ -286,7 +286,10 @@ fn vtk_compression_keys_reach_the_writer() {
             "`output.vtk_compression_level`: only with output.vtk_compression = \"zlib\"",
         ),
         (
-            vec!["output.vtk_compression=zlib", "output.vtk_compression_level=10"],
+            vec![
+                "output.vtk_compression=zlib",
+                "output.vtk_compression_level=10",
+            ],
             "`output.vtk_compression_level`: must be 1 (fastest) to 9 (smallest) (got 10)",
         ),
     ] {

@@ -11,7 +11,7 @@ use mpmice::shape::ShapeKind;
 use crate::harness::{
     plot_field, plot_xy, CellField, PlotSeries, Point, Series, StudyResult, Style,
 };
-use crate::impm_studies::plot_dir;
+use crate::plot_dir;
 
 pub(crate) fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -778,16 +778,6 @@ fn density_l1<const D: usize>(s: &IceState<D>, exact: impl Fn(&SVector<f64, D>) 
         / int.len() as f64
 }
 
-/// Directory of the study outputs (as the `verification` binary's default).
-fn results_dir(quick: bool) -> std::path::PathBuf {
-    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
-    if quick {
-        root.join("quick")
-    } else {
-        root
-    }
-}
-
 /// Semi-implicit ICE parameters with `cfl` an acoustic Courant number
 /// (`sound_speed_factor = 1`).
 fn semi_params<const D: usize>(
@@ -1245,7 +1235,7 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     ));
     series.push(fs);
 
-    let dir = results_dir(quick);
+    let dir = crate::plot_dir(quick);
     std::fs::create_dir_all(&dir)?;
     let plot: Vec<PlotSeries> = series
         .iter()

@@ -9,7 +9,7 @@ use mpmice::scene;
 
 use crate::coupled_studies::{cylinder_scene_at, repo_root};
 use crate::harness::{plot_xy, PlotSeries, Point, Series, StudyResult, Style};
-use crate::impm_studies::plot_dir;
+use crate::plot_dir;
 
 const NORM: &str = "Eq. 43 mean ||σr+σθ| − 2P/3| / (2P/3)";
 

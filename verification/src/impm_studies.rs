@@ -3,8 +3,6 @@
 //! against error versus the explicit method, and the dynamic manufactured
 //! solution run implicitly.
 
-use std::path::PathBuf;
-
 use mpmice::diagnostics::impm::{
     run_bar_implicit, run_mms_implicit, Column, Cylinder, ImpmMeasured,
 };
@@ -13,6 +11,7 @@ use mpmice::mpm::UpdateScheme;
 use mpmice::shape::ShapeKind;
 
 use crate::harness::{plot_xy, PlotSeries, Point, Series, StudyResult, Style};
+use crate::plot_dir;
 
 fn point(m: &ImpmMeasured) -> Point {
     let newton = m.newton_iterations() as f64;
@@ -63,16 +62,6 @@ fn explicit_point(m: &Measured) -> Point {
     Point::new(m.h, m.error, m.wall_s, m.updates_per_s())
         .with_extra("steps", m.steps as f64)
         .with_extra("particles", m.particles as f64)
-}
-
-/// Where the extra plots of a study go (next to the harness output).
-pub(crate) fn plot_dir(quick: bool) -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
-    if quick {
-        root.join("quick")
-    } else {
-        root
-    }
 }
 
 /// `impm_column`: quasistatic self-weight column, stress error vs h for the

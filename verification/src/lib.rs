@@ -21,6 +21,31 @@ pub mod reaction_studies;
 pub mod taylor_studies;
 pub mod york_studies;
 
+/// The folder the binary's `--out` names (set once by `main`; absent:
+/// `verification/results`).
+static RESULTS_ROOT: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+
+/// Sends the studies' extra plots to `dir` (`verification --out DIR`), as
+/// their JSON, CSV and PNG go; the first call wins.
+pub fn set_results_root(dir: std::path::PathBuf) {
+    let _ = RESULTS_ROOT.set(dir);
+}
+
+/// Where a study's extra plots go: beside the harness output, in the
+/// results folder (`--out`, or `verification/results`), `quick/` under it
+/// for a quick run, so quick plots never overwrite the full ones.
+pub(crate) fn plot_dir(quick: bool) -> std::path::PathBuf {
+    let root = RESULTS_ROOT
+        .get()
+        .cloned()
+        .unwrap_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results"));
+    if quick {
+        root.join("quick")
+    } else {
+        root
+    }
+}
+
 /// A study: name, one-line description, runner (`quick` = coarse resolutions).
 pub type Study = (
     &'static str,

@@ -22,10 +22,9 @@ struct Args {
     /// Coarse resolutions only (what the test suite runs).
     #[arg(long)]
     quick: bool,
-    /// Output folder (default: verification/results); `--quick` writes to
-    /// its `quick/` subfolder, so it never overwrites the full results.
-    /// The extra figures some studies draw always go to
-    /// verification/results (or results/quick).
+    /// Output folder (default: verification/results), for the results and
+    /// the extra figures some studies draw; `--quick` writes to its
+    /// `quick/` subfolder, so it never overwrites the full results.
     #[arg(long)]
     out: Option<PathBuf>,
 }
@@ -54,6 +53,7 @@ fn main() -> anyhow::Result<()> {
         return Ok(());
     }
     let base = args.out.clone().unwrap_or_else(|| root.join("results"));
+    verification::set_results_root(base.clone());
     let out = if args.quick { base.join("quick") } else { base };
     let chosen: Vec<_> = STUDIES
         .iter()
