@@ -176,6 +176,12 @@ fn study_writes_the_built_in_files() {
         serde_json::from_slice(&std::fs::read(dir.join("study_sod.json")).unwrap()).unwrap();
     let order = json["series"][0]["observed_order"].as_f64().unwrap();
     assert!((0.9..1.1).contains(&order), "{order} {out}");
+    assert_eq!(json["h_axis"], "cell size Δx [m]");
+    let error_axis = json["error_axis"].as_str().unwrap();
+    assert!(
+        error_axis.contains("cells.mixture_density") && error_axis.contains("kinetic"),
+        "{error_axis}"
+    );
     assert!(out.contains("Richardson"), "{out}");
     let (ok, _, err) = mpmice(&["study", s.to_str().unwrap(), "--reference", "exact"]);
     assert!(!ok && err.contains("finest, riemann"), "{err}");

@@ -90,8 +90,8 @@ pub fn write_columns(path: &Path, header: &[&str], columns: &[&[f64]]) -> io::Re
 
 /// Writes a table atomically, row by row, without holding it: a header
 /// line, then `rows` rows, row `i` being the values `fill(i, row)` appends
-/// to the (cleared) `row`. Rows are formatted in parallel, [`ROW_CHUNK`] to
-/// a task and [`CHUNK_BATCH`] tasks at a time, and written in order, so the
+/// to the (cleared) `row`. Rows are formatted in parallel, 256 to a task
+/// and 16 tasks at a time, and written in order, so the
 /// file is the same for any thread count.
 ///
 /// # Errors

@@ -47,6 +47,18 @@ pub struct StudyResult {
     /// empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+    /// What `h` is, with its unit, e.g. `"cell size Δx [m]"` or
+    /// `"particle spacing h [cells]"`; the x-axis label of the study's plot. Empty (and
+    /// omitted from the JSON) when unknown: the plot then falls back to a
+    /// generic label.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub h_axis: String,
+    /// What `error` is, with its unit, e.g. `"L1 density error [kg/m³]"`
+    /// or `"relative error [-]"`; the y-axis label of the study's plot. Empty
+    /// (and omitted from the JSON) when unknown: the plot then falls back to
+    /// a generic label.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub error_axis: String,
 }
 
 /// One convergence series: errors of one quantity in one norm against `h`.
@@ -209,7 +221,9 @@ fn csv_cell(s: &str) -> String {
 /// row per point. The PNG is a log-log plot of error against `h` with one
 /// line-and-markers series per [`Series`] (points sorted by `h`), labelled
 /// with the series label, norm and observed order, and [`plot_xy`]'s
-/// reference slope triangle. Every file is written atomically.
+/// reference slope triangle; its axes are labelled with
+/// [`StudyResult::h_axis`] and [`StudyResult::error_axis`] (generic labels
+/// where these are empty). Every file is written atomically.
 ///
 /// # Errors
 /// An unusable study name, or any I/O, serialisation or plotting error.
@@ -256,11 +270,21 @@ pub fn write_study(dir: &Path, result: &StudyResult) -> Result<()> {
             }
         })
         .collect();
+    let x_label = if result.h_axis.is_empty() {
+        "h (resolution, in the study's units)"
+    } else {
+        result.h_axis.as_str()
+    };
+    let y_label = if result.error_axis.is_empty() {
+        "error (norm in the legend)"
+    } else {
+        result.error_axis.as_str()
+    };
     plot_xy(
         &dir.join(format!("{stem}.png")),
         &result.study,
-        "h (resolution, in the study's units)",
-        "error (norm in the legend)",
+        x_label,
+        y_label,
         true,
         true,
         &plot_series,
@@ -1560,6 +1584,7 @@ mod tests {
                 Series::new("single", "L2", power_law(1.0, 1.0, &[0.1])),
             ],
             notes: vec!["CFL 0.4".to_string()],
+            ..Default::default()
         }
     }
 
@@ -1601,6 +1626,7 @@ mod tests {
             study: "s".into(),
             series: vec![Series::new("a", "L2", power_law(1.0, 1.0, &[0.1, 0.05]))],
             notes: vec![],
+            ..Default::default()
         };
         let json = serde_json::to_string(&plain).expect("json");
         assert!(!json.contains("notes") && !json.contains("extra"), "{json}");
@@ -1636,6 +1662,44 @@ mod tests {
         assert_png(&dir.join("manufactured_1d.png"));
         no_tmp_files(&dir);
         let _ = fs::remove_dir_all(dir.parent().expect("parent"));
+    }
+
+    #[test]
+    fn study_axes_are_written_and_optional() {
+        let dir = test_dir("axes");
+        let study = StudyResult {
+            h_axis: "cell size Δx [m]".to_string(),
+            error_axis: "L1 density error [kg/m³]".to_string(),
+            ..sample_study()
+        };
+        write_study(&dir, &study).expect("write study");
+        let json = fs::read_to_string(dir.join("manufactured_1d.json")).expect("json");
+        assert!(json.contains("\"h_axis\": \"cell size Δx [m]\""), "{json}");
+        assert!(
+            json.contains("\"error_axis\": \"L1 density error [kg/m³]\""),
+            "{json}"
+        );
+        let back: StudyResult = serde_json::from_str(&json).expect("parse");
+        assert_eq!(back.h_axis, study.h_axis);
+        assert_eq!(back.error_axis, study.error_axis);
+        assert_png(&dir.join("manufactured_1d.png"));
+
+        // Empty axes are omitted, and JSON written before the axes existed
+        // still loads (with empty axes).
+        let plain = sample_study();
+        let json = serde_json::to_string(&plain).expect("json");
+        assert!(
+            !json.contains("h_axis") && !json.contains("error_axis"),
+            "{json}"
+        );
+        let old = r#"{"study": "old", "series": [{"label": "a", "norm": "L2",
+            "points": [{"h": 0.1, "error": 0.01, "wall_s": 1.0, "updates_per_s": null}],
+            "observed_order": null}]}"#;
+        let back: StudyResult = serde_json::from_str(old).expect("old json");
+        assert_eq!(back.study, "old");
+        assert!(back.h_axis.is_empty() && back.error_axis.is_empty());
+        assert!(back.series[0].points[0].updates_per_s.is_nan());
+        let _ = fs::remove_dir_all(&dir);
     }
 
     #[test]
@@ -1846,6 +1910,7 @@ mod tests {
                 power_law(2.0, 2.0, &[0.1, 0.05]),
             )],
             notes: vec![],
+            ..Default::default()
         };
         write_study(&results, &other).expect("study 2");
         fs::write(results.join("work_precision.json"), "{\"runs\": []}").expect("other json");

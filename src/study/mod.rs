@@ -26,6 +26,10 @@
 //! value `Q_∞ = Q_N + (Q_N − Q_{N−1}) / (2^p − 1)` and its uncertainty, the
 //! grid-convergence index `GCI = 1.25 |Q_N − Q_{N−1}| / (2^p − 1)`
 //! (Roache's safety factor for three grids).
+//!
+//! The result's axes ([`StudyResult::h_axis`], [`StudyResult::error_axis`])
+//! name `h`, the cell size along x in metres, and the error: its norm, its
+//! reference and the field's unit as the runs' output names it.
 
 pub mod harness;
 
@@ -125,7 +129,13 @@ pub fn run_study(
         study: spec.name.clone(),
         series: Vec::new(),
         notes: Vec::new(),
+        // h is the x extent of the grid over its cells (`Level::h`), in the
+        // scene's length unit.
+        h_axis: "cell size Δx [m]".to_string(),
+        error_axis: String::new(),
     };
+    // The error axis of each series' field (one per variant).
+    let mut error_axes: Vec<String> = Vec::new();
     for (vi, (label, ovs)) in variants.iter().enumerate() {
         let base = parse_with(text, ovs).map_err(scene_err)?;
         refinable(&base)?;
@@ -157,6 +167,10 @@ pub fn run_study(
             None => default_field(&levels[0].kept.last)?,
         };
         let mut series = measure(&base, &levels, &field, spec.reference)?;
+        let axis = field_error_axis(&levels[0].kept.last, &field, spec.reference);
+        if !error_axes.contains(&axis) {
+            error_axes.push(axis);
+        }
         series.label = if variants.len() > 1 {
             format!("{field}, {label}")
         } else {
@@ -169,6 +183,17 @@ pub fn run_study(
             result.notes.push(note);
         }
     }
+    let mut error_axis = match error_axes.as_slice() {
+        [one] => one.clone(),
+        _ => format!(
+            "L1 cell-mean error vs {} (field in the legend, in its unit)",
+            reference_name(spec.reference)
+        ),
+    };
+    if let Some(q) = &spec.quantity {
+        error_axis.push_str(&format!("; |Q − Q∞| of {q} (history column's unit)"));
+    }
+    result.error_axis = error_axis;
     result.notes.push(format!(
         "{} refinements of grid.cells by 2, particles per cell fixed; reference: {}",
         spec.refine,
@@ -218,6 +243,29 @@ fn refined(text: &str, ovs: &[Override], base: &Scene, k: usize) -> Result<Scene
         add("time.max_steps", (m * f as u64).to_string())?;
     }
     parse_with(text, &o).map_err(scene_err)
+}
+
+/// The reference as the error axis names it.
+fn reference_name(reference: Reference) -> &'static str {
+    match reference {
+        Reference::Finest => "finest run",
+        Reference::Riemann => "exact Riemann",
+    }
+}
+
+/// The error axis of `field`'s series ([`measure`]): its norm, reference and
+/// the field's unit as the runs' output names it.
+fn field_error_axis(sets: &[FieldSet<'_>], field: &str, reference: Reference) -> String {
+    let unit = field
+        .split_once('.')
+        .and_then(|(set, name)| find(sets, set, name))
+        .map(|(s, i)| s.fields[i].unit.as_str());
+    let reference = reference_name(reference);
+    match unit {
+        Some("1") => format!("L1 cell-mean error of {field} vs {reference} [-]"),
+        Some(u) if !u.is_empty() => format!("L1 cell-mean error of {field} vs {reference} [{u}]"),
+        _ => format!("L1 cell-mean error of {field} vs {reference} (in the field's unit)"),
+    }
 }
 
 /// `cells.mixture_density` where the runs have cells, else

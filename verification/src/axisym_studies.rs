@@ -164,6 +164,8 @@ pub fn axisym_lame(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "axisym_lame".into(),
+        h_axis: "cell size h = 0.5/n across the wall (nondimensional) [-]".into(),
+        error_axis: "relative L2 error (quantity in the legend) [-]".into(),
         series,
         notes,
     })

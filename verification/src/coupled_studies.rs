@@ -134,6 +134,8 @@ pub fn cylinder_order(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "cylinder_order".into(),
+        h_axis: "cell size Δx [m]".into(),
+        error_axis: "Eq. 43 stress error ||σr+σθ| − 2P/3| / (2P/3) [-]".into(),
         series: vec![
             Series::new("MPM-ICE GIMP", "Eq. 43 mean ||σr+σθ| − 2P/3| / (2P/3)", pts),
             Series::new(
@@ -217,6 +219,8 @@ pub fn piston_adiabatic(quick: bool) -> anyhow::Result<StudyResult> {
     )?;
     Ok(StudyResult {
         study: "piston_adiabatic".into(),
+        h_axis: "cell size h = 1.2 m / N [m]".into(),
+        error_axis: "closed-end pressure error |p/p_exact − 1| at V1/V2 = 5 [-]".into(),
         series: vec![Series::new(
             "closed-end pressure at V1/V2 = 5",
             "|p/p_exact − 1|",
@@ -436,6 +440,8 @@ pub fn wedge_mach3(quick: bool) -> anyhow::Result<StudyResult> {
     );
     Ok(StudyResult {
         study: "wedge_mach3".into(),
+        h_axis: "cell size h [m]".into(),
+        error_axis: "shock-angle error [deg] or relative p2/p1 error [-] (legend)".into(),
         series: vec![
             Series::new("shock angle", "|β − 37.76°| [deg]", angle_pts),
             Series::new("p2/p1", "|ratio/3.771 − 1|", ratio_pts),

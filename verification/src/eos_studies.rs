@@ -119,6 +119,8 @@ pub fn mie_gruneisen_shock(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "mie_gruneisen_shock".into(),
+        h_axis: "cell size h = 1/N [m]".into(),
+        error_axis: "relative error: U_s, or p1 relative to the jump (legend) [-]".into(),
         series,
         notes,
     })
@@ -206,6 +208,8 @@ pub fn water_air_shock_tube(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "water_air_shock_tube".into(),
+        h_axis: "cell size h = 1/N [m]".into(),
+        error_axis: "L1 density error [kg/m³] or interface error [m] (legend)".into(),
         series,
         notes,
     })

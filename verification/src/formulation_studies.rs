@@ -115,6 +115,8 @@ pub fn zhang_vs_guilkey(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "zhang_vs_guilkey".into(),
+        h_axis: "cell size h (block 1/N, shock 0.5/N) [m]".into(),
+        error_axis: "relative pressure error (legend) [-]".into(),
         series,
         notes: vec![
             "Scenes: cases/zhang_vs_guilkey_block_{multiphase,coupled}.toml and \

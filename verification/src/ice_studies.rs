@@ -139,6 +139,8 @@ pub fn ice_diagonal_wave(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_diagonal_wave".into(),
+        h_axis: "cell size Δx = 1/N, unit square (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact at cell centres (nondimensional) [-]".into(),
         series,
         notes,
     })
@@ -261,6 +263,8 @@ pub fn ice_sod(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_sod".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact cell averages (nondimensional) [-]".into(),
         series,
         notes,
     })
@@ -343,6 +347,8 @@ pub fn ice_entropy_wave(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_entropy_wave".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact at cell centres (nondimensional) [-]".into(),
         series,
         notes: vec!["density wave at uniform u = 1, p = 1, gamma = 1.4, periodic, t = 1, cfl = 0.5 on |u| + c (Hancock 0.8, acoustic Hancock 0.9); L1 = mean |ρ − ρ_exact| over cells (cell-centre samples)".into()],
     })
@@ -423,6 +429,8 @@ pub fn ice_acoustic(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_acoustic".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error / wave amplitude ε [-]".into(),
         series,
         notes: vec!["linear acoustic wave, eps = 1e-5, c = 1, periodic, one period, cfl = 0.5 (high resolution 0.4, Hancock 0.8, acoustic Hancock 0.9); error relative to the amplitude".into()],
     })
@@ -737,6 +745,8 @@ pub fn ice_simple_wave(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_simple_wave".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact cell averages / ε [-]".into(),
         series,
         notes,
     })
@@ -883,6 +893,8 @@ pub fn ice_sod_semi_implicit(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "ice_sod_semi_implicit".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact cell averages (nondimensional) [-]".into(),
         series,
         notes,
     })
@@ -1257,6 +1269,9 @@ pub fn ice_low_mach(quick: bool) -> Result<StudyResult> {
     )?;
     Ok(StudyResult {
         study: "ice_low_mach".into(),
+        h_axis: "cell size Δx = 2π/N (nondimensional) [-]; Mach-floor series: Mach number M [-]"
+            .into(),
+        error_axis: "RMS velocity or p' error (legend), nondimensional [-]".into(),
         series,
         notes,
     })

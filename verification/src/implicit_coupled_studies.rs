@@ -108,6 +108,8 @@ pub fn cylinder_implicit(quick: bool) -> anyhow::Result<StudyResult> {
     notes.extend(speedups);
     Ok(StudyResult {
         study: "cylinder_implicit".into(),
+        h_axis: "cell size Δx [m]; Δt-sweep series: time step Δt [s]".into(),
+        error_axis: "Eq. 43 stress error ||σr+σθ| − 2P/3| / (2P/3) [-]".into(),
         series: vec![
             Series::new("implicit MPM-ICE, Δt 1e-4", NORM, implicit),
             Series::new("explicit MPM-ICE", NORM, explicit),
@@ -209,6 +211,8 @@ pub fn piston_implicit(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "piston_implicit".into(),
+        h_axis: "cell size h = 1.2 m / N [m]; Δt-sweep series: time step Δt [s]".into(),
+        error_axis: "closed-end pressure error |p/p_exact − 1| at V1/V2 = 5 [-]".into(),
         series: vec![
             Series::new(
                 format!("implicit, Δt sweep at N = {n_dt} (h = Δt)"),
@@ -353,6 +357,8 @@ pub fn slab_temporal_order(quick: bool) -> anyhow::Result<StudyResult> {
     );
     Ok(StudyResult {
         study: "slab_temporal_order".into(),
+        h_axis: "time step Δt [s]".into(),
+        error_axis: "slab displacement error |x(0.05 s) − x_ref| [m]".into(),
         series,
         notes,
     })

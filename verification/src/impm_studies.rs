@@ -84,6 +84,8 @@ pub fn impm_column(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "impm_column".into(),
+        h_axis: "cell size h = l₀/N [m]".into(),
+        error_axis: "RMS σ_yy error / (ρ g l₀) [-]".into(),
         series,
         notes: vec![
             "Column l0 = 50 m, one cell wide, plane strain, rollers on the sides and the base, \
@@ -146,6 +148,8 @@ pub fn impm_cylinder(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "impm_cylinder".into(),
+        h_axis: "cell size Δx [m]".into(),
+        error_axis: "relative error: Eq. 43 stress or RMS u_r vs Lamé (legend) [-]".into(),
         series,
         notes: vec![
             "Guilkey Sec. 4.1 without fluid: quarter annulus ri = 0.5, ro = 1, K = 117 GPa, \
@@ -304,6 +308,10 @@ pub fn impm_vs_explicit(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "impm_vs_explicit".into(),
+        h_axis:
+            "cylinder: cell size Δx [m]; bar: fixed cell size 1/N (nondimensional) [-], Δt swept"
+                .into(),
+        error_axis: "Eq. 43 (cylinder) or max_t RMS u / amplitude (bar) [-]".into(),
         series: vec![
             Series::new("cylinder implicit", "Eq. 43", imp),
             Series::new("cylinder implicit, modified Newton", "Eq. 43", imp_mod),
@@ -348,6 +356,8 @@ pub fn impm_mms(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "impm_mms".into(),
+        h_axis: "cell size h = 1/N (nondimensional) [-]; Courant-sweep series: Courant number [-]".into(),
+        error_axis: "max_t RMS displacement error / A [-]".into(),
         series: vec![
             Series::new("explicit USL CFL 0.2", "max_t RMS u / A", exp),
             Series::new("implicit Courant 0.2", "max_t RMS u / A", imp),

@@ -115,6 +115,8 @@ pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "lian_membrane".into(),
+        h_axis: "element size h (square L/n, disc 2a/n) [m]".into(),
+        error_axis: "relative error of period or centre deflection (legend) [-]".into(),
         series,
         notes,
     })
@@ -203,6 +205,8 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "lian_gas_expansion".into(),
+        h_axis: "element = cell size h (nondimensional) [-]".into(),
+        error_axis: "relative error of the final mean radius [-]".into(),
         series,
         notes,
     })

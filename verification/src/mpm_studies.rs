@@ -55,6 +55,8 @@ pub fn mpm_bar_1d(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "mpm_bar_1d".into(),
+        h_axis: "cell size h = 1/N (nondimensional) [-]".into(),
+        error_axis: "max_t RMS displacement error / amplitude [-]".into(),
         series,
         notes: vec![
             "Bar L = 1, E = 100, rho = 1, nu = 0 (c = 10), v0 = 1e-3 in mode 1, fixed at x = 0, \
@@ -103,6 +105,8 @@ pub fn mpm_mms_axis_aligned(quick: bool) -> anyhow::Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "mpm_mms_axis_aligned".into(),
+        h_axis: "cell size h = 1/N (nondimensional) [-]".into(),
+        error_axis: "max_t RMS displacement error / A [-]".into(),
         series,
         notes: vec![
             "u_i = A sin(pi X_i) sin(c pi t + phi_i), phi = (0, pi), unit domain, roller faces, \

@@ -130,6 +130,8 @@ pub fn zhang_rod(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "zhang_rod".into(),
+        h_axis: "cell size h (R/2, R/3, R/4) [m]".into(),
+        error_axis: "difference to the next finer run or Tate band (legend) [m]".into(),
         series: vec![
             Series::new("penetration at the end", "|P_h - P_h/next| [m]", p_pts),
             Series::new("residual length at the end", "|L_h - L_h/next| [m]", l_pts),

@@ -32,6 +32,8 @@ pub fn zhang_spall(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "zhang_spall".into(),
+        h_axis: "cell size h = 16.1 mm / N [m]".into(),
+        error_axis: "spall time: relative error [-]; plane: distance [m]".into(),
         series: vec![
             Series::new("spall time", "|t - 3d/c| / (3d/c)", time_pts),
             Series::new("spall plane", "|x - x_mid| [m]", plane_pts),

@@ -119,6 +119,8 @@ pub fn zhang_block(quick: bool) -> Result<StudyResult> {
     ));
     Ok(StudyResult {
         study: "zhang_block".into(),
+        h_axis: "cell size h = 1/N (unit box) [m]".into(),
+        error_axis: "max relative pressure change |p − p0| / p0 [-]".into(),
         series,
         notes: vec![
             "Solid: linear elastic, rho = 1000, E = 1e8, nu = 0.3, prestressed to the air's \

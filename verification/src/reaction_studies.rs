@@ -162,6 +162,8 @@ pub fn reaction_burn(quick: bool) -> Result<StudyResult> {
     ));
     Ok(StudyResult {
         study: "reaction_burn".into(),
+        h_axis: "cell size h (unit square 1/N, slab 0.5/N) [m]".into(),
+        error_axis: "relative error of burning area or burnt mass (legend) [-]".into(),
         series,
         notes: vec![
             "Burning area = burnt mass / (K dt) of one constant-rate step (kernel \

@@ -111,6 +111,8 @@ pub fn taylor_anvil(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "taylor_anvil".into(),
+        h_axis: "cell size h = R₀/n [m]".into(),
+        error_axis: "|L_f/L₀ − measured| or |D_f/D₀ − measured| (legend) [-]".into(),
         series,
         notes,
     })

@@ -119,6 +119,8 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "york_sod".into(),
+        h_axis: "cell size Δx = 1/N (nondimensional) [-]".into(),
+        error_axis: "L1 density error vs exact (nondimensional) [-]".into(),
         series,
         notes,
     })
@@ -193,6 +195,8 @@ pub fn york_piston_container(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "york_piston_container".into(),
+        h_axis: "cell size h [m]".into(),
+        error_axis: "relative period error |T/T_exact − 1| [-]".into(),
         series,
         notes,
     })
@@ -301,6 +305,8 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "york_dogbone".into(),
+        h_axis: "cell size h (nondimensional) [-]".into(),
+        error_axis: "relative hoop-stress error |s/(p r/t) − 1| [-]".into(),
         series: vec![Series::new(
             "dog-bone: hoop stress vs Laplace p r / t",
             "|s/(p r/t) - 1|",
@@ -428,6 +434,8 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
     }
     Ok(StudyResult {
         study: "york_airbag".into(),
+        h_axis: "cell size h [m]".into(),
+        error_axis: "peak penetration difference to the finest h [m]".into(),
         series,
         notes,
     })

@@ -50,6 +50,13 @@ fn sod_study_from_the_scene_matches_the_built_in_study() {
         user.observed_order, hr.observed_order
     );
     assert!((user.observed_order - hr.observed_order).abs() < 0.1);
+    // The plot's axes: the refined cell size, and the field's norm,
+    // reference and unit (from the runs' output).
+    assert_eq!(r.h_axis, "cell size Δx [m]");
+    assert_eq!(
+        r.error_axis,
+        "L1 cell-mean error of cells.mixture_density vs exact Riemann [kg/m^3]"
+    );
     for (a, b) in user.points.iter().zip(&hr.points) {
         assert_eq!(a.h, b.h);
         assert!((a.error - b.error).abs() <= 1e-9 * b.error, "{a:?} {b:?}");
