@@ -99,15 +99,16 @@ impl MemoryEstimate {
             0.0
         };
         // One particle's arrays: F and σ (3, 5 or 9 stored entries each in
-        // 1D, 2D, 3D), 4 vectors, 7 scalars (temperature and plastic strain
-        // counted whether a run tracks them or not) and a 2-byte material
-        // index.
+        // 1D, 2D, 3D), 4 vectors, 6 scalars (temperature and plastic strain
+        // counted whether a run tracks them or not; the id is stored only
+        // once particles are removed or split, not counted) and a 2-byte
+        // material index.
         let tensor = match dim {
             1 => 3.0,
             2 => 5.0,
             _ => 9.0,
         };
-        let state = 2.0 * tensor + 4.0 * dimf + 7.25;
+        let state = 2.0 * tensor + 4.0 * dimf + 6.25;
         // The arrays and the step's scratch (offsets and half-widths: two
         // vectors; the bins: one value); in implicit mode also the weights,
         // gradients, node indices and signs of the 3^dim support nodes and

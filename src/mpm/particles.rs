@@ -52,6 +52,10 @@ pub struct Particles<const D: usize> {
     /// A particle's identity: its index in the order the scene created the
     /// particles, kept when particles are removed (burnt out) or split into
     /// solid fields, so that outputs of different times can be matched.
+    /// Empty while every particle's id is its index (nothing removed or
+    /// reordered yet): storing those would cost 8 bytes a particle, twice
+    /// with the watchdog's copy (issue 24). Read it with
+    /// [`Particles::id_of`].
     pub id: Vec<u64>,
 }
 
@@ -100,7 +104,24 @@ impl<const D: usize> Particles<D> {
                 v.push(value);
             }
         }
-        self.id.push(self.id.last().map_or(0, |&l| l + 1));
+        // Implicit ids stay implicit: the new particle's id is its index.
+        if let Some(&last) = self.id.last() {
+            self.id.push(last + 1);
+        }
+    }
+
+    /// Id of particle `p` ([`Particles::id`]).
+    #[inline]
+    pub fn id_of(&self, p: usize) -> u64 {
+        self.id.get(p).copied().unwrap_or(p as u64)
+    }
+
+    /// Stores the implicit ids (each particle's index) of the first `n`
+    /// particles, before an operation that breaks index = id.
+    fn store_ids(&mut self, n: usize) {
+        if self.id.is_empty() {
+            self.id.extend(0..n as u64);
+        }
     }
 
     /// Makes room for exactly `n` more particles in every array (no
@@ -137,7 +158,9 @@ impl<const D: usize> Particles<D> {
                 op(v);
             }
         }
-        op(&mut self.id);
+        if !self.id.is_empty() {
+            op(&mut self.id);
+        }
     }
 
     /// Sizes [`Particles::temperature`] to one entry per particle (new
@@ -199,6 +222,9 @@ impl<const D: usize> Particles<D> {
     /// Keeps the particles `p` with `keep[p]`, in order, in place (no
     /// allocation).
     pub fn retain(&mut self, keep: &[bool]) {
+        if keep.iter().any(|&k| !k) {
+            self.store_ids(self.len());
+        }
         self.for_each_array(|v| v.retain_by(keep));
     }
 
@@ -241,7 +267,11 @@ impl<const D: usize> Particles<D> {
                 v.push(untracked);
             }
         }
-        self.id.push(other.id[p]);
+        let id = other.id_of(p);
+        if id != before as u64 || !self.id.is_empty() {
+            self.store_ids(before);
+            self.id.push(id);
+        }
     }
 
     /// Total mass.
@@ -353,18 +383,17 @@ mod tests {
             let x = SVector::<f64, 1>::new(i as f64);
             p.push(x, x, 1.0, 1.0, x, (i % 2) as u16);
         }
-        assert_eq!(p.id, [0, 1, 2, 3, 4, 5]);
+        let ids = |p: &Particles<1>| (0..p.len()).map(|i| p.id_of(i)).collect::<Vec<_>>();
+        assert_eq!(ids(&p), [0, 1, 2, 3, 4, 5]);
+        assert!(p.id.is_empty(), "ids in creation order are not stored");
         p.retain(&[true, false, true, true, false, true]);
-        assert_eq!(p.id, [0, 2, 3, 5]);
+        assert_eq!(ids(&p), [0, 2, 3, 5]);
         let odd = p.select(|i| p.material[i] == 1);
         let even = p.select(|i| p.material[i] == 0);
-        assert_eq!(
-            (odd.id.as_slice(), even.id.as_slice()),
-            (&[3, 5][..], &[0, 2][..])
-        );
+        assert_eq!((ids(&odd), ids(&even)), (vec![3, 5], vec![0, 2]));
         let mut all = even.clone();
         all.append(&odd);
-        assert_eq!(all.id, [0, 2, 3, 5]);
+        assert_eq!(ids(&all), [0, 2, 3, 5]);
         // A particle added later gets a new id.
         all.push(
             SVector::zeros(),
@@ -374,9 +403,20 @@ mod tests {
             SVector::zeros(),
             0,
         );
-        assert_eq!(all.id[4], 6);
-        for (&id, x) in all.id.iter().zip(&all.x).take(4) {
+        assert_eq!(all.id_of(4), 6);
+        for (id, x) in ids(&all).into_iter().zip(&all.x).take(4) {
             assert_eq!(id as f64, x[0]);
         }
+        // Keeping every particle, or copying all in order, keeps them
+        // implicit.
+        let mut q = Particles::<1>::default();
+        for i in 0..3 {
+            let x = SVector::<f64, 1>::new(i as f64);
+            q.push(x, x, 1.0, 1.0, x, 0);
+        }
+        q.retain(&[true; 3]);
+        let copy = q.select(|_| true);
+        assert!(q.id.is_empty() && copy.id.is_empty());
+        assert_eq!(ids(&copy), [0, 1, 2]);
     }
 }

@@ -128,7 +128,10 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
             put_scalars(ck, &n(name), v);
         }
     }
-    ck.put_u64_with(&n("id"), vec![p.len()], |buf| buf.extend(&p.id));
+    // Ids only once they are not the indices ([`Particles::id`]).
+    if !p.id.is_empty() {
+        ck.put_u64_with(&n("id"), vec![p.len()], |buf| buf.extend(&p.id));
+    }
 }
 
 /// Loads the particle arrays saved by [`save_particles`]; the material
@@ -170,7 +173,20 @@ pub fn load_particles<const D: usize>(
         temperature: optional(ck, "temperature")?,
         plastic_strain: optional(ck, "plastic_strain")?,
         damage: optional(ck, "damage")?,
-        id: ck.take_u64(&n("id"), Some(&[len]))?,
+        // Absent: each particle's id is its index. Stored ids that are the
+        // indices (an older checkpoint) become implicit again.
+        id: match ck.shape(&n("id")) {
+            Some(_) => {
+                let id = ck.take_u64(&n("id"), Some(&[len]))?;
+                let identity = id.iter().enumerate().all(|(i, &v)| v == i as u64);
+                if identity {
+                    Vec::new()
+                } else {
+                    id
+                }
+            }
+            None => Vec::new(),
+        },
     })
 }
 
@@ -204,7 +220,7 @@ pub fn particle_fields<const D: usize>(p: &Particles<D>) -> FieldSet<'_> {
             OutField::new(
                 "id",
                 "-",
-                Values::computed(n, 1, |i, o| o[0] = p.id[i] as f64),
+                Values::computed(n, 1, |i, o| o[0] = p.id_of(i) as f64),
             ),
             OutField::new(
                 "material",
@@ -773,5 +789,36 @@ mod tests {
         full(&[plane, bent], &mut ck);
         let err = take_tensors::<2>(&mut ck, "f", 2).expect_err("out of plane");
         assert!(err.to_string().contains("particle 1"), "{err}");
+    }
+
+    /// Ids in creation order are neither stored nor checkpointed; ids
+    /// after a removal are, and both come back; an older checkpoint's
+    /// stored identity ids load as implicit ones.
+    #[test]
+    fn particle_ids_round_trip_implicit_or_stored() {
+        let mut p = Particles::<2>::default();
+        for i in 0..4 {
+            let x = SVector::<f64, 2>::new(i as f64, 0.0);
+            p.push(x, x, 1.0, 1.0, x, 0);
+        }
+        let ids = |p: &Particles<2>| (0..p.len()).map(|i| p.id_of(i)).collect::<Vec<_>>();
+        let mut ck = Checkpoint::new("test", "", 0, 0.0);
+        save_particles(&mut ck, "particles", &p);
+        assert!(ck.shape("particles.id").is_none());
+        let back = load_particles::<2>(&mut ck, "particles", 1).expect("implicit");
+        assert!(back.id.is_empty() && ids(&back) == [0, 1, 2, 3]);
+
+        p.retain(&[true, false, true, true]);
+        let mut ck = Checkpoint::new("test", "", 0, 0.0);
+        save_particles(&mut ck, "particles", &p);
+        assert_eq!(ck.shape("particles.id"), Some(&[3][..]));
+        let back = load_particles::<2>(&mut ck, "particles", 1).expect("stored");
+        assert_eq!(ids(&back), [0, 2, 3]);
+
+        let mut ck = Checkpoint::new("test", "", 0, 0.0);
+        save_particles(&mut ck, "particles", &p);
+        ck.put_u64("particles.id", vec![3], vec![0, 1, 2]);
+        let back = load_particles::<2>(&mut ck, "particles", 1).expect("old");
+        assert!(back.id.is_empty() && ids(&back) == [0, 1, 2]);
     }
 }
