@@ -372,12 +372,8 @@ impl Lame {
                 LameShape::Sphere => (x0.norm(), x0 / x0.norm()),
             };
             let ex = self.exact(r0);
-            let s2 = Matrix2::new(
-                p.stress.get(i)[(0, 0)],
-                p.stress.get(i)[(0, 1)],
-                p.stress.get(i)[(1, 0)],
-                p.stress.get(i)[(1, 1)],
-            );
+            let s = p.stress.get(i);
+            let s2 = Matrix2::new(s[(0, 0)], s[(0, 1)], s[(1, 0)], s[(1, 1)]);
             let et = SVector::from([-er[1], er[0]]);
             let sr = er.dot(&(s2 * er));
             let third = et.dot(&(s2 * et));
@@ -388,7 +384,7 @@ impl Lame {
             };
             let pairs = [
                 (sr, ex.sigma_r),
-                (p.stress.get(i)[(2, 2)], ex.sigma_theta),
+                (s[(2, 2)], ex.sigma_theta),
                 (ur, ex.u_r),
                 (third, third_exact),
             ];

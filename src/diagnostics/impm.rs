@@ -665,8 +665,9 @@ impl GripBar {
         for i in 0..p.len() {
             if p.x0[i][1] < gauge {
                 ef = ef.max((p.f.get(i)[(1, 1)] - s).abs());
-                eyy = eyy.max((p.stress.get(i)[(1, 1)] - syy).abs() / syy.abs());
-                exx = exx.max((p.stress.get(i)[(0, 0)] - sxx).abs() / syy.abs());
+                let st = p.stress.get(i);
+                eyy = eyy.max((st[(1, 1)] - syy).abs() / syy.abs());
+                exx = exx.max((st[(0, 0)] - sxx).abs() / syy.abs());
             } else {
                 let u = p.x[i] - p.x0[i];
                 eg = eg.max((u - SVector::from([0.0, delta])).norm() / delta.abs());

@@ -86,8 +86,9 @@ pub fn revolution_measures(
         let d = p.x[i] - Vector2::new(center[0], center[1]);
         m_sum += m;
         r_sum += m * d.norm();
-        s_sum += m * (p.stress.get(i)[(0, 0)] + p.stress.get(i)[(1, 1)]);
-        h_sum += m * p.stress.get(i)[(2, 2)];
+        let s = p.stress.get(i);
+        s_sum += m * (s[(0, 0)] + s[(1, 1)]);
+        h_sum += m * s[(2, 2)];
         strain += p.vol0[i] * p.work[i];
     }
     let volume = volume_of_revolution(&poly);

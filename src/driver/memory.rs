@@ -290,10 +290,11 @@ pub fn peak_resident_bytes() -> Option<u64> {
 /// The share of the memory limit a scene's estimate may take: the
 /// estimate leaves out the program, its threads and the allocator's slack
 /// (the peak resident memory of 20-step runs, `summary.json`'s
-/// `peak_memory_bytes`, less the program's own 9.6 MiB, was 0.72–0.97 of
-/// the estimate: bench/block_1m 434 MiB for 502, two_disks at 256² 32.4
-/// for 45.2, pressurized_cylinder_impm 17.5 for 22.3, shock_helium_bubble
-/// 18.9 for 23.3, taylor_anvil at 160 × 320 34.2 for 35.2).
+/// `peak_memory_bytes`, less the program's own 9.6 MiB, was 0.74–0.98 of
+/// the estimate: bench/block_1m 419.5 MiB for 485.9, two_disks at 256²
+/// 32.4 for 43.9, pressurized_cylinder_impm 17.9 for 22.2,
+/// shock_helium_bubble 19.9 for 23.3, taylor_anvil at 160 × 320 33.5 for
+/// 34.2).
 pub const MEMORY_SHARE: f64 = 0.6;
 
 /// Refuses `scene` when its estimate exceeds [`MEMORY_SHARE`] of `limit`

@@ -103,6 +103,11 @@ pub enum Values<'a> {
     Computed(Computed<'a>),
 }
 
+/// Pads a `D`-vector to 3 components (the outputs' vectors are 3D).
+pub fn pad3<const D: usize>(v: &nalgebra::SVector<f64, D>) -> [f64; 3] {
+    std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
+}
+
 /// Writes tuple `i` of a [`Computed`] field into its output slice.
 pub type TupleFn<'a> = dyn Fn(usize, &mut [f64]) + Send + Sync + 'a;
 
@@ -143,11 +148,7 @@ impl<'a> Values<'a> {
     /// A vector field read from `v` (padded to 3 components) as it is
     /// written.
     pub fn vectors<const D: usize>(v: &'a [nalgebra::SVector<f64, D>]) -> Self {
-        Self::computed(v.len(), 3, move |i, o| {
-            for (k, x) in o[..3].iter_mut().enumerate() {
-                *x = if k < D { v[i][k] } else { 0.0 };
-            }
-        })
+        Self::computed(v.len(), 3, move |i, o| o[..3].copy_from_slice(&pad3(&v[i])))
     }
 
     /// A tensor field read from `m` (row-major) as it is written.

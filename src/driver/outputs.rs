@@ -27,11 +27,6 @@ pub fn per_depth(dim: usize) -> &'static str {
     }
 }
 
-/// Pads a `D`-vector to 3 components.
-pub fn pad3<const D: usize>(v: &nalgebra::SVector<f64, D>) -> [f64; 3] {
-    std::array::from_fn(|i| if i < D { v[i] } else { 0.0 })
-}
-
 /// The snapshot series and the history of one run.
 pub(crate) struct Outputs {
     dir: PathBuf,

@@ -204,10 +204,16 @@ impl<const D: usize> Particles<D> {
         }
     }
 
+    /// Damage of particle `p` (tracked or not).
+    #[inline]
+    pub fn damage_of(&self, p: usize) -> f64 {
+        self.damage.get(p).copied().unwrap_or(0.0)
+    }
+
     /// Whether particle `p` has failed (damage 1).
     #[inline]
     pub fn failed(&self, p: usize) -> bool {
-        self.damage.get(p).is_some_and(|&d| d >= 1.0)
+        self.damage_of(p) >= 1.0
     }
 
     /// The particles `p` with `keep(p)`, in order (a new set).

@@ -6,8 +6,9 @@
 use nalgebra::{Matrix3, SVector};
 use rayon::prelude::*;
 
+use crate::driver::model::pad3;
 use crate::driver::model::{Conserved, FieldSet, Geometry, Location, OutField, Values, Violation};
-use crate::driver::outputs::{pad3, per_depth};
+use crate::driver::outputs::per_depth;
 use crate::ice::{IceState, MaterialCells};
 use crate::material::eos::EquationOfState;
 use crate::material::SolidMaterial;
@@ -262,18 +263,17 @@ pub fn failure_fields<'a, const D: usize>(
     if materials.iter().all(|m| m.failure().is_none()) {
         return Vec::new();
     }
-    let damage = move |i: usize| p.damage.get(i).copied().unwrap_or(0.0);
     vec![
         OutField::new(
             "damage",
             "-",
-            Values::computed(p.len(), 1, move |i, o| o[0] = damage(i)),
+            Values::computed(p.len(), 1, |i, o| o[0] = p.damage_of(i)),
         ),
         OutField::new(
             "failed",
             "-",
-            Values::computed(p.len(), 1, move |i, o| {
-                o[0] = if damage(i) >= 1.0 { 1.0 } else { 0.0 }
+            Values::computed(p.len(), 1, |i, o| {
+                o[0] = if p.failed(i) { 1.0 } else { 0.0 }
             }),
         ),
     ]

@@ -1,6 +1,7 @@
 //! Zhang's multiphase MPM ([`crate::multiphase`]) as a model of the run
 //! loop.
 
+use crate::driver::model::pad3;
 use crate::driver::model::{
     Conserved, Counts, Description, DtRequest, FieldSet, Geometry, MaterialTotals, Model, OutField,
     StepStats, Values, Violation,
@@ -10,7 +11,6 @@ use crate::driver::models::arrays::{
     particle_watchdog, plastic_fields, save_particles,
 };
 use crate::driver::models::solid_explicit::{scene_name, SOLID_HISTORY};
-use crate::driver::outputs::pad3;
 use crate::error::Error;
 use crate::multiphase::MultiphaseRun;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};

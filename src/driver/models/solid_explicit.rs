@@ -1,5 +1,6 @@
 //! The explicit MPM solid as a model of the run loop.
 
+use crate::driver::model::pad3;
 use crate::driver::model::{
     Conserved, Counts, Description, DtRequest, FieldSet, Geometry, Model, OutField, StepStats,
     Values, Violation,
@@ -8,7 +9,6 @@ use crate::driver::models::arrays::{
     failure_fields, gas_point_fields, load_particles, name_particle_material, particle_conserved,
     particle_fields, particle_watchdog, plastic_fields, save_particles,
 };
-use crate::driver::outputs::pad3;
 use crate::error::Error;
 use crate::mpm::stable_dt;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
