@@ -3,16 +3,22 @@
 //! fractions, fill Σ M v / V, air state), the air mass ahead of, inside and
 //! behind the piston, and the closed-end pressure and temperature against
 //! the adiabat.
-//! `cargo run --release --example piston_interface_probe -- N RATIO [off]`
-//! (`off`: equilibrate on the cell volume, `ice.normalise_volume = false`).
-use mpmice::coupling::CoupledRun;
+//! `cargo run --release --example piston_interface_probe -- N RATIO [off|sharp]`
+//! (`off`: equilibrate on the cell volume, `ice.normalise_volume = false`;
+//! `sharp`: `coupling.rigid_interface = "sharp"`).
+use mpmice::coupling::{CoupledRun, RigidInterface};
 use mpmice::diagnostics::coupled::piston;
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let n: usize = a.get(1).map_or(120, |s| s.parse().unwrap());
     let target: f64 = a.get(2).map_or(5.0, |s| s.parse().unwrap());
-    let mut run = piston(n, 10.0, 0.02).unwrap();
+    let interface = if a.get(3).map(String::as_str) == Some("sharp") {
+        RigidInterface::Sharp
+    } else {
+        RigidInterface::Smeared
+    };
+    let mut run = piston(n, 10.0, 0.02, interface).unwrap();
     if a.get(3).map(String::as_str) == Some("off") {
         run.ice.normalise_volume = false;
     }

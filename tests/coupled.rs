@@ -141,9 +141,10 @@ fn solid_in_tension_next_to_gas_runs_without_nan() {
 /// P1 (V1/V2)^γ (Eq. 44): closed-end pressure at compression ratio 3.
 #[test]
 fn piston_converges_to_the_adiabatic_law() {
+    use mpmice::coupling::RigidInterface;
     use mpmice::diagnostics::coupled::piston_history;
     let err = |n: usize| {
-        let (h, _) = piston_history(n, 10.0, 0.02, 3.01).unwrap();
+        let (h, _) = piston_history(n, 10.0, 0.02, 3.01, RigidInterface::Smeared).unwrap();
         let &(r, p, e) = h.iter().find(|s| (s.0 - 3.0).abs() < 0.01).unwrap();
         eprintln!(
             "N = {n}: ratio {r:.3}, p/p_exact − 1 = {:+.4e}",
@@ -158,35 +159,72 @@ fn piston_converges_to_the_adiabatic_law() {
 
 /// `cases/piston.toml` is the piston of `diagnostics::coupled::piston`: at
 /// N = 120 and compression ratio 3 (t = 0.01 + (1 − 1/3)/10 s) its
-/// closed-end pressure is the diagnostic run's to round-off and within the
-/// first-order bound of Eq. 44.
+/// closed-end pressure is the diagnostic run's, with either rigid
+/// interface (`coupling.rigid_interface`), and within the first-order
+/// bound of Eq. 44 (smeared) or 1 % (sharp). The two runs differ in the
+/// last bits from the start (1e-15 in Δt by step 611); the smeared
+/// interface keeps that at round-off (1e-12), the sharp one amplifies it
+/// in the gas left in the cells the piston covers (`rigid_volume`'s
+/// notes) to about 5e-5, hence its looser agreement bound.
 #[test]
 fn piston_case_file_matches_the_adiabatic_law() {
+    use mpmice::coupling::RigidInterface;
     use mpmice::diagnostics::coupled::piston;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/piston.toml");
-    let mut sc = mpmice::scene::load(&path).unwrap();
-    sc.grid.cells = vec![120];
-    let t_end = 0.01 + (1.0 - 1.0 / 3.0) / 10.0;
-    let mut run = mpmice::scene::build_coupled_run::<1>(&sc).unwrap();
-    let mut reference = piston(120, 10.0, 0.02).unwrap();
-    for r in [&mut run, &mut reference] {
-        while r.fluid.time < t_end * (1.0 - 1e-12) {
-            r.step(t_end - r.fluid.time).unwrap();
+    for (interface, same, bound) in [
+        (RigidInterface::Smeared, 1e-9, 0.035),
+        (RigidInterface::Sharp, 1e-3, 0.01),
+    ] {
+        let mut sc = mpmice::scene::load(&path).unwrap();
+        sc.grid.cells = vec![120];
+        sc.coupling.rigid_interface = interface;
+        let t_end = 0.01 + (1.0 - 1.0 / 3.0) / 10.0;
+        let mut run = mpmice::scene::build_coupled_run::<1>(&sc).unwrap();
+        let mut reference = piston(120, 10.0, 0.02, interface).unwrap();
+        for r in [&mut run, &mut reference] {
+            while r.fluid.time < t_end * (1.0 - 1e-12) {
+                r.step(t_end - r.fluid.time).unwrap();
+            }
+        }
+        let c0 = run.fluid.layout.interior[0];
+        let (p, p_ref) = (run.fluid.pressure[c0], reference.fluid.pressure[c0]);
+        let exact = 101_325.0 * 3.0f64.powf(1.4);
+        eprintln!("{interface:?}: scene p = {p:e}, diagnostic p = {p_ref:e}, exact {exact:e}");
+        assert!(
+            (p / p_ref - 1.0).abs() < same,
+            "{interface:?}: scene {p:e} vs diagnostic {p_ref:e}"
+        );
+        assert!(
+            (p / exact - 1.0).abs() < bound,
+            "{interface:?}: p/exact − 1 = {:e}",
+            p / exact - 1.0
+        );
+    }
+}
+
+/// Issue 21: with the sharp rigid interface the piston's closed-end
+/// pressure follows P1 (V1/V2)^γ (Guilkey Eq. 44) within 1 % at every
+/// compression ratio from 1.5 to 5.5, at N = 120 and 240 (the smeared
+/// interface is 7.2 % and 3.4 % off at ratio 5, `piston_adiabatic`).
+#[test]
+fn sharp_rigid_piston_follows_the_adiabat_at_every_ratio() {
+    use mpmice::coupling::RigidInterface;
+    use mpmice::diagnostics::coupled::piston_history;
+    for n in [120, 240] {
+        let (h, _) = piston_history(n, 10.0, 0.02, 5.6, RigidInterface::Sharp).unwrap();
+        assert_eq!(h.len(), 9, "samples at ratios 1.5 … 5.5");
+        for (r, p, e) in h {
+            eprintln!(
+                "N = {n}: ratio {r:.3}, p/p_exact − 1 = {:+.4e}",
+                p / e - 1.0
+            );
+            assert!(
+                (p / e - 1.0).abs() < 0.01,
+                "N = {n}, ratio {r:.3}: {:+e}",
+                p / e - 1.0
+            );
         }
     }
-    let c0 = run.fluid.layout.interior[0];
-    let (p, p_ref) = (run.fluid.pressure[c0], reference.fluid.pressure[c0]);
-    let exact = 101_325.0 * 3.0f64.powf(1.4);
-    eprintln!("scene p = {p:e}, diagnostic p = {p_ref:e}, exact {exact:e}");
-    assert!(
-        (p / p_ref - 1.0).abs() < 1e-9,
-        "scene {p:e} vs diagnostic {p_ref:e}"
-    );
-    assert!(
-        (p / exact - 1.0).abs() < 0.035,
-        "p/exact − 1 = {:e}",
-        p / exact - 1.0
-    );
 }
 
 /// Guilkey Sec. 4.1 through the scene file: Eq. 43 error below 0.13 at

@@ -544,6 +544,17 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             "[0, 1)",
         ),
         (
+            format!("{good}\n[coupling]\nrigid_interface = \"exact\"\n"),
+            "coupling.rigid_interface",
+            "`smeared` or `sharp`",
+        ),
+        (
+            format!("{good}\n[coupling]\nrigid_interface = \"sharp\"\n")
+                .replacen("cfl = 0.5", "cfl = 0.5\nmode = \"semi_implicit\"", 1),
+            "coupling.rigid_interface",
+            "time.mode = explicit only",
+        ),
+        (
             good.replace("[time]", "[mpm]\nupdate = \"musl\"\n\n[time]"),
             "mpm.update",
             "usf, usl",

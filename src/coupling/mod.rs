@@ -46,6 +46,9 @@
 
 pub mod iteration;
 pub mod reaction;
+pub mod rigid_volume;
+
+pub use rigid_volume::RigidInterface;
 
 use std::ops::Mul;
 
@@ -108,6 +111,9 @@ pub struct CouplingParams {
     /// in the exchange is the one it had at the start of the step, not its
     /// node-to-cell average ([`SOLID_TRACE_FRACTION`]).
     pub trace_fraction: f64,
+    /// How a rigid field's volume enters the cells
+    /// ([`RigidInterface`]; scene key `coupling.rigid_interface`).
+    pub rigid_interface: RigidInterface,
 }
 
 /// Default [`CouplingParams::trace_fraction`] (scene key
@@ -125,6 +131,7 @@ impl Default for CouplingParams {
             momentum_exchange: 1e15,
             heat_exchange: 0.0,
             trace_fraction: SOLID_TRACE_FRACTION,
+            rigid_interface: RigidInterface::Smeared,
         }
     }
 }
@@ -440,7 +447,11 @@ impl<const D: usize> CoupledRun<D> {
                 Frame::Particles
             };
         }
-        ice.normalise_volume = true;
+        // The sharp rigid interface equilibrates on the cell volume when no
+        // solid field deforms (`rigid_volume`'s notes).
+        let sharp = coupling.rigid_interface == RigidInterface::Sharp;
+        ice.normalise_volume = !(sharp && fields.iter().all(|f| f.rigid_velocity.is_some()));
+        ice.rigid_faces_sharp = sharp;
         {
             // Grow the coefficient matrices by the solid fields' rows and
             // columns: every pair with a solid field in it exchanges at
@@ -562,9 +573,11 @@ impl<const D: usize> CoupledRun<D> {
     }
 
     /// Step 1: P2G and node → cell of every field's mass and velocity (and
-    /// temperature, with a heat exchange).
+    /// temperature, with a heat exchange); with [`RigidInterface::Sharp`] a
+    /// rigid field's cell mass from its particles' domains.
     fn p2g_to_cells(&mut self, dt: f64) -> Result<()> {
         let phases = phases!(self, dt);
+        let sharp = self.coupling.rigid_interface == RigidInterface::Sharp;
         for f in &mut self.fields {
             phases.p2g(&f.particles, &mut f.gs, &mut f.scratch)?;
             nodes_to_cells(
@@ -574,6 +587,9 @@ impl<const D: usize> CoupledRun<D> {
                 &mut f.cell_mass,
                 &mut f.cell_velocity,
             );
+            if f.rigid_velocity.is_some() && sharp {
+                rigid_volume::box_cell_mass(&self.fluid.layout, &f.particles, &mut f.cell_mass);
+            }
             if self.heat_on {
                 let p = &f.particles;
                 phases.p2g_scalar(p, &p.temperature, &f.gs, &f.scratch, &mut self.node_scalar);

@@ -6,7 +6,7 @@
 use nalgebra::SVector;
 
 use super::mms::fill_box;
-use crate::coupling::{CoupledRun, CouplingParams, SolidFieldSpec};
+use crate::coupling::{CoupledRun, CouplingParams, RigidInterface, SolidFieldSpec};
 use crate::error::Result;
 use crate::grid::{Boundary, Grid};
 use crate::ice::{
@@ -314,11 +314,12 @@ fn blocks_run(
 /// moving towards the closed end `x = 0` at `speed`, reached smoothly over
 /// `ramp` seconds ([`CoupledRun::rigid_ramp`]); exchange `K = 1e15`. The gas
 /// below the piston is compressed from length 1 to
-/// `1 + run.rigid_displacement(0, t)`.
+/// `1 + run.rigid_displacement(0, t)`. `interface`: how the piston's
+/// volume enters the cells ([`RigidInterface`]).
 ///
 /// # Errors
 /// As [`CoupledRun::new`].
-pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
+pub fn piston(n: usize, speed: f64, ramp: f64, interface: RigidInterface) -> Result<CoupledRun<1>> {
     let grid = Grid::<1>::new(
         SVector::zeros(),
         SVector::repeat(1.2),
@@ -348,7 +349,10 @@ pub fn piston(n: usize, speed: f64, ramp: f64) -> Result<CoupledRun<1>> {
         true,
         fluid,
         params,
-        CouplingParams::default(),
+        CouplingParams {
+            rigid_interface: interface,
+            ..CouplingParams::default()
+        },
     )?;
     run.rigid_ramp = ramp;
     Ok(run)
@@ -370,8 +374,9 @@ pub fn piston_history(
     speed: f64,
     ramp: f64,
     ratio_end: f64,
+    interface: RigidInterface,
 ) -> Result<(Vec<PistonSample>, u64)> {
-    let mut run = piston(n, speed, ramp)?;
+    let mut run = piston(n, speed, ramp, interface)?;
     let p1 = 101_325.0;
     let mut out = Vec::new();
     let mut next = 1.5;

@@ -204,7 +204,10 @@ pub fn face_specific_volume(ml: f64, vl: f64, mr: f64, vr: f64) -> f64 {
 ///
 /// `ustar[r][d]` holds material `r`'s face velocities normal to `d`;
 /// `fixed[r]` marks a rigid material whose face velocity is held (its first
-/// `n` entries are read; an empty slice marks none).
+/// `n` entries are read; an empty slice marks none); with `sharp_fixed` a
+/// rigid material's `θ_f` is the smaller of its two cells' instead of the
+/// mean ([`super::IceParams::rigid_faces_sharp`]).
+#[allow(clippy::too_many_arguments)]
 pub fn face_exchange<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
@@ -212,6 +215,7 @@ pub fn face_exchange<const D: usize>(
     dt: f64,
     cells: &[MaterialCells<D>],
     fixed: &[bool],
+    sharp_fixed: bool,
     ustar: &mut [[Vec<f64>; D]],
 ) {
     let fixed = if fixed.iter().take(cells.len()).any(|&f| f) {
@@ -234,7 +238,11 @@ pub fn face_exchange<const D: usize>(
             let (l, r) = (f - s, f);
             for m in 0..n {
                 let mc = &cells[m];
-                theta[m] = 0.5 * (mc.vol_frac[l] + mc.vol_frac[r]);
+                theta[m] = if sharp_fixed && fixed.get(m) == Some(&true) {
+                    mc.vol_frac[l].min(mc.vol_frac[r])
+                } else {
+                    0.5 * (mc.vol_frac[l] + mc.vol_frac[r])
+                };
                 v[m] = face_specific_volume(mc.mass[l], mc.sp_vol[l], mc.mass[r], mc.sp_vol[r]);
                 w[m] = theta[m] / v[m];
                 // SAFETY: face f is read and written by this task only.

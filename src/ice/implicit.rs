@@ -447,6 +447,7 @@ fn correct_face_velocities<const D: usize>(
                 dt,
                 &state.cells,
                 &params.rigid_mask(),
+                params.rigid_faces_sharp,
                 &mut ws.ustar,
             );
         }

@@ -148,6 +148,13 @@ pub struct IceParams<const D: usize> {
     /// particle material. Needed when solid mass reaches the cells by
     /// interpolation; `false` for fluid-only scenes.
     pub normalise_volume: bool,
+    /// The face exchange (Guilkey Eq. 38 at the faces) gives a rigid
+    /// material ([`Frame::Rigid`]) the smaller of its two cells' volume
+    /// fractions at a face instead of their mean: a face between a cell
+    /// the body has reached and one it has not lets the other materials
+    /// through at their own velocity
+    /// ([`crate::coupling::RigidInterface::Sharp`]).
+    pub rigid_faces_sharp: bool,
     /// Volume fraction below which a material of a mixed cell keeps its
     /// temperature through the flow work of the Lagrangian phase
     /// (isothermal, like the equilibration; `0` turns it off). See
@@ -307,6 +314,7 @@ impl<const D: usize> IceParams<D> {
             frames: Vec::new(),
             heat_sources: Vec::new(),
             normalise_volume: false,
+            rigid_faces_sharp: false,
             isothermal_fraction: ISOTHERMAL_FRACTION,
             isothermal_exempt: Vec::new(),
         }

@@ -335,6 +335,7 @@ pub fn stage_pressure<const D: usize>(
                 dt,
                 &state.cells,
                 &params.rigid_mask(),
+                params.rigid_faces_sharp,
                 &mut ws.ustar,
             );
         }

@@ -982,6 +982,7 @@ pub fn build_coupled_run<const D: usize>(
         momentum_exchange: cs.momentum_exchange,
         heat_exchange: cs.heat_exchange,
         trace_fraction: cs.solid_trace_fraction,
+        rigid_interface: cs.rigid_interface,
         ..Default::default()
     };
     let SolidRun {

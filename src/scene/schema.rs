@@ -792,6 +792,11 @@ pub struct CouplingSpec {
     /// in the momentum exchange is the one it had at the start of the step.
     #[serde(default = "default_solid_trace")]
     pub solid_trace_fraction: f64,
+    /// How a rigid solid's volume enters the cells: `"smeared"` (default,
+    /// Guilkey's node → cell average) or `"sharp"` (the exact overlap of
+    /// its particles with the cells; [`crate::coupling::RigidInterface`]).
+    #[serde(default)]
+    pub rigid_interface: crate::coupling::RigidInterface,
 }
 
 fn default_solid_trace() -> f64 {
@@ -817,6 +822,7 @@ impl Default for CouplingSpec {
             heat_exchange: 0.0,
             rigid_ramp: 0.0,
             solid_trace_fraction: default_solid_trace(),
+            rigid_interface: crate::coupling::RigidInterface::Smeared,
         }
     }
 }
@@ -3079,6 +3085,18 @@ impl Scene {
             return Err(err(
                 "coupling.heat_exchange",
                 format!("must be finite and >= 0, got {}", c.heat_exchange),
+            ));
+        }
+        if c.rigid_interface == crate::coupling::RigidInterface::Sharp
+            && self.time.mode != Mode::Explicit
+        {
+            return Err(err(
+                "coupling.rigid_interface",
+                format!(
+                    "\"sharp\" is offered with time.mode = explicit only (got {}; the implicit \
+                     pressure's time step collapses with it); allowed here: smeared",
+                    self.time.mode.name()
+                ),
             ));
         }
         if !(0.0..1.0).contains(&c.solid_trace_fraction) {

@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use mpmice::coupling::RigidInterface;
 use mpmice::diagnostics::coupled::piston_history;
 use mpmice::scene;
 
@@ -193,7 +194,7 @@ pub fn piston_implicit(quick: bool) -> anyhow::Result<StudyResult> {
                 .with_extra("dt", dt),
         );
         let start = Instant::now();
-        let (hist, steps) = piston_history(n, 10.0, 0.02, 5.05)?;
+        let (hist, steps) = piston_history(n, 10.0, 0.02, 5.05, RigidInterface::Smeared)?;
         let wall = start.elapsed().as_secs_f64();
         if let Some(&(r, p, ex)) = hist.iter().find(|s| (s.0 - 5.0).abs() < 0.01) {
             explicit.push(
