@@ -205,7 +205,9 @@ fn piston_case_file_matches_the_adiabatic_law() {
 /// Issue 21: with the sharp rigid interface the piston's closed-end
 /// pressure follows P1 (V1/V2)^γ (Guilkey Eq. 44) within 1 % at every
 /// compression ratio from 1.5 to 5.5, at N = 120 and 240 (the smeared
-/// interface is 7.2 % and 3.4 % off at ratio 5, `piston_adiabatic`).
+/// interface is 7.2 % and 3.4 % off at ratio 5, `piston_adiabatic`). This
+/// is the coarse regime the sharp interface is for: it does not converge
+/// (−0.8 % at N = 480, −1.2 % at 960; `rigid_volume`'s notes).
 #[test]
 fn sharp_rigid_piston_follows_the_adiabat_at_every_ratio() {
     use mpmice::coupling::RigidInterface;

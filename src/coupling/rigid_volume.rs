@@ -19,14 +19,21 @@
 //! ([`crate::ice::IceParams::normalise_volume`] off), so that the gas a
 //! body squeezes is compressed and pushed out.
 //!
-//! What it leaves (measured on the piston, issue 21): a little gas stays
-//! in each cell as the body covers it (about 1 % of a cell's gas), at
-//! high pressure and held at the body's velocity; it is released behind
-//! the body or carried with it. It holds about 0.7 % of the gas at every
-//! resolution, so the piston's pressure error (−0.5 to −0.8 %) does not
-//! converge, and the small masses of these cells amplify round-off (two
+//! What it leaves (measured on the piston, issue 21; experimental): a
+//! little gas stays in each cell as the body covers it (about 1 % of a
+//! cell's gas), at high pressure and held at the body's velocity, and is
+//! carried with the body or released behind it; a layer of cooler,
+//! denser gas forms at the body's face. The piston's pressure error at
+//! ratio 5 is −0.7, −0.6, −0.8 and −1.2 % at 120, 240, 480 and 960 cells:
+//! far better than the smeared interface at coarse cells, but it does not
+//! converge (the smeared one does, at first order, and is better from 960
+//! cells on). The small masses of those cells also amplify round-off (two
 //! runs that differ in the last bit at the start differ by 5e-5 in the
-//! closed-end pressure at ratio 3).
+//! closed-end pressure at ratio 3). Tried and dropped: closing the faces
+//! the body covers to the gas (the gas left in covered cells then stays
+//! where it is and ends up behind the body: −2 %), and merging covered
+//! cells' gas into their open neighbour (negative temperatures in the
+//! floor left behind).
 
 use serde::{Deserialize, Serialize};
 

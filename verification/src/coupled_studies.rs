@@ -274,9 +274,9 @@ pub fn piston_adiabatic(quick: bool) -> anyhow::Result<StudyResult> {
                 .into(),
             "Sharp (coupling.rigid_interface = \"sharp\"): the piston's exact volume per cell, \
              rigid faces only where both cells hold it, equilibration on the cell volume; the \
-             gas leaves the cells the piston takes over. What is left (about -0.7 % at every N) \
-             does not converge: a layer of about one cell of cooler, denser gas at the piston's \
-             face holds about 0.4 % of the gas mass (piston_interface_probe)."
+             gas leaves the cells the piston takes over. What is left (-0.6 to -1.2 %, growing \
+             with N) does not converge: gas left in the cells the piston covers, and a layer of \
+             about one cell of cooler, denser gas at its face (piston_interface_probe)."
                 .into(),
         ],
     })
