@@ -587,9 +587,6 @@ impl<const D: usize> CoupledRun<D> {
                 &mut f.cell_mass,
                 &mut f.cell_velocity,
             );
-            if f.rigid_velocity.is_some() && sharp {
-                rigid_volume::box_cell_mass(&self.fluid.layout, &f.particles, &mut f.cell_mass);
-            }
             if self.heat_on {
                 let p = &f.particles;
                 phases.p2g_scalar(p, &p.temperature, &f.gs, &f.scratch, &mut self.node_scalar);
@@ -600,6 +597,11 @@ impl<const D: usize> CoupledRun<D> {
                     &mut f.cell_mass,
                     &mut f.cell_temp,
                 );
+            }
+            // After the temperature's transfer, which writes the node
+            // average into `cell_mass` again.
+            if f.rigid_velocity.is_some() && sharp {
+                rigid_volume::box_cell_mass(&self.fluid.layout, &f.particles, &mut f.cell_mass);
             }
         }
         Ok(())
