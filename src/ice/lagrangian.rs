@@ -11,8 +11,8 @@ use super::exchange::{exchange_heat, exchange_momentum_fixed};
 use super::par::{try_rows, Out};
 use super::params::{EnergyForm, Frame, IceParams};
 use super::sources::{
-    cell_sources, conservative_energy, dissipation_share, eulerian_theta_kappa, LagrangianCell,
-    LagrangianInputs,
+    cell_sources, conservative_energy, dissipation_share, eulerian_theta_kappa, share,
+    LagrangianCell, LagrangianInputs,
 };
 use super::specific_volume::{lagrangian_volume, CellShare, MaterialShare};
 use super::state::IceState;
@@ -47,13 +47,31 @@ pub fn stage_lagrangian<const D: usize>(
     dt: f64,
     particle_velocity: &[Vec<SVector<f64, D>>],
 ) -> Result<(), IceError> {
+    // The loops over a cell's materials unrolled for one and two
+    // materials (Sod, 3 200 cells, one thread: the step from 79.5 to 75.9 ns
+    // per cell), the scene's count otherwise.
+    match state.num_materials() {
+        1 => lagrangian_cells::<D, 1>(state, params, ws, dt, particle_velocity),
+        2 => lagrangian_cells::<D, 2>(state, params, ws, dt, particle_velocity),
+        _ => lagrangian_cells::<D, 0>(state, params, ws, dt, particle_velocity),
+    }
+}
+
+/// [`stage_lagrangian`] with `N` materials (0: the scene's number).
+fn lagrangian_cells<const D: usize, const N: usize>(
+    state: &IceState<D>,
+    params: &IceParams<D>,
+    ws: &mut IceWorkspace<D>,
+    dt: f64,
+    particle_velocity: &[Vec<SVector<f64, D>>],
+) -> Result<(), IceError> {
     let nm = state.num_materials();
     let layout = &state.layout;
     let exchange = params.exchange.as_ref().filter(|_| nm > 1);
     let k_on = exchange.filter(|e| e.momentum.iter().any(|&k| k > 0.0));
     let h_on = exchange.filter(|e| !e.heat_off());
     let conservative = params.energy == EnergyForm::Conservative;
-    let (inp, out) = split_workspace(state, params, ws, dt, particle_velocity);
+    let (inp, out) = split_workspace::<D, N>(state, params, ws, dt, particle_velocity);
     let any_lagr = inp.lagr[..nm].iter().any(|&l| l);
     // Steps 8–11: sources (Guilkey Eqs. 33–34), Lagrangian values
     // (Eqs. 35–37), exchange (Eqs. 38–39) and specific volume (Eqs. 40–41,
@@ -91,13 +109,13 @@ pub fn stage_lagrangian<const D: usize>(
 /// The inputs of the Lagrangian phase (the state, the parameters, the
 /// pressure stage's results in the workspace and per-material constants)
 /// and its outputs (the workspace's Lagrangian values).
-fn split_workspace<'a, const D: usize>(
+fn split_workspace<'a, const D: usize, const N: usize>(
     state: &'a IceState<D>,
     params: &'a IceParams<D>,
     ws: &'a mut IceWorkspace<D>,
     dt: f64,
     particle_velocity: &'a [Vec<SVector<f64, D>>],
-) -> (LagrangianInputs<'a, D>, LagrangianOut<'a, D>) {
+) -> (LagrangianInputs<'a, D, N>, LagrangianOut<'a, D>) {
     let nm = state.num_materials();
     let mu = params
         .viscosity
@@ -140,7 +158,9 @@ fn split_workspace<'a, const D: usize>(
         lagr,
         fixed,
         any_fixed: fixed[..nm].iter().any(|&f| f),
-        nm,
+        one_eulerian: lagr[..nm].iter().filter(|&&l| !l).count() == 1,
+        one_material: nm == 1,
+        n_dyn: nm,
         dt,
         vol: state.layout.cell_volume(),
         t0: state.time,
@@ -198,10 +218,10 @@ impl<'a, const D: usize> LagrangianOut<'a, D> {
 /// `true` when a particle-borne material fills more than
 /// [`SOLID_FRACTION_FOR_FLOW_WORK`] of cell `c` or of a face neighbour.
 #[inline]
-fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
+fn solid_near<const D: usize, const N: usize>(inp: &LagrangianInputs<'_, D, N>, c: usize) -> bool {
     let layout = &inp.st.layout;
     let solid_in = |k: usize| {
-        (0..inp.nm)
+        (0..inp.nm())
             .any(|r| inp.lagr[r] && inp.st.cells[r].vol_frac[k] > SOLID_FRACTION_FOR_FLOW_WORK)
     };
     solid_in(c)
@@ -215,14 +235,14 @@ fn solid_near<const D: usize>(inp: &LagrangianInputs<'_, D>, c: usize) -> bool {
 // Called once per cell from one place: the body of the loop it came
 // from before the stage split, kept inlined there.
 #[inline(always)]
-fn momentum_exchange<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+fn momentum_exchange<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     k: &[f64],
     cons: bool,
     _c: usize,
     cell: &mut LagrangianCell<D>,
 ) {
-    let nm = inp.nm;
+    let nm = inp.nm();
     let LagrangianCell {
         theta,
         v,
@@ -279,12 +299,12 @@ fn momentum_exchange<const D: usize>(
 // Called once per cell from one place: the body of the loop it came
 // from before the stage split, kept inlined there.
 #[inline(always)]
-fn heat_exchange<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+fn heat_exchange<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     h: Option<&[f64]>,
     cell: &mut LagrangianCell<D>,
 ) -> f64 {
-    let nm = inp.nm;
+    let nm = inp.nm();
     let dt = inp.dt;
     let mut sum_tb = 0.0;
     if let Some(h) = h {
@@ -323,8 +343,8 @@ fn heat_exchange<const D: usize>(
 // Called once per cell from one place: the body of the loop it came
 // from before the stage split, kept inlined there.
 #[inline(always)]
-fn store_cell<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+fn store_cell<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     out: &LagrangianOut<'_, D>,
     c: usize,
     sum_tb: Option<f64>,
@@ -332,7 +352,7 @@ fn store_cell<const D: usize>(
 ) -> Result<(), IceError> {
     let st = inp.st;
     let LagrangianCell { u, t, v, .. } = cell;
-    for r in 0..inp.nm {
+    for r in 0..inp.nm() {
         let cv = inp.cv[r];
         if inp.lagr[r] {
             // The cell values of a particle-borne material are
@@ -358,7 +378,11 @@ fn store_cell<const D: usize>(
             mass: cell.mass[r],
             sp_vol: v[r],
             theta: cell.theta[r],
-            f_theta: cell.theta[r] * inp.kappa[r][c] / inp.stk[c],
+            f_theta: share(
+                cell.theta[r] * inp.kappa[r][c],
+                inp.stk[c],
+                inp.one_material,
+            ),
             temp: t[r],
             temp_before: cell.t_before[r],
             beta: cell.beta[r],

@@ -17,7 +17,12 @@ use crate::material::eos::{EquationOfState, FluidEos};
 /// What the Lagrangian phase reads in every cell: the state, the
 /// parameters, the pressure stage's results (volume fluxes, pressures) and
 /// per-material constants.
-pub(super) struct LagrangianInputs<'a, const D: usize> {
+///
+/// `N` is the number of materials when it is fixed at compile time (1 or
+/// 2: the loops over the materials of a cell unroll and the per-cell code
+/// is short enough for consecutive cells to overlap), 0 for the scene's
+/// number read at run time ([`Self::nm`]).
+pub(super) struct LagrangianInputs<'a, const D: usize, const N: usize> {
     /// The state at the start of the step (equilibrated).
     pub(super) st: &'a IceState<D>,
     /// The step's parameters.
@@ -46,8 +51,14 @@ pub(super) struct LagrangianInputs<'a, const D: usize> {
     pub(super) fixed: [bool; MAX_MATERIALS],
     /// `true` when any material is rigid.
     pub(super) any_fixed: bool,
-    /// Number of materials.
-    pub(super) nm: usize,
+    /// `true` when exactly one material is Eulerian (not particle-borne):
+    /// its shares of the cell's flow work and dissipation are 1.
+    pub(super) one_eulerian: bool,
+    /// `true` when the cell holds one material (`nm = 1`): its share of
+    /// `Σ_s θ_s κ_s` is 1.
+    pub(super) one_material: bool,
+    /// Number of materials (read through [`Self::nm`]).
+    pub(super) n_dyn: usize,
     /// Time step.
     pub(super) dt: f64,
     /// Cell volume.
@@ -56,6 +67,18 @@ pub(super) struct LagrangianInputs<'a, const D: usize> {
     pub(super) t0: f64,
     /// End of the step.
     pub(super) t1: f64,
+}
+
+impl<const D: usize, const N: usize> LagrangianInputs<'_, D, N> {
+    /// Number of materials: `N`, or the scene's when `N = 0`.
+    #[inline(always)]
+    pub(super) fn nm(&self) -> usize {
+        if N == 0 {
+            self.n_dyn
+        } else {
+            N
+        }
+    }
 }
 
 /// Per material of one cell: the values the Lagrangian phase builds up
@@ -120,8 +143,8 @@ fn pressure_gradient<const D: usize>(
 // Called once per cell from one place: the body of the loop it came
 // from before the stage split, kept inlined there.
 #[inline(always)]
-pub(super) fn cell_sources<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+pub(super) fn cell_sources<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     c: usize,
     cons: bool,
     cell: &mut LagrangianCell<D>,
@@ -131,7 +154,7 @@ pub(super) fn cell_sources<const D: usize>(
     let (dt, vol) = (inp.dt, inp.vol);
     let grad = pressure_gradient(layout, inp.pstar, c);
     let mut dke_src = 0.0;
-    for r in 0..inp.nm {
+    for r in 0..inp.nm() {
         let mc = &st.cells[r];
         cell.theta[r] = mc.vol_frac[c];
         cell.v[r] = mc.sp_vol[c];
@@ -168,7 +191,11 @@ pub(super) fn cell_sources<const D: usize>(
             (me + cell.heat[r]) / (m * cv)
         } else {
             // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
-            let f_theta = cell.theta[r] * inp.kappa[r][c] / inp.stk[c];
+            let f_theta = share(
+                cell.theta[r] * inp.kappa[r][c],
+                inp.stk[c],
+                inp.one_material,
+            );
             (me - dt * vol * f_theta * inp.press[c] * inp.div_sum[c] + cell.heat[r]) / (m * cv)
         };
         add_heat_sources(inp, c, r, cell);
@@ -198,21 +225,21 @@ pub(super) fn cell_sources<const D: usize>(
 /// negligible part of the cell's, so the cell's energy is unchanged to
 /// that order. Single-material cells (θ = 1) are never affected.
 #[inline]
-pub(super) fn isothermal_in<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+pub(super) fn isothermal_in<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     cell: &LagrangianCell<D>,
     r: usize,
 ) -> bool {
     let exempt = inp.params.isothermal_exempt.get(r) == Some(&true);
-    inp.nm > 1 && cell.theta[r] < inp.params.isothermal_fraction && !exempt
+    inp.nm() > 1 && cell.theta[r] < inp.params.isothermal_fraction && !exempt
 }
 
 /// Heat sources: internal energy added to material `r` of cell `c` at a
 /// rate per unit volume over a time window (the part of the step inside
 /// it).
 #[inline]
-fn add_heat_sources<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+fn add_heat_sources<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     c: usize,
     r: usize,
     cell: &mut LagrangianCell<D>,
@@ -233,13 +260,13 @@ fn add_heat_sources<const D: usize>(
 /// exchange heat (the Eulerian ones) in cell `c`: the denominator of their
 /// `f_θ`.
 #[inline]
-pub(super) fn eulerian_theta_kappa<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+pub(super) fn eulerian_theta_kappa<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     c: usize,
     cell: &LagrangianCell<D>,
 ) -> f64 {
     let mut stk_e = 0.0;
-    for r in 0..inp.nm {
+    for r in 0..inp.nm() {
         if !inp.lagr[r] {
             stk_e += cell.theta[r] * inp.kappa[r][c];
         }
@@ -268,8 +295,8 @@ pub(super) fn eulerian_theta_kappa<const D: usize>(
 /// residual of −560 J/kg in the water (0.06 % of its energy) drove the air
 /// trace to −680 K (water–air shock tube, step 10).
 #[inline]
-pub(super) fn conservative_energy<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+pub(super) fn conservative_energy<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     c: usize,
     stk_e: f64,
     dke_src: f64,
@@ -287,7 +314,14 @@ pub(super) fn conservative_energy<const D: usize>(
     let dvol = inp.dt * inp.vol * inp.div_sum[c];
     let mut dt_work = [0.0; MAX_MATERIALS];
     let mut rest = de - dke_src;
-    for r in 0..inp.nm {
+    // With one Eulerian material its flow work and the rest both go to it:
+    // its temperature change is `(Δ(mE) − dke_src + heat)/(M c_v)` however
+    // the two are split (the split shares the energy between materials), so
+    // the flow work is not computed. (It changes the result by round-off:
+    // `w + (rest − M c_v w)/(M c_v)` against `rest/(M c_v)`.) It was three
+    // divisions and two EOS calls on the dependency chain of every cell.
+    let n_split = if inp.one_eulerian { 0 } else { inp.nm() };
+    for r in 0..n_split {
         if inp.lagr[r] {
             continue;
         }
@@ -306,7 +340,7 @@ pub(super) fn conservative_energy<const D: usize>(
         );
         rest -= m * cv * dt_work[r];
     }
-    for r in 0..inp.nm {
+    for r in 0..inp.nm() {
         if inp.lagr[r] {
             continue;
         }
@@ -371,6 +405,20 @@ pub(super) fn flow_work(eos: &FluidEos, v0: f64, dv: f64, t0: f64, p: f64, cv: f
     -p * dv / cv
 }
 
+/// `part / total`, a material's share of a sum over the cell's materials;
+/// `whole` says that the sum has this one term (`total == part`), and then
+/// the share is exactly 1 for a positive finite `part` (as the division
+/// gives) without the division, which sat on the Lagrangian phase's
+/// dependency chain in every single-fluid cell.
+#[inline]
+pub(super) fn share(part: f64, total: f64, whole: bool) -> f64 {
+    if whole && part > 0.0 && part.is_finite() {
+        1.0
+    } else {
+        part / total
+    }
+}
+
 /// The share of Eulerian material `r` (masses `mass`) of a cell's dissipated energy
 /// (the kinetic-energy residual of [`conservative_energy`], the kinetic
 /// energy the momentum exchange removes): its mass over the Eulerian
@@ -379,13 +427,17 @@ pub(super) fn flow_work(eos: &FluidEos, v0: f64, dv: f64, t0: f64, p: f64, cv: f
 /// `(κ v)_gas/(κ v)_liquid` times as much as the liquid, see
 /// [`conservative_energy`].)
 #[inline]
-pub(super) fn dissipation_share<const D: usize>(
-    inp: &LagrangianInputs<'_, D>,
+pub(super) fn dissipation_share<const D: usize, const N: usize>(
+    inp: &LagrangianInputs<'_, D, N>,
     mass: &[f64; MAX_MATERIALS],
     r: usize,
 ) -> f64 {
+    if inp.one_eulerian {
+        // `m/m`, without the division (`total > 0` below is `m > 0`).
+        return if mass[r] > 0.0 { 1.0 } else { 0.0 };
+    }
     let mut total = 0.0;
-    for s in 0..inp.nm {
+    for s in 0..inp.nm() {
         if !inp.lagr[s] {
             total += mass[s];
         }
