@@ -33,16 +33,17 @@ pub fn timestep_with<const D: usize>(
     rigid: &[bool],
 ) -> f64 {
     let layout = &state.layout;
+    let inv_h = layout.h.map(|h| 1.0 / h);
     let rate = max_rows(layout, |row| {
         let mut rate: f64 = 0.0;
-        // c² v⁻¹ per material of the cell (the sound speed is the same in
+        // c² per material of the cell (the sound speed is the same in
         // every direction).
-        let mut c2_v = [0.0; MAX_MATERIALS];
+        let mut c2 = [0.0; MAX_MATERIALS];
         for c in row {
             for (r, (mat, mc)) in state.materials.iter().zip(&state.cells).enumerate() {
-                c2_v[r] = if sound_factor > 0.0 && !rigid.get(r).copied().unwrap_or(false) {
-                    let v = mc.sp_vol[c];
-                    mat.eos.sound_speed_sq(1.0 / v, mc.temperature[c]) / v
+                c2[r] = if sound_factor > 0.0 && !rigid.get(r).copied().unwrap_or(false) {
+                    mat.eos
+                        .sound_speed_sq(1.0 / mc.sp_vol[c], mc.temperature[c])
                 } else {
                     0.0
                 };
@@ -56,17 +57,17 @@ pub fn timestep_with<const D: usize>(
                     // The face velocity (Guilkey Eq. 28) couples the cell to
                     // its neighbours through v_f = 2 v_c v_n/(v_c + v_n)
                     // (< 2 v_n, increasing in v_n): the effective sound speed
-                    // is c √(max v_f/v_c).
+                    // is c √(max v_f/v_c), v_f/v_c = 2 v_n/(v_c + v_n).
                     let vn = mc.sp_vol[c - s].max(mc.sp_vol[c + s]);
-                    let vf = (2.0 * v * vn / (v + vn)).max(v);
-                    let cs = if c2_v[r] > 0.0 {
-                        sound_factor * (c2_v[r] * vf).sqrt()
+                    let ratio = (2.0 * vn / (v + vn)).max(1.0);
+                    let cs = if c2[r] > 0.0 {
+                        sound_factor * (c2[r] * ratio).sqrt()
                     } else {
                         0.0
                     };
                     w = w.max(mc.velocity[c][d].abs() + cs);
                 }
-                sum += w / layout.h[d];
+                sum += w * inv_h[d];
             }
             rate = rate.max(sum);
         }
