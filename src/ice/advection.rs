@@ -100,7 +100,7 @@ impl Advection {
 
 /// Limited slope (change per cell) from the backward difference `a` and the
 /// forward difference `b`.
-#[inline]
+#[inline(always)]
 pub fn limited_slope(a: f64, b: f64, limiter: Limiter) -> f64 {
     if a * b <= 0.0 {
         return 0.0;
@@ -122,7 +122,7 @@ pub fn limited_slope(a: f64, b: f64, limiter: Limiter) -> f64 {
 
 /// Limited slope of the field `q` (read through `q`) in cell `c` along
 /// the direction with flat-index stride `s`.
-#[inline]
+#[inline(always)]
 fn slope_at(q: &impl Fn(usize) -> f64, c: usize, s: usize, lim: Limiter) -> f64 {
     let qc = q(c);
     limited_slope(qc - q(c - s), q(c + s) - qc, lim)
@@ -159,7 +159,7 @@ pub fn remap_strain(strain: &[f64], c: usize, across: usize) -> f64 {
 /// `mu[e]` the signed transverse Courant numbers `w_e Δt / h_e` of the
 /// donor (only used by [`Advection::SecondOrder`] for `e ≠ d`).
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn centroid_value<const D: usize>(
     q: impl Fn(usize) -> f64,
     donor: usize,
@@ -231,7 +231,7 @@ fn centroid_value<const D: usize>(
 /// (the transverse terms use the cell velocity, which at a sharp interface
 /// can disagree with the face velocities that deliver the corner mass).
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn extensive_value<const D: usize>(
     q: &[f64],
     donor: usize,
