@@ -207,12 +207,14 @@ impl<const D: usize> AdvectedCell<'_, D> {
                 value: m,
             });
         }
+        // Two divisions, not four (see `sources::cell_sources`).
+        let inv_m = 1.0 / m;
         let mom = fields.velocity[c] * m0 + net_inflow_vec(layout, &fx.momentum, c);
         let mut me = m0 * fields.energy[c] + net_inflow(layout, &fx.energy, c);
         if let Some(k) = fields.kinetic {
             // Total energy advected; internal = total − kinetic.
             let me_tot = me + m0 * k[c] + net_inflow(layout, &fx.kinetic, c);
-            let me_cons = me_tot - 0.5 * mom.norm_squared() / m;
+            let me_cons = me_tot - 0.5 * mom.norm_squared() * inv_m;
             if me_cons > 0.0 {
                 me = me_cons;
             }
@@ -234,7 +236,7 @@ impl<const D: usize> AdvectedCell<'_, D> {
             // negative air volume at t = 2.4e-5 s.)
             mv = m * fields.sp_vol[c];
         }
-        let temp = me / (m * self.cv);
+        let temp = me * inv_m / self.cv;
         if !(temp.is_finite() && temp > 0.0) {
             return Err(IceError::NonPhysical {
                 site: site(st, c, Some(r)),
@@ -249,7 +251,7 @@ impl<const D: usize> AdvectedCell<'_, D> {
                 value: mv / m,
             });
         }
-        Ok((m, mom / m, temp, mv / m))
+        Ok((m, mom * inv_m, temp, mv * inv_m))
     }
 }
 

@@ -312,8 +312,10 @@ pub fn scalar_fluxes<const D: usize>(
             let (c, sign, nu) = donor(f, s, u, dt, h);
             let mu = courants(&velocity[c], dt, &layout.h);
             let qf = extensive_value(q, c, d, &layout.strides, sign, nu, &mu, scheme);
+            // `sign ν` is `u Δt / h` (`ν = |u| Δt / h`), without a second
+            // division.
             // SAFETY: each face is written by one task only.
-            unsafe { out.set(f, u * dt / h * qf) };
+            unsafe { out.set(f, sign * nu * qf) };
         }
     });
 }
@@ -394,7 +396,7 @@ pub fn material_fluxes<const D: usize>(
         par_face_rows(layout, d, |row| {
             for f in row {
                 let u = us[f];
-                let (c, sign, nu) = donor(f, s, u, dt, h);
+                let (c, sign, nu_fixed) = donor(f, s, u, dt, h);
                 // The Lagrangian cell's material beyond the fixed face: the
                 // fixed cell's swept mass times V/V^L of the donor, taken
                 // from the region of that width at the face.
@@ -402,12 +404,13 @@ pub fn material_fluxes<const D: usize>(
                 let g = q
                     .remap
                     .map_or(1.0, |e| 1.0 / (1.0 + remap_strain(e, c, across)));
-                let nu = g * nu;
+                let nu = g * nu_fixed;
                 let mu = courants(&q.velocity[c], dt, &layout.h);
                 let value =
                     |field: &[f64]| centroid_value(|i| field[i], c, d, st, sign, nu, &mu, scheme);
+                // `sign ν_fixed` is `u Δt / h`, without a second division.
                 let m_flux =
-                    g * u * dt / h * extensive_value(q.mass, c, d, st, sign, nu, &mu, scheme);
+                    sign * nu_fixed * g * extensive_value(q.mass, c, d, st, sign, nu, &mu, scheme);
                 let vel = SVector::<f64, D>::from_fn(|k, _| {
                     centroid_value(|i| q.velocity[i][k], c, d, st, sign, nu, &mu, scheme)
                 });

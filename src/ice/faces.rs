@@ -130,12 +130,20 @@ pub fn face_velocities<const D: usize>(
                     pr -= k * (u0r * sp_r + bulk[r] * su_r);
                 }
             }
-            let avg = if msum > 0.0 {
-                (ml * ul + mr * ur) / msum
+            // The mass-weighted velocity and [`face_specific_volume`], with
+            // one division.
+            let (avg, v_face) = if msum > 0.0 {
+                let inv = 1.0 / msum;
+                (
+                    (ml * ul + mr * ur) * inv,
+                    (ml * sp_vol[l] + mr * sp_vol[r]) * inv,
+                )
             } else {
-                0.5 * (ul + ur)
+                (
+                    0.5 * (ul + ur),
+                    face_specific_volume(ml, sp_vol[l], mr, sp_vol[r]),
+                )
             };
-            let v_face = face_specific_volume(ml, sp_vol[l], mr, sp_vol[r]);
             // Jump part (dissipation) with `dt`, resolved part (the
             // reconstructed slopes, zero without reconstruction) with
             // `smooth_dt`.
@@ -259,7 +267,8 @@ pub fn face_exchange<const D: usize>(
 
 /// Face pressure normal to `d` (Guilkey Eq. 31),
 /// `p* = (p_L/ρ_L + p_R/ρ_R)/(1/ρ_L + 1/ρ_R)` with the mixture bulk
-/// densities `ρ = Σ_r M_r/V` (here the total masses; `V` cancels).
+/// densities `ρ = Σ_r M_r/V` (here the total masses; `V` cancels),
+/// computed as `(p_L M_R + p_R M_L)/(M_L + M_R)` (one division, not three).
 pub fn face_pressure<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
@@ -272,9 +281,9 @@ pub fn face_pressure<const D: usize>(
     par_face_rows(layout, d, |row| {
         for f in row {
             let (l, r) = (f - s, f);
-            let (il, ir) = (1.0 / mix_mass[l], 1.0 / mix_mass[r]);
+            let (ml, mr) = (mix_mass[l], mix_mass[r]);
             // SAFETY: each face is written by one task only.
-            unsafe { o.set(f, (p[l] * il + p[r] * ir) / (il + ir)) };
+            unsafe { o.set(f, (p[l] * mr + p[r] * ml) / (ml + mr)) };
         }
     });
 }

@@ -163,6 +163,7 @@ fn split_workspace<'a, const D: usize, const N: usize>(
         n_dyn: nm,
         dt,
         vol: state.layout.cell_volume(),
+        inv_h: state.layout.h.map(|h| 1.0 / h),
         t0: state.time,
         t1: state.time + dt,
     };
@@ -408,7 +409,7 @@ fn store_cell<const D: usize, const N: usize>(
             out.temp[r].set(c, t[r]);
             out.e[r].set(c, cv * t[r]);
             out.ke[r].set(c, 0.5 * u[r].norm_squared());
-            out.v[r].set(c, mv / cell.mass[r]);
+            out.v[r].set(c, mv * cell.inv_m[r]);
         }
     }
     Ok(())

@@ -609,6 +609,7 @@ fn courant_check<const D: usize>(
 ) -> Result<(), IceError> {
     let layout = &state.layout;
     let nm = state.num_materials();
+    let dt_h = layout.h.map(|h| dt / h);
     try_rows(layout, |row| {
         for c in row {
             for r in 0..nm {
@@ -616,7 +617,7 @@ fn courant_check<const D: usize>(
                 for d in 0..D {
                     let s = layout.strides[d];
                     let (lo, hi) = (ustar[r][d][c], ustar[r][d][c + s]);
-                    courant += (hi.max(0.0) - lo.min(0.0)) * dt / layout.h[d];
+                    courant += (hi.max(0.0) - lo.min(0.0)) * dt_h[d];
                 }
                 if courant > 1.0 {
                     return Err(IceError::TimestepTooLarge {

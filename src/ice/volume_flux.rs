@@ -25,6 +25,7 @@ pub(super) fn volume_fluxes<const D: usize>(
     let scheme = params.advection;
     let layout = &state.layout;
     let nm = state.num_materials();
+    let inv_dt = 1.0 / dt;
 
     for r in 0..nm {
         let mc = &state.cells[r];
@@ -58,7 +59,7 @@ pub(super) fn volume_fluxes<const D: usize>(
         par_rows(layout, |row| {
             for c in row {
                 // ∇·(θ u*)_r; the fluxes carry Δt/h.
-                let dv = -net_inflow(layout, tf, c) / dt;
+                let dv = -net_inflow(layout, tf, c) * inv_dt;
                 let k = eos.compressibility(1.0 / mc.sp_vol[c], mc.temperature[c]);
                 // SAFETY: cell c is read and written by this task only.
                 unsafe {
