@@ -19,9 +19,9 @@ use crate::material::eos::{EquationOfState, FluidEos};
 /// per-material constants.
 ///
 /// `N` is the number of materials when it is fixed at compile time (1 or
-/// 2: the loops over the materials of a cell unroll and the per-cell code
-/// is short enough for consecutive cells to overlap), 0 for the scene's
-/// number read at run time ([`Self::nm`]).
+/// 2: the loops over the materials of a cell unroll; Sod in 1D went from
+/// 79.5 to 75.9 ns per cell-step), 0 for the scene's number read at run
+/// time ([`Self::nm`]).
 pub(super) struct LagrangianInputs<'a, const D: usize, const N: usize> {
     /// The state at the start of the step (equilibrated).
     pub(super) st: &'a IceState<D>,
