@@ -172,31 +172,13 @@ mod tests {
         CellLayout::<2>::new(SVector::zeros(), SVector::repeat(h), [n, n]).unwrap()
     }
 
-    #[test]
-    fn a_block_on_the_cells_fills_them_exactly() {
+    /// A 3 × 3-cell block of 2 × 2 particles per cell at cells (2, 3),
+    /// shifted by `(sx, sy)` cells: every cell holds 4 × (its area inside
+    /// the block), to round-off of the fractions' sums, and the total is
+    /// kept.
+    fn assert_block_overlap(sx: f64, sy: f64) {
         let (h, n) = (0.1, 8);
         let lay = layout(n, h);
-        let p = block(h, 2, 2, 3, 3, [0.0, 0.0]);
-        let mut m = vec![0.0; n * n];
-        box_cell_mass(&lay, &p, &mut m);
-        for j in 0..n {
-            for i in 0..n {
-                let inside = (2..5).contains(&i) && (3..6).contains(&j);
-                let want = if inside { 4.0 } else { 0.0 };
-                // Exact but for the round-off of the fractions' sums.
-                assert!((m[i + n * j] - want).abs() < 1e-12, "cell ({i}, {j})");
-            }
-        }
-    }
-
-    #[test]
-    fn a_shifted_block_shares_its_mass_by_overlap() {
-        // Shifted by 0.3 cells in x and 0.55 in y (not a multiple of the
-        // particle spacing): every cell holds 4 × (its area inside the
-        // block); the total is kept.
-        let (h, n) = (0.1, 8);
-        let lay = layout(n, h);
-        let (sx, sy) = (0.3, 0.55);
         let p = block(h, 2, 2, 3, 3, [sx, sy]);
         let mut m = vec![0.0; n * n];
         box_cell_mass(&lay, &p, &mut m);
@@ -209,6 +191,18 @@ mod tests {
         }
         let total: f64 = m.iter().sum();
         assert!((total - 36.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_block_on_the_cells_fills_them_exactly() {
+        // 4 in each of the 9 cells, 0 elsewhere.
+        assert_block_overlap(0.0, 0.0);
+    }
+
+    #[test]
+    fn a_shifted_block_shares_its_mass_by_overlap() {
+        // Not a multiple of the particle spacing.
+        assert_block_overlap(0.3, 0.55);
     }
 
     #[test]

@@ -139,10 +139,7 @@ pub fn face_velocities<const D: usize>(
                     (ml * sp_vol[l] + mr * sp_vol[r]) * inv,
                 )
             } else {
-                (
-                    0.5 * (ul + ur),
-                    face_specific_volume(ml, sp_vol[l], mr, sp_vol[r]),
-                )
+                (0.5 * (ul + ur), harmonic_mean(sp_vol[l], sp_vol[r]))
             };
             // Jump part (dissipation) with `dt`, resolved part (the
             // reconstructed slopes, zero without reconstruction) with
@@ -200,8 +197,15 @@ pub fn face_specific_volume(ml: f64, vl: f64, mr: f64, vr: f64) -> f64 {
     if msum > 0.0 {
         (ml * vl + mr * vr) / msum
     } else {
-        2.0 * vl * vr / (vl + vr)
+        harmonic_mean(vl, vr)
     }
+}
+
+/// `2 a b/(a + b)`: the face specific volume where neither cell holds the
+/// material.
+#[inline]
+fn harmonic_mean(a: f64, b: f64) -> f64 {
+    2.0 * a * b / (a + b)
 }
 
 /// Pointwise-implicit momentum exchange of the face velocities normal to

@@ -54,9 +54,6 @@ pub(super) struct LagrangianInputs<'a, const D: usize, const N: usize> {
     /// `true` when exactly one material is Eulerian (not particle-borne):
     /// its shares of the cell's flow work and dissipation are 1.
     pub(super) one_eulerian: bool,
-    /// `true` when the cell holds one material (`nm = 1`): its share of
-    /// `Σ_s θ_s κ_s` is 1.
-    pub(super) one_material: bool,
     /// Number of materials (read through [`Self::nm`]).
     pub(super) n_dyn: usize,
     /// Time step.
@@ -204,11 +201,7 @@ pub(super) fn cell_sources<const D: usize, const N: usize>(
             (me + cell.heat[r]) / (m * cv)
         } else {
             // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
-            let f_theta = share(
-                cell.theta[r] * inp.kappa[r][c],
-                inp.stk[c],
-                inp.one_material,
-            );
+            let f_theta = share(cell.theta[r] * inp.kappa[r][c], inp.stk[c], inp.nm() == 1);
             (me - dt * vol * f_theta * inp.press[c] * inp.div_sum[c] + cell.heat[r]) / (m * cv)
         };
         add_heat_sources(inp, c, r, cell);
