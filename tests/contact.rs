@@ -119,6 +119,7 @@ impl<const D: usize> Scene<D> {
                 scheme: UpdateScheme::Usl,
                 mass_floor: floor * RHO * vol,
                 damping: 0.0,
+                pic_fraction: 0.0,
             },
             materials: vec![mat],
             particles,

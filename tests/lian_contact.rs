@@ -219,6 +219,7 @@ fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
         end: 0.5,
         every: 0.05,
         law: mpmice::contact::ContactLaw::Stick,
+        pic_fraction: 0.0,
     };
     let dir = std::env::temp_dir().join("mpmice_test_lian_gas");
     std::fs::create_dir_all(&dir).expect("dir");
@@ -245,4 +246,56 @@ fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
     // Started as the rectangle 1 × 2 (quarter: r(0°) = 0.5, r(90°) = 1).
     assert_eq!((r.r0[0], r.r90[0]), (0.5, 1.0));
     assert!(err < 0.02, "mean radius {}", r.r_mean[last]);
+}
+
+#[test]
+fn a_pic_share_brings_the_expanded_gas_to_rest_without_gaining_energy() {
+    // Lian Sec. 7.3 at element = cell = 0.4, 2 points per cell and
+    // direction, to t = 2. Its end state is at rest. With FLIP (β = 0) the
+    // gas points keep velocities the grid does not see (the null space of
+    // the grid-to-particle map), and their kinetic energy grows out of the
+    // gas's internal energy (issue 17); a PIC share β damps them by 1 − β a
+    // step, and the stick contact and the gas viscosity only dissipate.
+    use mpmice::diagnostics::lian_gas::GasExpansion;
+    let run = |pic_fraction: f64| {
+        let case = GasExpansion {
+            element: 0.4,
+            cell: 0.4,
+            per_cell: 2,
+            end: 2.0,
+            every: 0.05,
+            law: mpmice::contact::ContactLaw::Stick,
+            pic_fraction,
+        };
+        let dir = std::env::temp_dir().join(format!("mpmice_test_lian_pic_{pic_fraction}"));
+        std::fs::create_dir_all(&dir).expect("dir");
+        case.run(&dir).expect("run")
+    };
+    for pic in [0.0, 0.01] {
+        let r = run(pic);
+        let last = r.t.len() - 1;
+        let rise = r
+            .energy
+            .windows(2)
+            .map(|w| (w[1] - w[0]) / r.energy[0])
+            .fold(f64::NEG_INFINITY, f64::max);
+        eprintln!(
+            "pic {pic}: t = 2: gas kinetic on its points {:.3e}, on the grid {:.3e} (of {:.4}), \
+             energy change {:+.3e}, largest rise between samples {rise:.2e}, r0 {:.4}, r90 {:.4}",
+            r.gas_kinetic[last],
+            r.grid_kinetic[last],
+            r.energy[0],
+            r.energy[last] / r.energy[0] - 1.0,
+            r.r0[last],
+            r.r90[last]
+        );
+        if pic > 0.0 {
+            assert!(
+                r.gas_kinetic[last] < 1e-4 * r.energy[0],
+                "the gas is not at rest: {}",
+                r.gas_kinetic[last]
+            );
+            assert!(rise <= 1e-9, "the energy rose by {rise:.2e} of E0");
+        }
+    }
 }

@@ -203,6 +203,14 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "mpm.damping",
             "≥ 0",
         ),
+        (
+            edit(
+                "[[materials]]",
+                "[mpm]\npic_fraction = 1.5\n\n[[materials]]",
+            ),
+            "mpm.pic_fraction",
+            "0 (FLIP) … 1 (PIC)",
+        ),
         ("this is = not toml [".to_string(), "<toml>", "TOML"),
         // Failure models (issue 18; more in tests/failure.rs).
         (

@@ -324,6 +324,7 @@ impl Lame {
             scheme: relax.scheme,
             mass_floor: 1e-12 * min_mass,
             damping: relax.damping,
+            pic_fraction: 0.0,
         };
         let time = TimeControl {
             end: relax.end,

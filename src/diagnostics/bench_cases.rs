@@ -167,6 +167,7 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
         scheme: UpdateScheme::Usl,
         mass_floor: 1e-12,
         damping: 0.0,
+        pic_fraction: 0.0,
     };
     let dt = 0.3 * h / speed;
     let time = TimeControl {
@@ -229,6 +230,7 @@ pub fn rotating_block_3d(shape: ShapeKind) -> SolidRun<3> {
         scheme: UpdateScheme::Usl,
         mass_floor: 1e-12,
         damping: 0.0,
+        pic_fraction: 0.0,
     };
     let time = TimeControl {
         end: f64::INFINITY,

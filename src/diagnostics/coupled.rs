@@ -147,6 +147,7 @@ fn steel_run<const D: usize>(
         scheme: UpdateScheme::Usf,
         mass_floor: 1e-12 * min_mass,
         damping: 0.0,
+        pic_fraction: 0.0,
     };
     let eos = solid_eos(&m, 101_325.0);
     CoupledRun::new(
@@ -291,6 +292,7 @@ fn blocks_run(
         scheme: UpdateScheme::Usf,
         mass_floor: 1e-12 * min_mass,
         damping: 0.0,
+        pic_fraction: 0.0,
     };
     let coupling = CouplingParams {
         p_ref: gas.p,

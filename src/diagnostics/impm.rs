@@ -367,6 +367,7 @@ impl Cylinder {
             scheme: UpdateScheme::Usl,
             mass_floor: 1e-12 * particles.mass[0],
             damping,
+            pic_fraction: 0.0,
         };
         let np = particles.len();
         let time = TimeControl {

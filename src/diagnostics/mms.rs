@@ -215,6 +215,7 @@ pub fn run_mms<const D: usize>(
         scheme,
         mass_floor: 1e-12 * particles.mass[0],
         damping: 0.0,
+        pic_fraction: 0.0,
     };
     let np = particles.len();
     let time = TimeControl {
@@ -354,6 +355,7 @@ pub fn run_bar(
         scheme,
         mass_floor: 1e-12 * particles.mass[0],
         damping: bar.damping,
+        pic_fraction: 0.0,
     };
     let np = particles.len();
     let time = TimeControl {

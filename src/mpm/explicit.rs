@@ -78,6 +78,11 @@ pub struct ExplicitParams {
     /// becomes m a = f − α m v, time-centred (drives a solid to its
     /// quasistatic state; 0 = off).
     pub damping: f64,
+    /// PIC share β ∈ [0, 1] of the particle velocity update: v_p ← (1 − β)
+    /// (v_p + Δt Σ S a_i) + β Σ S v_i (0: FLIP, Eq. 26; 1: PIC). A share
+    /// β damps the particle velocities the grid cannot see (the null space
+    /// of the grid-to-particle map) by the factor 1 − β a step.
+    pub pic_fraction: f64,
 }
 
 /// Node fields of the background grid (ghost nodes included).
@@ -1133,6 +1138,7 @@ fn g2p<
         &gs.velocity
     };
     let failed = AtomicUsize::new(usize::MAX);
+    let pic = ctx.params.pic_fraction;
     let tangent = ctx.tangent;
     let has_membrane = !tangent.is_empty();
     // York Eq. 24's c_max from the state at the start of the stress update.
@@ -1193,7 +1199,11 @@ fn g2p<
                 }
             });
             if FLIP {
-                *vp += acc * dt; // Eq. 26
+                if pic > 0.0 {
+                    *vp = (*vp + acc * dt) * (1.0 - pic) + vel * pic;
+                } else {
+                    *vp += acc * dt; // Eq. 26
+                }
             }
             match POS {
                 POS_APPLY => *xp += vel * dt, // Eq. 27

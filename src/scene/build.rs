@@ -641,6 +641,7 @@ pub fn build_solid_run<const D: usize>(scene: &Scene) -> Result<SolidRun<D>, Sce
         scheme: scene.mpm_update(),
         mass_floor: 1e-12 * min_mass,
         damping: scene.mpm.damping,
+        pic_fraction: scene.mpm.pic_fraction,
     };
     let time = TimeControl {
         end: scene.time.end,
@@ -1099,6 +1100,7 @@ pub fn build_multiphase_run<const D: usize>(scene: &Scene) -> Result<MultiphaseR
         scheme: UpdateScheme::Usl,
         mass_floor: 1e-12 * min_mass,
         damping: scene.mpm.damping,
+        pic_fraction: scene.mpm.pic_fraction,
     };
     let time = TimeControl {
         end: scene.time.end,

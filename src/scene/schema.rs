@@ -272,6 +272,13 @@ pub struct MpmSpec {
     /// Mass-proportional damping α ≥ 0 [1/s] (quasistatic end states).
     #[serde(default)]
     pub damping: f64,
+    /// PIC share β ∈ [0, 1] of the particle velocity update (0: FLIP).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub pic_fraction: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn default_shape() -> ShapeKind {
@@ -288,6 +295,7 @@ impl Default for MpmSpec {
             update: None,
             particles_per_cell: default_ppc(),
             damping: 0.0,
+            pic_fraction: 0.0,
         }
     }
 }
@@ -3410,6 +3418,12 @@ impl Scene {
             return Err(err(
                 "mpm.damping",
                 format!("must be a finite number ≥ 0 (got {})", self.mpm.damping),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.mpm.pic_fraction) {
+            return Err(err(
+                "mpm.pic_fraction",
+                format!("must be 0 (FLIP) … 1 (PIC) (got {})", self.mpm.pic_fraction),
             ));
         }
         if self.materials.is_empty() {

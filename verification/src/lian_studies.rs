@@ -129,8 +129,10 @@ pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
 /// the final mean radius against the inextensible-membrane circle
 /// R = 1.5/(π/2) = 0.9549 (quarter perimeter 1.5; the stretch at p R/(E t)
 /// ≈ 5e-5 is negligible; the paper reports 0.96); extras: the radii at 0°
-/// and 90°, their relative difference, the energy change and the escaped
-/// gas points; one series with stick contact, one with free slip.
+/// and 90°, their relative difference, the energy change, the gas's
+/// kinetic energy on its points and on the grid, and the escaped gas
+/// points; series with stick contact and with free slip (FLIP), and with
+/// stick contact and a PIC share of 0.01 (`mpm.pic_fraction`).
 /// `LIAN_GAS_END` sets the end time (default 3).
 ///
 /// # Errors
@@ -155,9 +157,10 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
          energy loss about 5 %"
     )];
     let mut series = Vec::new();
-    for (name, law) in [
-        ("stick", ContactLaw::Stick),
-        ("slip", ContactLaw::Slip { friction: 0.0 }),
+    for (name, law, pic_fraction) in [
+        ("stick", ContactLaw::Stick, 0.0),
+        ("slip", ContactLaw::Slip { friction: 0.0 }, 0.0),
+        ("stick, PIC share 0.01", ContactLaw::Stick, 0.01),
     ] {
         let mut pts = Vec::new();
         for &(h, per_cell) in sizes {
@@ -168,6 +171,7 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
                 end,
                 every: 0.01,
                 law,
+                pic_fraction,
             };
             let r = case.run(&dir).with_context(|| format!("{name}, h = {h}"))?;
             let last = r.t.len() - 1;
@@ -175,9 +179,11 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
             let de = r.energy[last] / r.energy[0] - 1.0;
             notes.push(format!(
             "{name}, h = {h}: mean radius {rm:.4}, r(0°) {r0:.4}, r(90°) {r90:.4}, |r0 - r90|/r {:.3e}, \
-             energy change {de:+.3e}, gas kinetic {:.3e} (of {:.4} total), escaped {}, {} steps, {:.1} s",
+             energy change {de:+.3e}, gas kinetic {:.3e} (the grid's part {:.3e}; of {:.4} total), \
+             escaped {}, {} steps, {:.1} s",
             (r0 - r90).abs() / rm,
             r.gas_kinetic[last],
+            r.grid_kinetic[last],
             r.energy[0],
             r.escaped,
             r.steps,
@@ -194,6 +200,8 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
                 .with_extra("r_0", r0)
                 .with_extra("r_90", r90)
                 .with_extra("energy_change", de)
+                .with_extra("gas_kinetic", r.gas_kinetic[last])
+                .with_extra("gas_kinetic_grid", r.grid_kinetic[last])
                 .with_extra("escaped", r.escaped as f64),
             );
         }
