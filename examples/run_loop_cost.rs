@@ -18,7 +18,9 @@
 //!   the state into a checkpoint (what the loop keeps as the last good
 //!   state) and one history row, over 20 calls each.
 //!
-//! Prints the wall time and the step count.
+//! `loop`, `no_watchdog` and `minimal` call `run_scene`, which builds its own
+//! one-thread pool, as `mpmice run --threads 1` does; the other modes run in
+//! a one-thread pool built here. Prints the wall time and the step count.
 
 use std::time::Instant;
 
@@ -92,41 +94,48 @@ fn main() -> anyhow::Result<()> {
     let opts = RunOptions::quiet(&out, 1);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let start = Instant::now();
-    let steps = pool.install(|| -> anyhow::Result<u64> {
-        match (mode, case) {
-            ("bare" | "parts", "two_disks") => {
-                let mut m = ExplicitSolid {
-                    run: scene::build_solid_run::<2>(&sc)?,
-                };
-                let steps = bare(&mut m, sc.time.end)?;
-                if mode == "parts" {
-                    parts(&m);
+    // `run_scene` builds its own pool of `opts.threads`, as the CLI's run
+    // does: not inside this one.
+    let steps = if matches!(mode, "loop" | "no_watchdog" | "minimal") {
+        run_scene(&sc, &opts)?.steps
+    } else {
+        pool.install(|| -> anyhow::Result<u64> {
+            match (mode, case) {
+                ("bare" | "parts", "two_disks") => {
+                    let mut m = ExplicitSolid {
+                        run: scene::build_solid_run::<2>(&sc)?,
+                    };
+                    let steps = bare(&mut m, sc.time.end)?;
+                    if mode == "parts" {
+                        parts(&m);
+                    }
+                    Ok(steps)
                 }
-                Ok(steps)
-            }
-            ("bare" | "parts", _) => {
-                let (mut state, params) = scene::build_fluid_run::<1>(&sc)?;
-                ice::equilibrate(&mut state, &params)?;
-                let ws = IceWorkspace::new(&state);
-                let mut m = Fluid { state, params, ws };
-                let steps = bare(&mut m, sc.time.end)?;
-                if mode == "parts" {
-                    parts(&m);
+                ("bare" | "parts", _) => {
+                    let (mut state, params) = scene::build_fluid_run::<1>(&sc)?;
+                    ice::equilibrate(&mut state, &params)?;
+                    let ws = IceWorkspace::new(&state);
+                    let mut m = Fluid { state, params, ws };
+                    let steps = bare(&mut m, sc.time.end)?;
+                    if mode == "parts" {
+                        parts(&m);
+                    }
+                    Ok(steps)
                 }
-                Ok(steps)
+                ("local_loop", "two_disks") => {
+                    let mut m = ExplicitSolid {
+                        run: scene::build_solid_run::<2>(&sc)?,
+                    };
+                    Ok(run_model(&mut m, &sc, &opts, 1)?.steps)
+                }
+                _ => {
+                    anyhow::bail!(
+                        "MODE: bare | loop | no_watchdog | minimal | local_loop (two_disks)"
+                    )
+                }
             }
-            ("local_loop", "two_disks") => {
-                let mut m = ExplicitSolid {
-                    run: scene::build_solid_run::<2>(&sc)?,
-                };
-                Ok(run_model(&mut m, &sc, &opts, 1)?.steps)
-            }
-            ("loop" | "no_watchdog" | "minimal", _) => Ok(run_scene(&sc, &opts)?.steps),
-            _ => {
-                anyhow::bail!("MODE: bare | loop | no_watchdog | minimal | local_loop (two_disks)")
-            }
-        }
-    })?;
+        })?
+    };
     println!(
         "{case} {cells} {mode}: {steps} steps, {:.3} s",
         start.elapsed().as_secs_f64()
