@@ -94,6 +94,146 @@ impl Preconditioner for InvDiag<'_> {
     }
 }
 
+/// The multigrid's cell stencil of the layout (with its periodic axes)
+/// when `solver` is PCG–multigrid; checks that periodic faces come in
+/// pairs for every solver.
+fn multigrid_stencil<const D: usize>(
+    layout: &CellLayout<D>,
+    bcs: &Boundaries<D>,
+    solver: LinearSolver,
+) -> Result<Option<CellStencil>, IceError> {
+    let mut sdims = [1usize; 3];
+    sdims[..D].copy_from_slice(&layout.cells);
+    let mut stencil = if solver == LinearSolver::PcgMultigrid {
+        Some(
+            CellStencil::new(sdims)
+                .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?,
+        )
+    } else {
+        None
+    };
+    for d in 0..D {
+        let periodic = bcs[d].each_ref().map(|b| *b == IceBoundary::Periodic);
+        if periodic[0] != periodic[1] {
+            return Err(invalid(
+                format!("boundaries[{d}]"),
+                "periodic must be set on both sides",
+            ));
+        }
+        if let (true, Some(st)) = (periodic[0], stencil.as_mut()) {
+            st.set_periodic(d)
+                .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
+        }
+    }
+    Ok(stencil)
+}
+
+/// The links between unknowns (interior faces, and periodic faces once, at
+/// the lower side) and the Dirichlet links of inflow faces, in face order;
+/// inflow faces are marked in the multigrid stencil too.
+fn face_links<const D: usize>(
+    layout: &CellLayout<D>,
+    bcs: &Boundaries<D>,
+    mut stencil: Option<&mut CellStencil>,
+) -> Result<(Vec<Link>, Vec<Link>), IceError> {
+    let mut unknown = vec![usize::MAX; layout.len()];
+    for (k, &c) in layout.interior.iter().enumerate() {
+        unknown[c] = k;
+    }
+    let mut links = Vec::new();
+    let mut dirichlet = Vec::new();
+    for d in 0..D {
+        let s = layout.strides[d];
+        let nd = layout.cells[d] as isize;
+        for &f in &layout.faces[d] {
+            let ijk = layout.coords(f);
+            let mut pos = [0usize; 3];
+            for e in 0..D {
+                pos[e] = ijk[e].max(0) as usize;
+            }
+            let sface = stencil
+                .as_ref()
+                .map_or(usize::MAX, |st| st.face_index(d, pos));
+            let side = if ijk[d] == 0 {
+                Some(0)
+            } else if ijk[d] == nd {
+                Some(1)
+            } else {
+                None
+            };
+            match side {
+                None => links.push(Link {
+                    i: unknown[f - s],
+                    j: unknown[f],
+                    face: f,
+                    d,
+                    sface,
+                }),
+                Some(side) => match &bcs[d][side] {
+                    IceBoundary::Periodic => {
+                        if side == 0 && nd > 1 {
+                            links.push(Link {
+                                i: unknown[f + (nd as usize - 1) * s],
+                                j: unknown[f],
+                                face: f,
+                                d,
+                                sface,
+                            });
+                        }
+                    }
+                    IceBoundary::Inflow(_) => {
+                        let cell = if side == 0 { f } else { f - s };
+                        dirichlet.push(Link {
+                            i: unknown[cell],
+                            j: usize::MAX,
+                            face: f,
+                            d,
+                            sface,
+                        });
+                        if let Some(st) = stencil.as_deref_mut() {
+                            let mut c3 = [0usize; 3];
+                            let cc = layout.coords(cell);
+                            for e in 0..D {
+                                c3[e] = cc[e] as usize;
+                            }
+                            st.set_boundary_face(d, side, c3, BoundaryKind::Dirichlet)
+                                .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
+                        }
+                    }
+                    IceBoundary::Wall | IceBoundary::Outflow => {}
+                },
+            }
+        }
+    }
+    Ok((links, dirichlet))
+}
+
+/// The direct solver's sparse pattern over `n` unknowns (the diagonal, four
+/// entries a link, one a Dirichlet link) and its triplet values.
+fn direct_assembler(
+    n: usize,
+    links: &[Link],
+    dirichlet: &[Link],
+) -> Result<(Assembler, Vec<f64>), IceError> {
+    let nt = n + 4 * links.len() + dirichlet.len();
+    let (mut rows, mut cols) = (Vec::with_capacity(nt), Vec::with_capacity(nt));
+    for k in 0..n {
+        rows.push(k);
+        cols.push(k);
+    }
+    for l in links {
+        rows.extend_from_slice(&[l.i, l.j, l.i, l.j]);
+        cols.extend_from_slice(&[l.i, l.j, l.j, l.i]);
+    }
+    for l in dirichlet {
+        rows.push(l.i);
+        cols.push(l.i);
+    }
+    let a = Assembler::new(n, n, &rows, &cols)
+        .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
+    Ok((a, vec![0.0; nt]))
+}
+
 impl PressureSystem {
     /// The links of a layout: interior faces, periodic faces (once, at the
     /// lower side) and inflow (Dirichlet) faces; walls and outflow faces are
@@ -104,118 +244,11 @@ impl PressureSystem {
         solver: LinearSolver,
     ) -> Result<Self, IceError> {
         let n = layout.num_interior();
-        let mut unknown = vec![usize::MAX; layout.len()];
-        for (k, &c) in layout.interior.iter().enumerate() {
-            unknown[c] = k;
-        }
-        let mut sdims = [1usize; 3];
-        sdims[..D].copy_from_slice(&layout.cells);
-        let mut stencil = if solver == LinearSolver::PcgMultigrid {
-            Some(
-                CellStencil::new(sdims)
-                    .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?,
-            )
-        } else {
-            None
-        };
-        for d in 0..D {
-            let periodic = bcs[d].each_ref().map(|b| *b == IceBoundary::Periodic);
-            if periodic[0] != periodic[1] {
-                return Err(invalid(
-                    format!("boundaries[{d}]"),
-                    "periodic must be set on both sides",
-                ));
-            }
-            if let (true, Some(st)) = (periodic[0], stencil.as_mut()) {
-                st.set_periodic(d)
-                    .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
-            }
-        }
-        let mut links = Vec::new();
-        let mut dirichlet = Vec::new();
-        for d in 0..D {
-            let s = layout.strides[d];
-            let nd = layout.cells[d] as isize;
-            for &f in &layout.faces[d] {
-                let ijk = layout.coords(f);
-                let mut pos = [0usize; 3];
-                for e in 0..D {
-                    pos[e] = ijk[e].max(0) as usize;
-                }
-                let sface = stencil
-                    .as_ref()
-                    .map_or(usize::MAX, |st| st.face_index(d, pos));
-                let side = if ijk[d] == 0 {
-                    Some(0)
-                } else if ijk[d] == nd {
-                    Some(1)
-                } else {
-                    None
-                };
-                match side {
-                    None => links.push(Link {
-                        i: unknown[f - s],
-                        j: unknown[f],
-                        face: f,
-                        d,
-                        sface,
-                    }),
-                    Some(side) => match &bcs[d][side] {
-                        IceBoundary::Periodic => {
-                            if side == 0 && nd > 1 {
-                                links.push(Link {
-                                    i: unknown[f + (nd as usize - 1) * s],
-                                    j: unknown[f],
-                                    face: f,
-                                    d,
-                                    sface,
-                                });
-                            }
-                        }
-                        IceBoundary::Inflow(_) => {
-                            let cell = if side == 0 { f } else { f - s };
-                            dirichlet.push(Link {
-                                i: unknown[cell],
-                                j: usize::MAX,
-                                face: f,
-                                d,
-                                sface,
-                            });
-                            if let Some(st) = stencil.as_mut() {
-                                let mut c3 = [0usize; 3];
-                                let cc = layout.coords(cell);
-                                for e in 0..D {
-                                    c3[e] = cc[e] as usize;
-                                }
-                                st.set_boundary_face(d, side, c3, BoundaryKind::Dirichlet)
-                                    .map_err(|e| {
-                                        invalid("implicit.linear_solver", e.to_string())
-                                    })?;
-                            }
-                        }
-                        IceBoundary::Wall | IceBoundary::Outflow => {}
-                    },
-                }
-            }
-        }
+        let mut stencil = multigrid_stencil(layout, bcs, solver)?;
+        let (links, dirichlet) = face_links(layout, bcs, stencil.as_mut())?;
         let (assembler, triplets) = if solver == LinearSolver::Direct {
-            let nt = n + 4 * links.len() + dirichlet.len();
-            let (mut rows, mut cols) = (Vec::with_capacity(nt), Vec::with_capacity(nt));
-            for k in 0..n {
-                rows.push(k);
-                cols.push(k);
-            }
-            for l in &links {
-                rows.extend_from_slice(&[l.i, l.j, l.i, l.j]);
-                cols.extend_from_slice(&[l.i, l.j, l.j, l.i]);
-            }
-            for l in &dirichlet {
-                rows.push(l.i);
-                cols.push(l.i);
-            }
-            let a = Assembler::new(n, n, &rows, &cols)
-                .map_err(|e| invalid("implicit.linear_solver", e.to_string()))?;
-            (Some(a), vec![0.0; nt])
+            let (a, t) = direct_assembler(n, &links, &dirichlet)?;
+            (Some(a), t)
         } else {
             (None, Vec::new())
         };
