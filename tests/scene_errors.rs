@@ -211,6 +211,14 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "mpm.pic_fraction",
             "0 (FLIP) … 1 (PIC)",
         ),
+        (
+            edit(
+                "cfl = 0.5",
+                "cfl = 0.5\nmode = \"implicit\"\ndt = 0.01\n\n[mpm]\npic_fraction = 0.1",
+            ),
+            "mpm.pic_fraction",
+            "explicit",
+        ),
         ("this is = not toml [".to_string(), "<toml>", "TOML"),
         // Failure models (issue 18; more in tests/failure.rs).
         (

@@ -51,8 +51,9 @@ pub struct GasExpansionRun {
     /// Gas kinetic energy Σ_p ½ m_p |v_p|² (of its points).
     pub gas_kinetic: Vec<f64>,
     /// The part of it the grid sees: Σ_i ½ m_i |v_i|² over the domain's
-    /// nodes after the last step (0 at the start). FLIP points can carry velocities the
-    /// grid does not see (the null space of the grid-to-particle map).
+    /// nodes after the last step (0 at the start). FLIP points can carry
+    /// velocities the grid does not see (the null space of the
+    /// grid-to-particle map).
     pub grid_kinetic: Vec<f64>,
     /// Gas points outside the membrane at the end.
     pub escaped: usize,
@@ -220,8 +221,7 @@ fn sample(m: &MembraneContact, out: &mut GasExpansionRun, row: &mut Vec<f64>) {
     // Columns: particle kinetic, strain, potential, membrane kinetic,
     // strain, external work, hourglass, damping, total, ...
     out.gas_kinetic.push(row[0]);
-    // The nodes on and inside the domain (the ghost nodes hold mirror
-    // copies).
+    // The nodes on and inside the domain only (not the ghost layers).
     let (grid, gs) = (&m.solid.run.grid, m.solid.run.grid_state());
     let on_domain = |i: usize| {
         let c = grid.node_coords(i);

@@ -203,6 +203,10 @@ pub struct Airbag {
     /// The viscous stress this adds, μ v/ℓ ≈ 0.2 · 4 / 0.05 = 16 Pa at the
     /// probe, is 0.4 % of the bag pressure.
     pub gas_viscosity: f64,
+    /// PIC share of the particle velocity update (`mpm.pic_fraction`; 0:
+    /// FLIP, York's update). It damps the gas points' disordered motion
+    /// that the inviscid gas grows (see `gas_viscosity`).
+    pub pic_fraction: f64,
 }
 
 impl Default for Airbag {
@@ -217,6 +221,7 @@ impl Default for Airbag {
             history_interval: 2.0e-4,
             gas_margin_over_h: 0.25,
             gas_viscosity: 0.2,
+            pic_fraction: 0.0,
         }
     }
 }
@@ -318,6 +323,7 @@ mode = "explicit"
 shape = "gimp"
 update = "musl"
 particles_per_cell = 2
+pic_fraction = {pic}
 
 [[materials]]
 name = "air"
@@ -373,6 +379,7 @@ formats = ["csv"]
             end = self.impact_time,
             gamma = Self::GAMMA,
             mu = self.gas_viscosity,
+            pic = self.pic_fraction,
             rho_f = Self::FABRIC_DENSITY,
             young = self.young,
             nu = Self::POISSON,

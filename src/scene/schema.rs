@@ -3523,6 +3523,14 @@ impl Scene {
             _ => {}
         }
         if t.mode == Mode::Implicit {
+            if self.mpm.pic_fraction > 0.0 {
+                return Err(err(
+                    "mpm.pic_fraction",
+                    "the PIC share is part of the explicit particle update; implicit MPM moves \
+                     its particles by the solved displacement; allowed: time.mode = explicit, \
+                     semi_implicit",
+                ));
+            }
             if let Some(i) = self.materials.iter().position(|m| m.plasticity.is_some()) {
                 return Err(err(
                     format!("materials[{i}].plasticity"),

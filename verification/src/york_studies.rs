@@ -323,11 +323,12 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
 /// velocity, peak pressure (point mean and `p V`), the drift of `p V^γ` of
 /// the bag's gas, the energy balance error (relative to the probe's kinetic
 /// energy), gas points outside the bag, with York's dog-bone gas viscosity
-/// (0.2 Pa s, the default) and, at 20 and 10 mm, inviscid (York Table VI).
+/// (0.2 Pa s, the default) and, at 20 and 10 mm, inviscid (York Table VI),
+/// with FLIP and with a PIC share of 0.01.
 /// The series' error is the peak penetration's difference from the finest
 /// size's. Histories go to
-/// `results/york_airbag[_inviscid]_h{h}.csv`, membrane shapes (release, peak, end) to
-/// `results/york_airbag_shapes_h{h}.csv`.
+/// `results/york_airbag[_inviscid[_pic]]_h{h}.csv`, membrane shapes (release, peak,
+/// end) to `results/york_airbag[_inviscid[_pic]]_shapes_h{h}.csv`.
 ///
 /// # Errors
 /// Any solver error.
@@ -353,19 +354,27 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
     // The inviscid gas at the two coarsest sizes beside York's dog-bone
     // viscosity (the default) at every size.
     let inviscid: Vec<f64> = hs.iter().copied().filter(|&h| h >= 0.01 - 1e-12).collect();
-    for (mu, sizes) in [(cfg0.gas_viscosity, hs.clone()), (0.0, inviscid)] {
+    // And the inviscid gas with a PIC share of 0.01 (`mpm.pic_fraction`).
+    for (mu, pic, sizes) in [
+        (cfg0.gas_viscosity, 0.0, hs.clone()),
+        (0.0, 0.0, inviscid.clone()),
+        (0.0, 0.01, inviscid),
+    ] {
         let mut runs = Vec::new();
         for &h in &sizes {
             let r = match run_airbag(&Airbag {
                 h,
                 gas_viscosity: mu,
+                pic_fraction: pic,
                 ..Airbag::default()
             }) {
                 Ok(r) => r,
                 // The inviscid gas is shown for its noise; its failure is a
                 // result, not the study's end.
                 Err(e) if mu == 0.0 => {
-                    notes.push(format!("mu = 0 Pa s, h = {h}: the run stopped: {e}"));
+                    notes.push(format!(
+                        "mu = 0 Pa s, PIC share {pic}, h = {h}: the run stopped: {e}"
+                    ));
                     eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
                     continue;
                 }
@@ -374,17 +383,17 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
             let i = r.inflated;
             let gas_ke = r.history.last().map_or(0.0, |s| s.gas_kinetic);
             notes.push(format!(
-            "mu = {mu} Pa s, h = {h}: gas kinetic energy {:.2} J at release, {gas_ke:.2} J at the end; bag mass {:.4} kg, probe mass {:.4} kg; after inflation p {:.1} (pV {:.1}) Pa, volume {:.5} m^3 (gas point volumes {:.5}, those inside {:.5}); peak penetration {:.4} m at {:.4} s, rebound velocity {:+.3} m/s (at the end {:+.3}), peak pressure {:.1} (pV {:.1}) Pa, p V^gamma drift {:.2e} (pV {:.2e}), energy error {:.2e} of the probe's kinetic energy, gas points outside max {}, {} steps, {} particles, {:.1} s",
+            "mu = {mu} Pa s, PIC share {pic}, h = {h}: gas kinetic energy {:.2} J at release, {gas_ke:.2} J at the end; bag mass {:.4} kg, probe mass {:.4} kg; after inflation p {:.1} (pV {:.1}) Pa, volume {:.5} m^3 (gas point volumes {:.5}, those inside {:.5}); peak penetration {:.4} m at {:.4} s, rebound velocity {:+.3} m/s (at the end {:+.3}), peak pressure {:.1} (pV {:.1}) Pa, p V^gamma drift {:.2e} (pV {:.2e}), energy error {:.2e} of the probe's kinetic energy, gas points outside max {}, {} steps, {} particles, {:.1} s",
             i.gas_kinetic, r.bag_mass, r.probe_mass, i.mean_pressure, i.volume_pressure, i.volume, i.gas_volume, i.gas_volume_inside,
             r.peak_penetration.0, r.peak_penetration.1, r.rebound_velocity, r.end_velocity, r.peak_pressure.0,
             r.peak_pressure.1, r.adiabat_drift.0, r.adiabat_drift.1, r.energy_error,
             r.history.iter().map(|s| s.outside).max().unwrap_or(0), r.steps, r.particles, r.wall_s
         ));
             eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
-            let tag = if mu > 0.0 {
-                String::new()
-            } else {
-                "_inviscid".into()
+            let tag = match (mu > 0.0, pic > 0.0) {
+                (true, _) => "",
+                (false, false) => "_inviscid",
+                (false, true) => "_inviscid_pic",
             };
             std::fs::write(
                 root.join(format!("york_airbag{tag}_h{h}.csv")),
@@ -427,7 +436,14 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
             })
             .collect();
         series.push(Series::new(
-            format!("airbag, gas viscosity {mu} Pa s: peak penetration vs the finest size"),
+            if pic > 0.0 {
+                format!(
+                    "airbag, gas viscosity {mu} Pa s, PIC share {pic}: peak penetration vs the \
+                     finest size"
+                )
+            } else {
+                format!("airbag, gas viscosity {mu} Pa s: peak penetration vs the finest size")
+            },
             "|d_peak(h) - d_peak(finest)| [m]",
             points,
         ));
