@@ -50,8 +50,8 @@ pub struct GasExpansionRun {
     pub energy: Vec<f64>,
     /// Gas kinetic energy Σ_p ½ m_p |v_p|² (of its points).
     pub gas_kinetic: Vec<f64>,
-    /// The part of it the grid sees: Σ_i ½ m_i |v_i|² over the domain's
-    /// nodes after the last step (0 at the start). FLIP points can carry
+    /// The part of it the grid sees: Σ_i ½ m_i |v_i|² over the nodes after
+    /// the last step (0 at the start). FLIP points can carry
     /// velocities the grid does not see (the null space of the
     /// grid-to-particle map).
     pub grid_kinetic: Vec<f64>,
@@ -221,16 +221,14 @@ fn sample(m: &MembraneContact, out: &mut GasExpansionRun, row: &mut Vec<f64>) {
     // Columns: particle kinetic, strain, potential, membrane kinetic,
     // strain, external work, hourglass, damping, total, ...
     out.gas_kinetic.push(row[0]);
-    // The nodes on and inside the domain only (not the ghost layers).
-    let (grid, gs) = (&m.solid.run.grid, m.solid.run.grid_state());
-    let on_domain = |i: usize| {
-        let c = grid.node_coords(i);
-        (0..3).all(|d| (0..=grid.cells[d] as isize).contains(&c[d]))
-    };
+    // Over every node: the fold leaves no mass on the ghosts beyond walls
+    // and symmetry planes.
+    let gs = m.solid.run.grid_state();
     out.grid_kinetic.push(
-        (0..gs.mass.len())
-            .filter(|&i| on_domain(i))
-            .map(|i| 0.5 * gs.mass[i] * gs.velocity_new[i].norm_squared())
+        gs.mass
+            .iter()
+            .zip(&gs.velocity_new)
+            .map(|(m, v)| 0.5 * m * v.norm_squared())
             .sum(),
     );
     out.energy.push(row[8]);

@@ -390,11 +390,11 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
             r.history.iter().map(|s| s.outside).max().unwrap_or(0), r.steps, r.particles, r.wall_s
         ));
             eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
-            let tag = match (mu > 0.0, pic > 0.0) {
-                (true, _) => "",
-                (false, false) => "_inviscid",
-                (false, true) => "_inviscid_pic",
-            };
+            let tag = format!(
+                "{}{}",
+                if mu > 0.0 { "" } else { "_inviscid" },
+                if pic > 0.0 { "_pic" } else { "" }
+            );
             std::fs::write(
                 root.join(format!("york_airbag{tag}_h{h}.csv")),
                 r.history_csv(),
@@ -436,14 +436,14 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
             })
             .collect();
         series.push(Series::new(
-            if pic > 0.0 {
-                format!(
-                    "airbag, gas viscosity {mu} Pa s, PIC share {pic}: peak penetration vs the \
-                     finest size"
-                )
-            } else {
-                format!("airbag, gas viscosity {mu} Pa s: peak penetration vs the finest size")
-            },
+            format!(
+                "airbag, gas viscosity {mu} Pa s{}: peak penetration vs the finest size",
+                if pic > 0.0 {
+                    format!(", PIC share {pic}")
+                } else {
+                    String::new()
+                }
+            ),
             "|d_peak(h) - d_peak(finest)| [m]",
             points,
         ));
