@@ -211,7 +211,8 @@ pub fn york_piston_container(quick: bool) -> Result<StudyResult> {
 /// against p r / t, energy, gas points outside the membrane, wall time.
 /// The error of the series is the hoop stress's relative difference from
 /// Laplace's p r / t (p from the gas's p V over the enclosed area). Each
-/// size's history goes to `results/york_dogbone_h{h}.csv`.
+/// size's history goes to `york_dogbone_h{h}.csv` beside the study's
+/// JSON (`results/`, `results/quick/` or `--out`).
 ///
 /// # Errors
 /// Any solver error.
@@ -244,7 +245,9 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
         "targets: final radius converges; at the two finest sizes hoop within 2 % of p r / t and radii at 0 and 90 deg within 1 %; no gas point outside".to_string(),
     ];
     let mut points = Vec::new();
-    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
+    // Beside the study's JSON: `results/`, `results/quick/` or `--out`.
+    let root = crate::plot_dir(quick);
+    std::fs::create_dir_all(&root)?;
     for &h in &hs {
         let s = DogBone {
             h,
@@ -326,9 +329,10 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
 /// (0.2 Pa s, the default) and, at 20 and 10 mm, inviscid (York Table VI),
 /// with FLIP and with a PIC share of 0.01.
 /// The series' error is the peak penetration's difference from the finest
-/// size's. Histories go to
-/// `results/york_airbag[_inviscid[_pic]]_h{h}.csv`, membrane shapes (release, peak,
-/// end) to `results/york_airbag[_inviscid[_pic]]_shapes_h{h}.csv`.
+/// size's. Histories go to `york_airbag[_inviscid[_pic]]_h{h}.csv`,
+/// membrane shapes (release, peak, end) to
+/// `york_airbag[_inviscid[_pic]]_shapes_h{h}.csv`, beside the study's JSON
+/// (`results/`, `results/quick/` or `--out`).
 ///
 /// # Errors
 /// Any solver error.
@@ -348,8 +352,9 @@ pub fn york_airbag(quick: bool) -> Result<StudyResult> {
         Airbag::PROBE_MASS, Airbag::PROBE_YOUNG, Airbag::PROBE_SPEED, cfg0.gas_viscosity, cfg0.inflate_time,
         cfg0.inflate_damping, cfg0.impact_time, cfg0.gas_margin_over_h
     )];
-    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("results");
-    let _ = std::fs::create_dir_all(&root);
+    // Beside the study's JSON: `results/`, `results/quick/` or `--out`.
+    let root = crate::plot_dir(quick);
+    std::fs::create_dir_all(&root)?;
     let mut series = Vec::new();
     // The inviscid gas at the two coarsest sizes beside York's dog-bone
     // viscosity (the default) at every size.
