@@ -1,7 +1,8 @@
 //! Probe: York Sod with gas points, L1(ρ) split by region (Sod) and the
 //! density/energy range (all cases).
 //! `[CASE=123|ratio] [SHAPE=q|c|l] [DUMP=1] cargo run --release --example york_sod_probe -- G KAPPA C1 C2 CFL PPC CELLS...`
-//! (G = g/Δx; York's defaults: 1.4142135623730951 0.75 1 1 0.4 3 200).
+//! (G = g/Δx; York's defaults: 1.4142135623730951 0.75 1 1 0.4 3 200);
+//! `END=T` ends at T instead of the case's time.
 use mpmice::diagnostics::york::{riemann_exact, run_york_sod, YorkSod};
 
 fn main() {
@@ -9,7 +10,7 @@ fn main() {
         .skip(1)
         .map(|s| s.parse().unwrap())
         .collect();
-    let base = match std::env::var("CASE").as_deref() {
+    let mut base = match std::env::var("CASE").as_deref() {
         // The 123 problem (two rarefactions, near-vacuum), the tube long
         // enough that the closed ends' shocks stay out of [0, 1].
         Ok("123") => YorkSod {
@@ -40,6 +41,9 @@ fn main() {
         },
         _ => YorkSod::default(),
     };
+    if let Ok(t) = std::env::var("END") {
+        base.end = t.parse().expect("END: a time");
+    }
     let exact = riemann_exact(base.left, base.right).unwrap();
     for &n in &a[6..] {
         let s = YorkSod {
