@@ -1,6 +1,8 @@
 //! The Lian Sec. 7.3 gas expansion over time (issue 17): the membrane's
-//! radii at 0° and 90°, the total energy, the gas's kinetic energy carried
-//! by its points and the part of it the grid sees, at every `EVERY` of time.
+//! radii at 0° and 90°, its roundness (the spread of its nodes' radii), its
+//! tension over Laplace's p r, the total energy, the gas's kinetic energy
+//! carried by its points and the part of it the grid sees, at every `EVERY`
+//! of time.
 //!
 //! `cargo run --release --example lian_gas_probe -- H END [stick|slip] [EVERY] [PIC]`
 //!
@@ -33,15 +35,19 @@ fn main() -> anyhow::Result<()> {
         pic_fraction,
     };
     let r = case.run(&dir)?;
-    println!("t r0 r90 r_mean (r0-r90)/r_mean E/E0-1 gas_KE_points gas_KE_grid");
+    println!(
+        "t r0 r90 r_mean (r0-r90)/r_mean (r_max-r_min)/r_mean T/(p r_mean) E/E0-1 gas_KE_points gas_KE_grid"
+    );
     for i in 0..r.t.len() {
         println!(
-            "{:.3} {:.5} {:.5} {:.5} {:+.3e} {:+.4e} {:.4e} {:.4e}",
+            "{:.3} {:.5} {:.5} {:.5} {:+.3e} {:.3e} {:.4} {:+.4e} {:.4e} {:.4e}",
             r.t[i],
             r.r0[i],
             r.r90[i],
             r.r_mean[i],
             (r.r0[i] - r.r90[i]) / r.r_mean[i],
+            (r.r_range[i].1 - r.r_range[i].0) / r.r_mean[i],
+            r.tension[i] / (r.gas_pressure[i] * r.r_mean[i]),
             r.energy[i] / r.energy[0] - 1.0,
             r.gas_kinetic[i],
             r.grid_kinetic[i]

@@ -249,19 +249,19 @@ fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
 }
 
 #[test]
-fn a_pic_share_brings_the_expanded_gas_to_rest_without_gaining_energy() {
-    // Lian Sec. 7.3 at element = cell = 0.4, 2 points per cell and
+fn a_pic_share_brings_the_expanded_gas_to_rest_round_and_keeps_its_energy_as_heat() {
+    // Lian Sec. 7.3 at element = cell = 0.4, 4 points per cell and
     // direction, to t = 2. Its end state is at rest. With FLIP (β = 0) the
     // gas points keep velocities the grid does not see (the null space of
-    // the grid-to-particle map), and their kinetic energy grows out of the
-    // gas's internal energy (issue 17); a PIC share β damps them by 1 − β a
-    // step, and the stick contact and the gas viscosity only dissipate.
+    // the grid-to-particle map), and the membrane is still moving at t = 2;
+    // a PIC share β damps them by 1 − β a step, and the kinetic energy it
+    // takes from a gas point becomes that point's heat (issue 17).
     use mpmice::diagnostics::lian_gas::GasExpansion;
     let run = |pic_fraction: f64| {
         let case = GasExpansion {
             element: 0.4,
             cell: 0.4,
-            per_cell: 2,
+            per_cell: 4,
             end: 2.0,
             every: 0.05,
             law: mpmice::contact::ContactLaw::Stick,
@@ -271,41 +271,64 @@ fn a_pic_share_brings_the_expanded_gas_to_rest_without_gaining_energy() {
         std::fs::create_dir_all(&dir).expect("dir");
         case.run(&dir).expect("run")
     };
-    for pic in [0.0, 0.01] {
-        let r = run(pic);
-        let last = r.t.len() - 1;
+    let (flip, pic) = (run(0.0), run(0.01));
+    let last = flip.t.len() - 1;
+    let e0 = flip.energy[0];
+    for (beta, r) in [(0.0, &flip), (0.01, &pic)] {
         let rise = r
             .energy
             .windows(2)
             .map(|w| (w[1] - w[0]) / r.energy[0])
             .fold(f64::NEG_INFINITY, f64::max);
+        let (r_min, r_max) = r.r_range[last];
         eprintln!(
-            "pic {pic}: t = 2: gas kinetic on its points {:.3e}, on the grid {:.3e} (of {:.4}), \
-             energy change {:+.3e}, largest rise between samples {rise:.2e}, r0 {:.4}, r90 {:.4}",
+            "β {beta}: t = 2: gas kinetic on its points {:.3e}, on the grid {:.3e} (of {:.4}), \
+             energy change {:+.3e}, largest rise between samples {rise:.2e}, r0 {:.4}, r90 {:.4}, \
+             radii spread {:.3e}, tension / (p r) {:.4}",
             r.gas_kinetic[last],
             r.grid_kinetic[last],
             r.energy[0],
             r.energy[last] / r.energy[0] - 1.0,
             r.r0[last],
-            r.r90[last]
+            r.r90[last],
+            (r_max - r_min) / r.r_mean[last],
+            r.tension[last] / (r.gas_pressure[last] * r.r_mean[last]),
         );
-        if pic > 0.0 {
-            assert!(
-                r.gas_kinetic[last] < 1e-4 * r.energy[0],
-                "the gas is not at rest: {}",
-                r.gas_kinetic[last]
-            );
-            assert!(rise <= 1e-9, "the energy rose by {rise:.2e} of E0");
-        } else {
-            // The control: with FLIP most of the gas's kinetic energy is on
-            // its points only (measured 11×), so the bounds above test the
-            // share, not a gas that happens to be quiet.
-            assert!(
-                r.gas_kinetic[last] > 5.0 * r.grid_kinetic[last],
-                "FLIP: points {:.3e}, grid {:.3e}",
-                r.gas_kinetic[last],
-                r.grid_kinetic[last]
-            );
-        }
     }
+    // At rest: measured 2.8e-6 of E0; the control, FLIP, 5.2e-3.
+    assert!(
+        pic.gas_kinetic[last] < 1e-4 * e0,
+        "the gas is not at rest: {:.3e}",
+        pic.gas_kinetic[last]
+    );
+    assert!(
+        flip.gas_kinetic[last] > 1e-3 * e0,
+        "FLIP at rest too: {:.3e} (the bound would not test the share)",
+        flip.gas_kinetic[last]
+    );
+    // The total kept (measured −0.86 %; FLIP −2.9 %; β without the heating
+    // lost 11 % at this size); between two samples it may still rise a
+    // little (the blend's heating is exact, the rest of the step is not).
+    let change = pic.energy[last] / e0 - 1.0;
+    assert!(change.abs() < 0.01, "energy change {change:.2e} of E0");
+    let rise = pic
+        .energy
+        .windows(2)
+        .map(|w| (w[1] - w[0]) / e0)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(rise < 1e-3, "the energy rose by {rise:.2e} of E0");
+    // At rest the membrane is a circle held by Laplace's tension T = p r.
+    // With the contact's mirror convention at the symmetry planes (the
+    // membrane's mapped mass doubled where the gas's is folded) this
+    // coarse run gives T/(p r) = 0.92 (0.95 at h = 0.2) and a spread of
+    // the nodes' radii of 2.0 % (0.43 % at 0.2); without it 2.27 and 4.1 %
+    // (2.16 and 3.4 % at 0.2).
+    let (r_min, r_max) = pic.r_range[last];
+    let spread = (r_max - r_min) / pic.r_mean[last];
+    assert!(spread < 0.03, "radii spread {spread:.3e}");
+    let laplace = pic.tension[last] / (pic.gas_pressure[last] * pic.r_mean[last]);
+    assert!(
+        (laplace - 1.0).abs() < 0.12,
+        "tension / (p r) = {laplace:.4}"
+    );
 }

@@ -45,6 +45,17 @@ pub struct GasExpansionRun {
     pub r90: Vec<f64>,
     /// Mean distance of the membrane's nodes from the axis.
     pub r_mean: Vec<f64>,
+    /// Smallest and largest distance of its nodes from the axis.
+    pub r_range: Vec<(f64, f64)>,
+    /// The membrane's tension T = s_tt t along its outline, the mean over
+    /// its elements (plane strain through the depth: s_tt = (σ̂xx + σ̂yy) /
+    /// (1 + ν)); at rest Laplace's law makes it p r.
+    pub tension: Vec<f64>,
+    /// The gas's median pressure over its points (−tr σ / 3; the median,
+    /// not the mean, because a layer of points at the membrane ends up
+    /// hotter than the rest: at h = 0.1, t = 2, β = 0.01 the bulk is at
+    /// 6.31 ± 0.1 and that layer reaches 13.9).
+    pub gas_pressure: Vec<f64>,
     /// Total energy (gas kinetic and internal, membrane kinetic and
     /// strain, less hourglass losses).
     pub energy: Vec<f64>,
@@ -216,6 +227,29 @@ fn sample(m: &MembraneContact, out: &mut GasExpansionRun, row: &mut Vec<f64>) {
     out.r90.push(line.last().map_or(0.0, r));
     out.r_mean
         .push(line.iter().map(r).sum::<f64>() / line.len().max(1) as f64);
+    out.r_range.push(
+        line.iter()
+            .map(r)
+            .fold((f64::INFINITY, 0.0), |(a, b), v| (a.min(v), b.max(v))),
+    );
+    let sheet = &m.membranes.meshes[0];
+    let nu = sheet.material.poisson;
+    out.tension.push(
+        sheet
+            .stress
+            .iter()
+            .zip(&sheet.thickness)
+            .map(|(s, t)| (s[0] + s[1]) / (1.0 + nu) * t)
+            .sum::<f64>()
+            / sheet.stress.len().max(1) as f64,
+    );
+    let p = &m.solid.run.particles;
+    let mut pressures: Vec<f64> = (0..p.len())
+        .map(|i| -p.stress.get(i).trace() / 3.0)
+        .collect();
+    pressures.sort_by(f64::total_cmp);
+    out.gas_pressure
+        .push(pressures.get(pressures.len() / 2).copied().unwrap_or(0.0));
     row.clear();
     m.history_row(row);
     // Columns: particle kinetic, strain, potential, membrane kinetic,

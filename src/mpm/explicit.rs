@@ -81,7 +81,9 @@ pub struct ExplicitParams {
     /// PIC share β ∈ [0, 1] of the particle velocity update: v_p ← (1 − β)
     /// (v_p + Δt Σ S a_i) + β Σ S v_i (0: FLIP, Eq. 26; 1: PIC). A share
     /// β damps the particle velocities the grid cannot see (the null space
-    /// of the grid-to-particle map) by the factor 1 − β a step.
+    /// of the grid-to-particle map) by the factor 1 − β a step. A gas
+    /// point's kinetic energy lost to the blend becomes its internal
+    /// energy; a solid's is dissipated.
     pub pic_fraction: f64,
 }
 
@@ -1200,7 +1202,24 @@ fn g2p<
             });
             if FLIP {
                 if pic > 0.0 {
-                    *vp = (*vp + acc * dt) * (1.0 - pic) + vel * pic;
+                    let v_flip = *vp + acc * dt;
+                    let v_new = v_flip * (1.0 - pic) + vel * pic;
+                    if ctx.materials[mat[p] as usize].gas().is_some() {
+                        // A gas point's kinetic energy that the share takes
+                        // out becomes its heat (internal energy ρ_ref e per
+                        // reference volume), as York's q does (Eq. 23): the
+                        // blend conserves the point's total energy. A point
+                        // the blend speeds up cools by as much, unless that
+                        // would leave it no internal energy.
+                        let heat = 0.5 * mass[p] / vol0[p]
+                            * (v_flip.norm_squared() - v_new.norm_squared());
+                        // SAFETY: as above.
+                        let e = unsafe { work.get(p) };
+                        if *e + heat > 0.0 {
+                            *e += heat;
+                        }
+                    }
+                    *vp = v_new;
                 } else {
                     *vp += acc * dt; // Eq. 26
                 }

@@ -129,9 +129,10 @@ pub fn lian_membrane(quick: bool) -> Result<StudyResult> {
 /// the final mean radius against the inextensible-membrane circle
 /// R = 1.5/(π/2) = 0.9549 (quarter perimeter 1.5; the stretch at p R/(E t)
 /// ≈ 5e-5 is negligible; the paper reports 0.96); extras: the radii at 0°
-/// and 90°, their relative difference, the energy change, the gas's
-/// kinetic energy on its points and on the grid, and the escaped gas
-/// points; series with stick contact and with free slip (FLIP), and with
+/// and 90°, their relative difference, the spread of the membrane nodes'
+/// radii (roundness), its tension over Laplace's p r (p the gas's median
+/// pressure), the energy change, the gas's kinetic energy on its points and
+/// on the grid, and the escaped gas points; series with stick contact and with free slip (FLIP), and with
 /// stick contact and a PIC share of 0.01 (`mpm.pic_fraction`).
 /// `LIAN_GAS_END` sets the end time (default 3).
 ///
@@ -158,9 +159,9 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
     )];
     let mut series = Vec::new();
     for (name, law, pic_fraction) in [
-        ("stick", ContactLaw::Stick, 0.0),
-        ("slip", ContactLaw::Slip { friction: 0.0 }, 0.0),
-        ("stick, PIC share 0.01", ContactLaw::Stick, 0.01),
+        ("stick contact", ContactLaw::Stick, 0.0),
+        ("slip contact", ContactLaw::Slip { friction: 0.0 }, 0.0),
+        ("stick contact, PIC share 0.01", ContactLaw::Stick, 0.01),
     ] {
         let mut pts = Vec::new();
         for &(h, per_cell) in sizes {
@@ -177,8 +178,11 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
             let last = r.t.len() - 1;
             let (r0, r90, rm) = (r.r0[last], r.r90[last], r.r_mean[last]);
             let de = r.energy[last] / r.energy[0] - 1.0;
+            let spread = (r.r_range[last].1 - r.r_range[last].0) / rm;
+            let laplace = r.tension[last] / (r.gas_pressure[last] * rm);
             notes.push(format!(
             "{name}, h = {h}: mean radius {rm:.4}, r(0°) {r0:.4}, r(90°) {r90:.4}, |r0 - r90|/r {:.3e}, \
+             spread of the nodes' radii {spread:.3e}, tension / (p r) {laplace:.4}, \
              energy change {de:+.3e}, gas kinetic {:.3e} (the grid's part {:.3e}; of {:.4} total), \
              escaped {}, {} steps, {:.1} s",
             (r0 - r90).abs() / rm,
@@ -199,6 +203,8 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
                 .with_extra("r_mean", rm)
                 .with_extra("r_0", r0)
                 .with_extra("r_90", r90)
+                .with_extra("radii_spread", spread)
+                .with_extra("tension_over_pr", laplace)
                 .with_extra("energy_change", de)
                 .with_extra("gas_kinetic", r.gas_kinetic[last])
                 .with_extra("gas_kinetic_grid", r.grid_kinetic[last])
@@ -206,7 +212,7 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
             );
         }
         series.push(Series::new(
-            format!("final mean radius, {name} contact"),
+            format!("final mean radius, {name}"),
             "relative",
             pts,
         ));
