@@ -223,8 +223,8 @@ impl<const D: usize> GridContact<D> {
     /// the MPM body's folded node on a face weighed (and pushed) twice
     /// against the points: in Lian's gas expansion, one cell deep between
     /// two symmetry planes, the membrane carried twice the gas pressure
-    /// (tension 1.97 p r at rest) and turned twice as sharply at its ends on
-    /// the x and y symmetry planes (curvature 1.9 against 1.0 between).
+    /// (tension 2.1–2.3 p r at rest) and turned twice as sharply at its ends
+    /// on the x and y symmetry planes (curvature 1.9 against 1.0 between).
     fn mirror_at_walls(&mut self, grid: &Grid<D>) {
         for &i in &self.touched {
             let c = grid.node_coords(i);
