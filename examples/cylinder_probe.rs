@@ -2,8 +2,9 @@
 //! shape functions, with Guilkey Eq. 43's error split by where the
 //! particles sit (first-cell layers at the inner and outer surfaces, and
 //! the rest): what limits the order.
-//! Also σ_r and σ_θ of the first particle rows at the inner surface
-//! against Lamé (mean per row of reference radius).
+//! Also the hoop force across the cut y = 0 against P r_i, and σ_r and σ_θ
+//! of the first particle rows at the inner surface against Lamé (mean per
+//! row of reference radius).
 //! `cargo run --release --example cylinder_probe -- SHAPE DX [DX ...]`,
 //! SHAPE a scene shape name (`ShapeKind::NAMES`); `PPC=K`
 //! sets K × K particles per cell (the case has 2), `END=T` the end time
@@ -66,6 +67,14 @@ fn main() -> anyhow::Result<()> {
             bands[1].1,
             bands[2].0 / np,
             bands[2].1
+        );
+        // The hoop force across the cut y = 0: Σ σ_θ over the row nearest
+        // the x-axis times its spacing; Lamé (and the quarter's balance)
+        // make it P r_i.
+        let hoop: f64 = m.row.iter().map(|s| s.2).sum::<f64>() * dx / ppc as f64;
+        println!(
+            "  hoop force across the cut {hoop:.5e} = {:.4} P r_i",
+            hoop / (m.pressure * 0.5)
         );
         // Rows of particles by reference radius from the inner surface.
         let rows = 3 * ppc;

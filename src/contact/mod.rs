@@ -26,7 +26,7 @@
 
 use nalgebra::SVector;
 
-use crate::grid::{Boundary, Grid, Reflect};
+use crate::grid::Grid;
 use crate::mpm::explicit::offset;
 use crate::shape::{LinearHat, ParticleWeights};
 
@@ -217,29 +217,18 @@ impl<const D: usize> GridContact<D> {
 
     /// The mirror-point convention of the MPM body ([`Grid::fold_ghosts`])
     /// for the points: a node on a fixed or symmetry face holds a point and
-    /// its mirror image. The linear hat puts no weight beyond the face, so
-    /// only the nodes on it change: q ← q + reflect(q), the mass doubled and
-    /// a vector's mirrored component cancelled, face by face. Without it
-    /// the MPM body's folded node on a face weighed (and pushed) twice
-    /// against the points: in Lian's gas expansion, one cell deep between
-    /// two symmetry planes, the membrane carried twice the gas pressure
-    /// (tension 2.1–2.3 p r at rest) and turned twice as sharply at its ends
-    /// on the x and y symmetry planes (curvature 1.9 against 1.0 between).
+    /// its mirror image ([`Grid::fold_on_faces`]: the mass doubled, a
+    /// vector's mirrored component cancelled). Without it the MPM body's
+    /// folded node on a face weighed (and pushed) twice against the points:
+    /// in Lian's gas expansion, one cell deep between two symmetry planes,
+    /// the membrane carried twice the gas pressure (tension 2.1–2.3 p r at
+    /// rest) and turned twice as sharply at its ends on the x and y
+    /// symmetry planes (curvature 1.9 against 1.0 between).
     fn mirror_at_walls(&mut self, grid: &Grid<D>) {
         for &i in &self.touched {
-            let c = grid.node_coords(i);
-            for axis in 0..D {
-                for (side, layer) in [(0, 0), (1, grid.cells[axis] as isize)] {
-                    let bc = grid.bc[axis][side];
-                    if c[axis] != layer || !matches!(bc, Boundary::Fixed | Boundary::Symmetry) {
-                        continue;
-                    }
-                    self.mass[i] *= 2.0;
-                    let (p, n) = (self.momentum[i], self.normal[i]);
-                    self.momentum[i] = p.add(&Reflect::<D>::reflect(&p, axis, bc));
-                    self.normal[i] = n.add(&Reflect::<D>::reflect(&n, axis, bc));
-                }
-            }
+            self.mass[i] = grid.fold_on_faces(i, self.mass[i]);
+            self.momentum[i] = grid.fold_on_faces(i, self.momentum[i]);
+            self.normal[i] = grid.fold_on_faces(i, self.normal[i]);
         }
     }
 

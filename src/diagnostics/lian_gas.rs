@@ -247,9 +247,12 @@ fn sample(m: &MembraneContact, out: &mut GasExpansionRun, row: &mut Vec<f64>) {
     let mut pressures: Vec<f64> = (0..p.len())
         .map(|i| -p.stress.get(i).trace() / 3.0)
         .collect();
-    pressures.sort_by(f64::total_cmp);
-    out.gas_pressure
-        .push(pressures.get(pressures.len() / 2).copied().unwrap_or(0.0));
+    let mid = pressures.len() / 2;
+    out.gas_pressure.push(if pressures.is_empty() {
+        0.0
+    } else {
+        *pressures.select_nth_unstable_by(mid, f64::total_cmp).1
+    });
     row.clear();
     m.history_row(row);
     // Columns: particle kinetic, strain, potential, membrane kinetic,

@@ -230,6 +230,24 @@ impl<const D: usize> Grid<D> {
         }
     }
 
+    /// [`Self::fold_ghosts`] at one node for a value that puts nothing on
+    /// the ghosts (a body mapped by the linear hat from inside the grid):
+    /// only a node on a `Fixed` or `Symmetry` face changes, to
+    /// `q + reflect(q)` (it holds a point and its mirror image), face by
+    /// face as the fold does.
+    pub fn fold_on_faces<T: Reflect<D>>(&self, i: usize, mut q: T) -> T {
+        let c = self.node_coords(i);
+        for axis in 0..D {
+            for (side, layer) in [(0, 0), (1, self.cells[axis] as isize)] {
+                let bc = self.bc[axis][side];
+                if c[axis] == layer && matches!(bc, Boundary::Fixed | Boundary::Symmetry) {
+                    q = q.add(&q.reflect(axis, bc));
+                }
+            }
+        }
+        q
+    }
+
     /// Sets every ghost node beyond a `Fixed` or `Symmetry` face to the
     /// reflection of its mirror node inside (the counterpart of
     /// [`Self::fold_ghosts`] for grid velocities and accelerations); along a
