@@ -26,12 +26,30 @@
 
 use nalgebra::SVector;
 
-use crate::grid::Grid;
+use crate::grid::{Boundary, Grid, Reflect};
 use crate::mpm::explicit::offset;
 use crate::shape::{LinearHat, ParticleWeights};
 
 mod run;
 pub use run::{node_normals, MembraneContactStep};
+
+/// A surface normal under the mirror convention: its image across any
+/// wall or symmetry face flips the component normal to the face (a
+/// velocity's image on a no-slip face is −v instead).
+#[derive(Debug, Clone, Copy)]
+struct Direction<const D: usize>(SVector<f64, D>);
+
+impl<const D: usize> Reflect<D> for Direction<D> {
+    fn reflect(&self, axis: usize, _: Boundary) -> Self {
+        Direction(self.0.reflect(axis, Boundary::Symmetry))
+    }
+    fn add(&self, other: &Self) -> Self {
+        Direction(self.0 + other.0)
+    }
+    fn zero() -> Self {
+        Direction(SVector::zeros())
+    }
+}
 
 /// How the contact force acts tangentially.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -217,8 +235,8 @@ impl<const D: usize> GridContact<D> {
 
     /// The mirror-point convention of the MPM body ([`Grid::fold_ghosts`])
     /// for the points: a node on a fixed or symmetry face holds a point and
-    /// its mirror image ([`Grid::fold_on_faces`]: the mass doubled, a
-    /// vector's mirrored component cancelled). Without it the MPM body's
+    /// its mirror image ([`Grid::fold_on_faces`]: the mass doubled, the
+    /// mirrored component of the momentum and of the normal cancelled). Without it the MPM body's
     /// folded node on a face weighed (and pushed) twice against the points:
     /// in Lian's gas expansion, one cell deep between two symmetry planes,
     /// the membrane carried twice the gas pressure (tension 2.1–2.3 p r at
@@ -228,7 +246,10 @@ impl<const D: usize> GridContact<D> {
         for &i in &self.touched {
             self.mass[i] = grid.fold_on_faces(i, self.mass[i]);
             self.momentum[i] = grid.fold_on_faces(i, self.momentum[i]);
-            self.normal[i] = grid.fold_on_faces(i, self.normal[i]);
+            // A direction's mirror image flips its component across the
+            // face on a no-slip face too (the velocity's −v rule would
+            // cancel the normal there).
+            self.normal[i] = grid.fold_on_faces(i, Direction(self.normal[i])).0;
         }
     }
 
