@@ -584,8 +584,9 @@ fn axisym_lame(quick: bool, out: &Path) -> anyhow::Result<()> {
 /// York Figs. 11–13: the dog-bone membrane expansion at element size 0.1
 /// (`--quick`: 0.4) to t = 4. `positions`: one PNG per snapshot time with
 /// the membrane (line) and gas points (markers), `york_fig11_tT.png`, and
-/// a CSV of all points; otherwise the radii at 0° and 90° and the kinetic,
-/// gas internal, membrane strain and total energies against time
+/// a CSV of all points; otherwise the radii at 0° and 90° and the kinetic
+/// (of the points and of the grid), gas internal, membrane strain and total
+/// energies against time
 /// (`york_fig13_radii.png`, `york_fig13_energy.png`, `york_fig13.csv`).
 fn york_dogbone_figures(quick: bool, out: &Path, positions: bool) -> anyhow::Result<()> {
     use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
@@ -669,8 +670,13 @@ fn york_dogbone_figures(quick: bool, out: &Path, positions: bool) -> anyhow::Res
     println!("wrote {}", path.display());
     let energy = vec![
         PlotSeries {
-            label: "kinetic".into(),
+            label: "kinetic (points)".into(),
             points: col(&|x| x.kinetic),
+            style: Style::Line,
+        },
+        PlotSeries {
+            label: "kinetic (grid)".into(),
+            points: col(&|x| x.grid_kinetic),
             style: Style::Line,
         },
         PlotSeries {

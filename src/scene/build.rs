@@ -364,11 +364,44 @@ fn fill_objects<const D: usize>(
     Ok((particles, ranges))
 }
 
+/// The polygon of a closed membrane drawn on the same curve as `obj`'s
+/// region, if the scene has one: an object filling a membrane fills the
+/// polygon of the membrane's points. The points lie on the curve and their
+/// chords inside it, so a filling point within a chord's sagitta of the
+/// curve would start outside the membrane: at element size 0.2 the
+/// dog-bone's lobe tops y = ±0.45 fall on the gas's lattice, 2e-4 beyond
+/// the chords, and those two gas points were outside from the first step.
+fn enclosing_membrane<const D: usize>(
+    scene: &Scene,
+    grid: &Grid<D>,
+    obj: &ObjectSpec,
+) -> Option<Geometry> {
+    let is_membrane = |name: &str| {
+        scene
+            .materials
+            .iter()
+            .any(|m| m.name == name && m.kind == MaterialKind::Membrane)
+    };
+    if D != 2 || is_membrane(&obj.material) {
+        return None;
+    }
+    scene
+        .objects
+        .iter()
+        .filter(|m| is_membrane(&m.material) && m.geometry == obj.geometry)
+        .find_map(|m| {
+            let spacing = m.spacing.unwrap_or(grid.h.min());
+            let (vertices, closed, ..) = membrane_curve(&m.geometry, spacing, grid.axisymmetric);
+            closed.then_some(Geometry::Polygon { vertices })
+        })
+}
+
 /// Calls `f` with each particle position of the filled object `obj`, in
 /// creation order: `ppc` points per cell and axis at the centres of the
-/// cell's sub-cells, kept where `obj.geometry` contains them and no object
-/// of `obj.except` does (not for membranes, whose points follow their
-/// polyline).
+/// cell's sub-cells, kept where `obj.geometry` contains them, and the
+/// polygon of a closed membrane on the same curve if there is one
+/// ([`enclosing_membrane`]), and no object of `obj.except` does (not for
+/// membranes, whose points follow their polyline).
 fn object_positions<const D: usize>(
     scene: &Scene,
     grid: &Grid<D>,
@@ -377,6 +410,7 @@ fn object_positions<const D: usize>(
     mut f: impl FnMut([f64; D]),
 ) {
     let per_cell = ppc.pow(D as u32);
+    let enclosing = enclosing_membrane(scene, grid, obj);
     for cell in 0..grid.num_cells() {
         let mut rem = cell;
         let c: [usize; D] = std::array::from_fn(|d| {
@@ -393,6 +427,7 @@ fn object_positions<const D: usize>(
                 x[d] = grid.lower[d] + grid.h[d] * (c[d] as f64 + (s as f64 + 0.5) / ppc as f64);
             }
             if obj.geometry.contains(&x)
+                && enclosing.as_ref().is_none_or(|poly| poly.contains(&x))
                 && !obj
                     .except
                     .iter()

@@ -888,7 +888,7 @@ impl ReactionSpec {
 }
 
 /// Region filled by an object.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Geometry {
     /// Axis-aligned box.
