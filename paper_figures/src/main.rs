@@ -619,10 +619,17 @@ fn york_dogbone_figures(quick: bool, out: &Path, positions: bool) -> anyhow::Res
                     points: line,
                     style: Style::Line,
                 },
+                // The domain's fixed walls (they also fix the axes).
                 PlotSeries {
-                    label: String::new(),
-                    points: vec![(-frame, -frame), (frame, frame)],
-                    style: Style::Markers,
+                    label: "fixed walls".into(),
+                    points: vec![
+                        (-frame, -frame),
+                        (frame, -frame),
+                        (frame, frame),
+                        (-frame, frame),
+                        (-frame, -frame),
+                    ],
+                    style: Style::Line,
                 },
             ];
             let path = out.join(format!("york_fig11_t{t:.2}.png"));
