@@ -157,10 +157,12 @@ pub struct DogBone {
     pub young: f64,
     /// The gas fills the dog-bone shrunk by this fraction of `h` (lobe
     /// radius and neck half-width less the margin; York: 0, the default).
-    /// Gas points that start within a quarter cell of the membrane cross
-    /// it during the expansion (6 of 515 points at h = 0.2, 10 of 1430 at
-    /// h = 0.1). A quarter-cell margin keeps all of them in at h = 0.2 but
-    /// not at h = 0.1 (still 10 out), and removes gas.
+    /// With GIMP, gas points that start within a quarter cell of the
+    /// membrane crossed it during the expansion (6 of 515 points at
+    /// h = 0.2, 10 of 1430 at h = 0.1), and a quarter-cell margin kept them
+    /// in at h = 0.2 but not at 0.1 (still 10 out), and removed gas; with
+    /// the quadratic B-spline (the default [`Self::shape`]) none crosses
+    /// without a margin.
     pub gas_margin_over_h: f64,
     /// The MPM shape function (`mpm.shape`; default the quadratic
     /// B-spline). With GIMP, gas points that start a few hundredths of a
