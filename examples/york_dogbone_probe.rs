@@ -1,6 +1,6 @@
 //! Probe of York Sec. 4.3's dog-bone (`diagnostics::york_membrane::DogBone`):
 //! `cargo run --release --example york_dogbone_probe -- H END MARGIN SHAPE PIC`
-//! (defaults 0.2, 0.3, 0, gimp, 0) prints the final measures (radii, hoop
+//! (defaults 0.2, 0.3, 0, the case's `quadratic_bspline`, 0) prints the final measures (radii, hoop
 //! stress against p r / t, gas points out, energy, kinetic energy of the
 //! points and of the grid; `HIST=1` adds the history CSV). With `TRACE=1`
 //! it prints instead, for each gas point the first time it is outside the
@@ -18,9 +18,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let margin: f64 = args.get(3).map_or(Ok(0.0), |s| s.parse())?;
     let shape: &'static str = match args.get(4).map(String::as_str) {
         Some("linear") => "linear",
-        Some("quadratic_bspline") => "quadratic_bspline",
+        Some("gimp") => "gimp",
         Some("cubic_bspline") => "cubic_bspline",
-        _ => "gimp",
+        _ => DogBone::default().shape,
     };
     let s = DogBone {
         h,
