@@ -301,9 +301,7 @@ pub struct DogBoneSample {
     /// Kinetic energy (gas and membrane) of the points.
     pub kinetic: f64,
     /// Kinetic energy on the grid's nodes after the last step (0 at the
-    /// start): FLIP points can carry velocities the grid does not see
-    /// (the null space of the grid-to-particle map), which `kinetic`
-    /// counts and this does not.
+    /// start; [`crate::mpm::GridState::kinetic_energy`]).
     pub grid_kinetic: f64,
     /// Gas internal energy.
     pub internal: f64,
@@ -404,13 +402,7 @@ pub fn run_dog_bone(s: &DogBone) -> Result<DogBoneRun> {
         if run.t >= next_hist - 1e-12 || run.finished() {
             let m = membrane_measures(&run, [0.0, 0.0]);
             let (kinetic, internal, strain) = energy_split(&run);
-            let gs = run.grid_state();
-            let grid_kinetic = gs
-                .mass
-                .iter()
-                .zip(&gs.velocity_new)
-                .map(|(m, v)| 0.5 * m * v.norm_squared())
-                .sum();
+            let grid_kinetic = run.grid_state().kinetic_energy();
             history.push(DogBoneSample {
                 t: run.t,
                 radius_0: m.radius_0,

@@ -331,20 +331,26 @@ pub fn self_intersection(v: &[[f64; 2]], closed: bool) -> Option<(usize, usize)>
     None
 }
 
+/// Where the edge from `a` to `b` crosses the line y = `py`, if it
+/// straddles it (one end above, the other not): the crossing of the
+/// even–odd rule, which every inside test here counts (a point is inside
+/// when an odd number of its polygon's edges cross its row beyond it).
+#[inline]
+pub fn edge_crossing(a: [f64; 2], b: [f64; 2], py: f64) -> Option<f64> {
+    ((a[1] > py) != (b[1] > py)).then(|| (b[0] - a[0]) * (py - a[1]) / (b[1] - a[1]) + a[0])
+}
+
 /// Whether point `x` lies inside the closed polygon through `v`
-/// (even–odd rule).
+/// (even–odd rule, [`edge_crossing`]).
 pub fn inside_polygon<const D: usize>(x: &SVector<f64, D>, v: &[SVector<f64, D>]) -> bool {
     let (px, py) = (x[0], x[1]);
     let n = v.len();
-    let mut inside = false;
-    for i in 0..n {
-        let (xi, yi) = (v[i][0], v[i][1]);
-        let (xj, yj) = (v[(i + n - 1) % n][0], v[(i + n - 1) % n][1]);
-        if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
-            inside = !inside;
-        }
-    }
-    inside
+    let xy = |p: &SVector<f64, D>| [p[0], p[1]];
+    (0..n)
+        .filter(|&i| edge_crossing(xy(&v[i]), xy(&v[(i + n - 1) % n]), py).is_some_and(|c| px < c))
+        .count()
+        % 2
+        == 1
 }
 
 #[cfg(test)]

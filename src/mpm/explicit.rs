@@ -116,6 +116,19 @@ impl<const D: usize> GridState<D> {
             accel: vec![SVector::zeros(); n],
         }
     }
+
+    /// Kinetic energy on the nodes after the step, ½ Σ m_i |vᴸ_i|², over
+    /// every node (the fold leaves no mass on the ghosts beyond walls and
+    /// symmetry planes). FLIP points can carry velocities the grid does not
+    /// see (the null space of the grid-to-particle map); their own kinetic
+    /// energy counts those, this does not.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.mass
+            .iter()
+            .zip(&self.velocity_new)
+            .map(|(m, v)| 0.5 * m * v.norm_squared())
+            .sum()
+    }
 }
 
 /// Wall time spent in each phase of the explicit step, accumulated over steps.

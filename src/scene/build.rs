@@ -399,8 +399,9 @@ fn enclosing_membrane<const D: usize>(
         })
 }
 
-/// The even–odd inside test of a polygon (the rule of
-/// [`Geometry::Polygon`]'s `contains`, to the bit) for the many points of a
+/// The even–odd inside test of a polygon (the crossings of
+/// [`membrane::edge_crossing`], as [`Geometry::Polygon`]'s `contains`
+/// counts them) for the many points of a
 /// lattice that share few rows: each row's edge crossings are found once
 /// and sorted, and a point counts the crossings beyond it by bisection. A
 /// membrane of 10⁴ points around 10⁶ lattice points would otherwise cost
@@ -418,11 +419,7 @@ impl RowCrossings {
         let row = self.rows.entry(py.to_bits()).or_insert_with(|| {
             let n = v.len();
             let mut c: Vec<f64> = (0..n)
-                .filter_map(|i| {
-                    let [xi, yi] = v[i];
-                    let [xj, yj] = v[(i + n - 1) % n];
-                    ((yi > py) != (yj > py)).then(|| (xj - xi) * (py - yi) / (yj - yi) + xi)
-                })
+                .filter_map(|i| membrane::edge_crossing(v[i], v[(i + n - 1) % n], py))
                 .collect();
             c.sort_by(f64::total_cmp);
             c

@@ -1022,15 +1022,14 @@ impl Geometry {
                 // Even–odd rule: count crossings of the ray to +x.
                 let (px, py) = (x[0], x[1]);
                 let n = vertices.len();
-                let mut inside = false;
-                for i in 0..n {
-                    let [xi, yi] = vertices[i];
-                    let [xj, yj] = vertices[(i + n - 1) % n];
-                    if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
-                        inside = !inside;
-                    }
-                }
-                inside
+                (0..n)
+                    .filter(|&i| {
+                        crate::membrane::edge_crossing(vertices[i], vertices[(i + n - 1) % n], py)
+                            .is_some_and(|c| px < c)
+                    })
+                    .count()
+                    % 2
+                    == 1
             }
         }
     }
