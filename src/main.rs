@@ -252,6 +252,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     "through the boundary: mass {:.4e}, momentum ({:.4e}, {:.4e}, {:.4e}), energy {:.4e} (the drifts are net of it)",
                     b.mass, b.momentum[0], b.momentum[1], b.momentum[2], b.energy
                 )?;
+                let g = b.body_momentum;
+                if g.iter().any(|&x| x != 0.0) {
+                    writeln!(
+                        std::io::stdout(),
+                        "body force impulse: ({:.4e}, {:.4e}, {:.4e}) (the momentum drift is net of it)",
+                        g[0], g[1], g[2]
+                    )?;
+                }
             }
             writeln!(
                 std::io::stdout(),

@@ -261,7 +261,7 @@ impl LoopState {
         let b = x.unwrap_or_default();
         ck.put_f64(
             "loop.exchange",
-            vec![6],
+            vec![9],
             vec![
                 if x.is_some() { 1.0 } else { 0.0 },
                 b.mass,
@@ -269,6 +269,9 @@ impl LoopState {
                 b.momentum[1],
                 b.momentum[2],
                 b.energy,
+                b.body_momentum[0],
+                b.body_momentum[1],
+                b.body_momentum[2],
             ],
         );
     }
@@ -279,11 +282,20 @@ impl LoopState {
         let s = ck.take_f64("loop.scalars", Some(&[11]))?;
         let c = ck.take_u64("loop.counters", Some(&[4]))?;
         let m = ck.take_f64("loop.initial_materials", Some(&[names.len(), 6]))?;
-        let x = ck.take_f64("loop.exchange", Some(&[6]))?;
+        // Checkpoints before the body-force column hold 6 entries.
+        let mut x = ck.take_f64("loop.exchange", None)?;
+        if x.len() != 6 && x.len() != 9 {
+            return Err(CheckpointError::Malformed {
+                what: "array loop.exchange".into(),
+                reason: format!("{} entries, expected 6 or 9", x.len()),
+            });
+        }
+        x.resize(9, 0.0);
         let exchange = (x[0] != 0.0).then_some(BoundaryExchange {
             mass: x[1],
             momentum: [x[2], x[3], x[4]],
             energy: x[5],
+            body_momentum: [x[6], x[7], x[8]],
         });
         let materials = names
             .iter()
@@ -881,7 +893,7 @@ fn summarise<M: Model>(
     let (m0, m1) = (ls.initial.mass(), end.mass() - b.mass);
     let (p0, p1) = (ls.initial.momentum(), end.momentum());
     let dp = (0..3)
-        .map(|d| (p1[d] - b.momentum[d] - p0[d]).powi(2))
+        .map(|d| (p1[d] - b.momentum[d] - b.body_momentum[d] - p0[d]).powi(2))
         .sum::<f64>()
         .sqrt();
     let (e0, e1) = (ls.initial.energies, end.energies);

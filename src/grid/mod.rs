@@ -266,6 +266,27 @@ impl<const D: usize> Grid<D> {
         }
     }
 
+    /// Every node that [`Self::fold_ghosts`] reads or changes at a `Fixed`
+    /// or `Symmetry` face (ghost layers and their mirror layers inside,
+    /// boundary layers included), sorted, each once; empty without such
+    /// faces. Elsewhere the fold leaves a nodal value as the particles put
+    /// it.
+    pub fn mirrored_nodes(&self) -> Vec<usize> {
+        let mut nodes = Vec::new();
+        for axis in 0..D {
+            if self.periodic(axis) {
+                continue;
+            }
+            self.for_each_mirror_pair(axis, |ghost, mirror, _, _| {
+                nodes.push(ghost);
+                nodes.push(mirror);
+            });
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+
     /// Whether `axis` is periodic (the scene sets both faces alike).
     #[inline]
     pub fn periodic(&self, axis: usize) -> bool {

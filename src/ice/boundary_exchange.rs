@@ -20,16 +20,21 @@ use nalgebra::SVector;
 use super::advection::AdvectionFluxes;
 use super::state::CellLayout;
 
-/// Mass, momentum (padded to 3D) and energy that entered the fluid through
-/// the domain boundary.
+/// Mass, momentum (padded to 3D) and energy that entered the system through
+/// the domain boundary (for ICE, through the boundary faces; for MPM, the
+/// reaction of fixed walls, symmetry planes and fixed membrane ends,
+/// [`crate::mpm::wall_reaction`]), and the momentum the body force added.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct BoundaryExchange {
     /// Mass in \[kg\] (per depth in 1D/2D).
     pub mass: f64,
-    /// Momentum in.
+    /// Momentum in through the boundary.
     pub momentum: [f64; 3],
     /// Energy in (internal + kinetic + pressure work).
     pub energy: f64,
+    /// Momentum added by the body force (gravity), `∫ Σ m b dt`; its work
+    /// is in the potential energy.
+    pub body_momentum: [f64; 3],
 }
 
 impl BoundaryExchange {
@@ -38,6 +43,7 @@ impl BoundaryExchange {
         self.mass += o.mass;
         for d in 0..3 {
             self.momentum[d] += o.momentum[d];
+            self.body_momentum[d] += o.body_momentum[d];
         }
         self.energy += o.energy;
     }

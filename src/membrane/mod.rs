@@ -133,19 +133,24 @@ impl<const D: usize> Membranes<D> {
     }
 
     /// Holds the end points of open chains with `fixed_ends` at their
-    /// initial positions, at rest.
+    /// initial positions, at rest; returns the impulse that takes them to
+    /// rest (the supports' reaction, `−Σ m v`).
     pub fn fix_ends(
         &self,
         x: &mut [SVector<f64, D>],
         x0: &[SVector<f64, D>],
         v: &mut [SVector<f64, D>],
-    ) {
+        mass: &[f64],
+    ) -> SVector<f64, D> {
+        let mut impulse = SVector::zeros();
         for c in self.chains.iter().filter(|c| c.fixed_ends && !c.closed) {
             for p in [c.first, c.first + c.count - 1] {
                 x[p] = x0[p];
+                impulse -= v[p] * mass[p];
                 v[p] = SVector::zeros();
             }
         }
+        impulse
     }
 
     /// Stretch of every particle's segment: current length / initial

@@ -22,6 +22,7 @@ use rayon::prelude::*;
 
 use super::particles::Particles;
 use super::scatter::{Bins, SharedMut};
+use super::wall_reaction::WallRecord;
 use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
 use crate::material::plasticity::PlasticState;
@@ -53,6 +54,11 @@ impl UpdateScheme {
 pub trait BodyForce<const D: usize>: Sync {
     /// Acceleration at reference position `x0`, current position `x`, time `t`.
     fn accel(&self, x0: &SVector<f64, D>, x: &SVector<f64, D>, t: f64) -> SVector<f64, D>;
+    /// The acceleration if it is the same everywhere and always (sums
+    /// over the particles then need only their masses).
+    fn uniform(&self) -> Option<SVector<f64, D>> {
+        None
+    }
 }
 
 /// A uniform body force (gravity).
@@ -62,6 +68,9 @@ pub struct Uniform<const D: usize>(pub SVector<f64, D>);
 impl<const D: usize> BodyForce<D> for Uniform<D> {
     fn accel(&self, _: &SVector<f64, D>, _: &SVector<f64, D>, _: f64) -> SVector<f64, D> {
         self.0
+    }
+    fn uniform(&self) -> Option<SVector<f64, D>> {
+        Some(self.0)
     }
 }
 
@@ -102,6 +111,9 @@ pub struct GridState<const D: usize> {
     pub velocity_new: Vec<SVector<f64, D>>,
     /// Nodal acceleration a_i after boundary conditions.
     pub accel: Vec<SVector<f64, D>>,
+    /// The particles' own fields on the nodes the wall fold touches, for
+    /// the walls' reaction ([`GridState::wall_impulse`]).
+    walls: WallRecord<D>,
 }
 
 impl<const D: usize> GridState<D> {
@@ -114,7 +126,16 @@ impl<const D: usize> GridState<D> {
             velocity: vec![SVector::zeros(); n],
             velocity_new: vec![SVector::zeros(); n],
             accel: vec![SVector::zeros(); n],
+            walls: WallRecord::default(),
         }
+    }
+
+    /// The impulse the fixed walls and symmetry planes gave the particles
+    /// in the last step of `dt` with PIC share `pic`
+    /// ([`super::wall_reaction`]): zero without such faces. Valid after a
+    /// complete explicit step (its P2G recorded the unfolded fields).
+    pub fn wall_impulse(&self, dt: f64, pic: f64) -> SVector<f64, D> {
+        self.walls.impulse(&self.accel, &self.velocity_new, dt, pic)
     }
 
     /// Kinetic energy on the nodes after the step, ½ Σ m_i |vᴸ_i|², over
@@ -1005,6 +1026,15 @@ fn p2g<
             }
         });
     });
+    // The walls' reaction needs the particles' own fields where the fold
+    // changes them: the first mapping's mass and momentum, and the force.
+    if MASS || FORCE {
+        gs.walls.record(
+            grid,
+            MASS.then_some((&gs.mass[..], &gs.momentum[..])),
+            FORCE.then_some(&gs.force[..]),
+        );
+    }
     // Mirror-particle boundary treatment (see `Grid::fold_ghosts`).
     if MASS {
         grid.fold_ghosts(&mut gs.mass);

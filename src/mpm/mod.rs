@@ -7,6 +7,7 @@ pub mod implicit;
 pub mod particles;
 mod scatter;
 pub mod tensors;
+pub mod wall_reaction;
 
 pub use explicit::{
     explicit_step, stable_dt, BodyForce, CoupledMpm, ExplicitParams, GridState, PhaseTimes,

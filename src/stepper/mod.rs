@@ -74,7 +74,18 @@ pub struct SolidRun<const D: usize> {
     pub(crate) grid_state: GridState<D>,
     /// Reusable step buffers.
     pub(crate) scratch: StepScratch<D>,
+    /// The impulse the fixed walls, symmetry planes and fixed membrane ends
+    /// gave the particles in the last step ([`GridState::wall_impulse`]).
+    pub wall_impulse: SVector<f64, D>,
+    /// The impulse of the body force in the last step, `Δt Σ_p m_p b_p`.
+    pub body_impulse: SVector<f64, D>,
+    /// Partial sums of the body impulse, one per fixed block of particles
+    /// (a sum independent of the thread count).
+    body_partial: Vec<SVector<f64, D>>,
 }
+
+/// Particles per partial sum of [`SolidRun::body_impulse`].
+const BODY_BLOCK: usize = 4096;
 
 impl<const D: usize> SolidRun<D> {
     /// A run at t = 0.
@@ -99,6 +110,9 @@ impl<const D: usize> SolidRun<D> {
             membranes: Membranes::default(),
             grid_state: GridState::new(n),
             scratch: StepScratch::default(),
+            wall_impulse: SVector::zeros(),
+            body_impulse: SVector::zeros(),
+            body_partial: Vec::new(),
         }
     }
 
@@ -138,6 +152,10 @@ impl<const D: usize> SolidRun<D> {
                 });
             }
         }
+        self.body_impulse = match self.body.as_deref() {
+            Some(b) => body_impulse(b, &self.particles, self.t, dt, &mut self.body_partial),
+            None => SVector::zeros(),
+        };
         explicit_step(
             &self.grid,
             &self.materials,
@@ -151,9 +169,10 @@ impl<const D: usize> SolidRun<D> {
             dt,
             self.steps,
         )?;
+        self.wall_impulse = self.grid_state.wall_impulse(dt, self.params.pic_fraction);
         if !self.membranes.is_empty() {
             let p = &mut self.particles;
-            self.membranes.fix_ends(&mut p.x, &p.x0, &mut p.v);
+            self.wall_impulse += self.membranes.fix_ends(&mut p.x, &p.x0, &mut p.v, &p.mass);
         }
         self.t += dt;
         self.steps += 1;
@@ -177,5 +196,34 @@ impl<const D: usize> SolidRun<D> {
     /// The grid node fields of the last step.
     pub fn grid_state(&self) -> &GridState<D> {
         &self.grid_state
+    }
+}
+
+/// `Δt Σ_p m_p b(x⁰_p, x_p, t)`, summed in fixed blocks of particles and
+/// then in block order, so that every thread count gives the same bits.
+fn body_impulse<const D: usize>(
+    body: &(dyn BodyForce<D> + Send + Sync),
+    p: &Particles<D>,
+    t: f64,
+    dt: f64,
+    partial: &mut Vec<SVector<f64, D>>,
+) -> SVector<f64, D> {
+    use rayon::prelude::*;
+    partial.resize(p.len().div_ceil(BODY_BLOCK), SVector::zeros());
+    let uniform = body.uniform();
+    partial.par_iter_mut().enumerate().for_each(|(b, out)| {
+        let range = b * BODY_BLOCK..((b + 1) * BODY_BLOCK).min(p.len());
+        *out = match uniform {
+            // Gravity: M g, from the masses alone.
+            Some(_) => SVector::from_element(p.mass[range].iter().sum()),
+            None => range.fold(SVector::zeros(), |acc, i| {
+                acc + body.accel(&p.x0[i], &p.x[i], t) * p.mass[i]
+            }),
+        };
+    });
+    let sum = partial.iter().sum::<SVector<f64, D>>();
+    match uniform {
+        Some(g) => g * (sum[0] * dt),
+        None => sum * dt,
     }
 }

@@ -10,6 +10,7 @@ use crate::driver::models::arrays::{
     particle_fields, particle_watchdog, plastic_fields, save_particles,
 };
 use crate::error::Error;
+use crate::ice::BoundaryExchange;
 use crate::mpm::stable_dt;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 use crate::stepper::SolidRun;
@@ -97,8 +98,17 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             self.stable_dt().min(dt.value)
         };
         let dt = self.run.step_dt(dt)?;
+        // The walls' reaction and the body force's impulse, so that the
+        // summary's momentum drift is what the scheme itself lost (an
+        // axisymmetric run's radial momentum is not conserved: none).
+        let boundary = (!self.run.grid.axisymmetric).then(|| BoundaryExchange {
+            momentum: pad3(&self.run.wall_impulse),
+            body_momentum: pad3(&self.run.body_impulse),
+            ..Default::default()
+        });
         Ok(StepStats {
             dt,
+            boundary,
             ..Default::default()
         })
     }
@@ -226,8 +236,9 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             update: scene_name(&self.run.params.scheme),
             iterative: false,
             // Axisymmetric: the hoop force changes the radial momentum (only
-            // the axial one is conserved), so no drift is reported.
-            momentum_conserved: !self.run.grid.axisymmetric,
+            // the axial one is conserved), so no drift is reported; nor with
+            // mass-proportional damping (a drag to the ground).
+            momentum_conserved: !self.run.grid.axisymmetric && self.run.params.damping == 0.0,
             phase_times: self.run.phase_times(),
             implicit_split: None,
             coupled_iterations: None,
