@@ -489,6 +489,9 @@ pub struct Description {
     /// Whether the momentum of the whole state is conserved (walls and
     /// boundary pressures exchange momentum with a coupled system).
     pub momentum_conserved: bool,
+    /// r–z: only the axial (second) component of the momentum is conserved
+    /// (the hoop force changes the radial one), so the drift is of it.
+    pub axial_momentum_only: bool,
     /// Wall time per phase of the explicit MPM step.
     pub phase_times: crate::mpm::PhaseTimes,
     /// Implicit MPM: seconds in assembly, factorisation, solves and particle

@@ -893,6 +893,7 @@ fn summarise<M: Model>(
     let (m0, m1) = (ls.initial.mass(), end.mass() - b.mass);
     let (p0, p1) = (ls.initial.momentum(), end.momentum());
     let dp = (0..3)
+        .filter(|&d| !desc.axial_momentum_only || d == 1)
         .map(|d| (p1[d] - b.momentum[d] - b.body_momentum[d] - p0[d]).powi(2))
         .sum::<f64>()
         .sqrt();

@@ -69,8 +69,10 @@ pub struct Summary {
     pub mass_drift: f64,
     /// |P_end − P_0 − P_in| / Σ m|v| at the start (|…| if that is zero),
     /// `P_in` the momentum that came in through the boundary (advected, and
-    /// the boundary faces' pressure impulse); NaN (JSON null) where walls
-    /// exchange momentum with the system unaccounted.
+    /// the boundary faces' pressure impulse; for MPM the walls' reaction),
+    /// and the body force's impulse; NaN (JSON null) where walls exchange
+    /// momentum with the system unaccounted; in an r–z MPM run, of the
+    /// axial component only (the hoop force changes the radial one).
     pub momentum_drift: f64,
     /// (E_end − E_0 − E_in)/|E_0| of kinetic + stored + body-force potential
     /// energy (relative to the largest end energy if E_0 = 0), `E_in` the

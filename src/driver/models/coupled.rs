@@ -278,6 +278,7 @@ impl<const D: usize> Model for Coupled<D> {
             // Walls and the pressure at them exchange momentum with the
             // coupled system.
             momentum_conserved: false,
+            axial_momentum_only: false,
             phase_times: run.phase_times(),
             // Implicit solid fields: their Newton solves' time split.
             implicit_split: run.fields.iter().any(|f| f.implicit.is_some()).then(|| {

@@ -217,6 +217,7 @@ impl<const D: usize> Model for Multiphase<D> {
             update: scene_name(&self.run.params.scheme),
             iterative: false,
             momentum_conserved: !self.run.grid.axisymmetric,
+            axial_momentum_only: false,
             phase_times: self.run.phase_times(),
             implicit_split: None,
             coupled_iterations: None,

@@ -99,16 +99,14 @@ impl<const D: usize> Model for ExplicitSolid<D> {
         };
         let dt = self.run.step_dt(dt)?;
         // The walls' reaction and the body force's impulse, so that the
-        // summary's momentum drift is what the scheme itself lost (an
-        // axisymmetric run's radial momentum is not conserved: none).
-        let boundary = (!self.run.grid.axisymmetric).then(|| BoundaryExchange {
-            momentum: pad3(&self.run.wall_impulse),
-            body_momentum: pad3(&self.run.body_impulse),
-            ..Default::default()
-        });
+        // summary's momentum drift is what the scheme itself lost.
         Ok(StepStats {
             dt,
-            boundary,
+            boundary: Some(BoundaryExchange {
+                momentum: pad3(&self.run.wall_impulse),
+                body_momentum: pad3(&self.run.body_impulse),
+                ..Default::default()
+            }),
             ..Default::default()
         })
     }
@@ -235,10 +233,11 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             shape: scene_name(&self.run.params.shape),
             update: scene_name(&self.run.params.scheme),
             iterative: false,
-            // Axisymmetric: the hoop force changes the radial momentum (only
-            // the axial one is conserved), so no drift is reported; nor with
-            // mass-proportional damping (a drag to the ground).
-            momentum_conserved: !self.run.grid.axisymmetric && self.run.params.damping == 0.0,
+            // Mass-proportional damping is a drag to the ground: no drift
+            // is reported.
+            momentum_conserved: self.run.params.damping == 0.0,
+            // r–z: the hoop force changes the radial momentum.
+            axial_momentum_only: self.run.grid.axisymmetric,
             phase_times: self.run.phase_times(),
             implicit_split: None,
             coupled_iterations: None,

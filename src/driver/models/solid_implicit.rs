@@ -177,6 +177,7 @@ impl<const D: usize> Model for ImplicitSolid<D> {
             },
             iterative: true,
             momentum_conserved: true,
+            axial_momentum_only: false,
             phase_times: Default::default(),
             implicit_split: Some([
                 sum(|s| s.assembly_s),
