@@ -734,11 +734,23 @@ impl<const D: usize> CoupledRun<D> {
     /// Largest stable time step: the ICE limit over all materials (the
     /// solids' sound speeds included) and the MPM limit of every
     /// deformable field; with the semi-implicit pressure, at most
-    /// `max_dt_growth` times the last accepted step (as a fluid-only run).
+    /// `max_dt_growth` times the last accepted step, from an acoustic first
+    /// step (as a fluid-only run), except with implicit solids.
     pub fn stable_dt(&self) -> f64 {
         let implicit = self.ice.implicit.as_ref();
-        let factor = implicit.map_or(1.0, |sp| sp.sound_speed_factor);
-        let growth = match (implicit, self.ws.last_dt()) {
+        let last = self.ws.last_dt();
+        // The first step is acoustic, then grows (semi-implicit mode); with
+        // implicit solids their Newton control sets the step from
+        // `time.dt` on (the temporal-order study halves it from the start).
+        let newton = self.fields.iter().any(|f| f.implicit.is_some());
+        let factor = implicit.map_or(1.0, |sp| {
+            if newton {
+                sp.sound_speed_factor
+            } else {
+                ice::timestep::first_step_factor(sp, last)
+            }
+        });
+        let growth = match (implicit, last) {
             (Some(sp), Some(last)) => sp.max_dt_growth * last,
             _ => f64::INFINITY,
         };

@@ -84,7 +84,8 @@ pub struct SemiImplicit {
     /// (`cfl / max Σ_d (|u_d| + factor c)/h_d`); `0` (default) limits the
     /// step by advection only, `1` makes `cfl` an acoustic Courant number.
     pub sound_speed_factor: f64,
-    /// Largest ratio of a time step to the previous one, `≥ 1`.
+    /// Largest ratio of a time step to the previous one, `≥ 1`; a run's
+    /// first step is acoustic ([`super::timestep::first_step_factor`]).
     pub max_dt_growth: f64,
     /// Convective predictor `β ∈ [0, 1]`: the cell velocities entering the
     /// face velocities of Guilkey Eq. 28 are `uⁿ + β Δt aⁿ⁻¹`, with

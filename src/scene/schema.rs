@@ -1325,7 +1325,8 @@ pub struct PressureSolveSpec {
     /// Factor on the sound speed in the timestep (0: advection only).
     #[serde(default)]
     pub sound_speed_factor: f64,
-    /// Largest growth of the timestep from one step to the next (≥ 1).
+    /// Largest growth of the timestep from one step to the next (≥ 1); a
+    /// run's first step is acoustic (`sound_speed_factor` at least 1).
     #[serde(default = "default_dt_growth")]
     pub max_dt_growth: f64,
     /// Convective predictor `β ∈ [0, 1]` of the face velocities
