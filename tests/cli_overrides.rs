@@ -249,15 +249,32 @@ fn the_summary_carries_its_provenance() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `output.vtk_compression = "zlib"` writes zlib VTK files (smaller, the
-/// compressor named) at any level, and a bad value or level is refused
-/// naming the key and the allowed values.
+/// `output.vtk_compression = "zlib"` (the default) writes zlib VTK files
+/// (smaller than `"none"`'s raw ones, the compressor named) at any level,
+/// and a bad value or level is refused naming the key and the allowed
+/// values.
 #[test]
 fn vtk_compression_keys_reach_the_writer() {
     let size = |dir: &Path, f: &str| std::fs::metadata(dir.join(f)).unwrap().len();
     let raw = tmp("vtk-raw");
-    let (ok, _, err) = run_sod(&raw, &["--set", "grid.cells=[400]"]);
+    let (ok, _, err) = run_sod(
+        &raw,
+        &[
+            "--set",
+            "grid.cells=[400]",
+            "--set",
+            "output.vtk_compression=none",
+        ],
+    );
     assert!(ok, "{err}");
+    let default = tmp("vtk-default");
+    let (ok, _, err) = run_sod(&default, &["--set", "grid.cells=[400]"]);
+    assert!(ok, "{err}");
+    let f = "cells_0004.vti";
+    let text = String::from_utf8_lossy(&std::fs::read(default.join(f)).unwrap()).into_owned();
+    assert!(text.contains("compressor=\"vtkZLibDataCompressor\""));
+    assert!(size(&default, f) < size(&raw, f));
+    let _ = std::fs::remove_dir_all(&default);
     for level in ["1", "9"] {
         let z = tmp(&format!("vtk-zlib{level}"));
         let set = format!("output.vtk_compression_level={level}");
@@ -288,7 +305,10 @@ fn vtk_compression_keys_reach_the_writer() {
             "`output.vtk_compression`: unknown variant `gzip`, expected `none` or `zlib`",
         ),
         (
-            vec!["output.vtk_compression_level=3"],
+            vec![
+                "output.vtk_compression=none",
+                "output.vtk_compression_level=3",
+            ],
             "`output.vtk_compression_level`: only with output.vtk_compression = \"zlib\"",
         ),
         (

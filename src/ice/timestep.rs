@@ -103,7 +103,7 @@ fn viscous_rate<const D: usize>(state: &IceState<D>, mu: &[f64]) -> f64 {
 /// `dt_max` allowed (the whole output interval) and kept what survived the
 /// halvings of failed pressure iterations; from the acoustic step the run
 /// grows by `max_dt_growth` a step (at 1.2, 100× in 26 steps).
-pub(crate) fn first_step_factor(sp: &super::SemiImplicit, last_dt: Option<f64>) -> f64 {
+pub fn first_step_factor(sp: &super::SemiImplicit, last_dt: Option<f64>) -> f64 {
     if last_dt.is_none() {
         sp.sound_speed_factor.max(1.0)
     } else {

@@ -1575,7 +1575,8 @@ pub struct OutputSpec {
     /// all).
     #[serde(default = "default_checkpoint_keep")]
     pub checkpoint_keep: usize,
-    /// How VTK files store their arrays: raw (default) or zlib-compressed.
+    /// How VTK files store their arrays: zlib-compressed (default, level 1)
+    /// or raw.
     #[serde(default)]
     pub vtk_compression: VtkCompression,
     /// zlib level, 1 (fastest, the default) to 9 (smallest); only with
@@ -1588,10 +1589,11 @@ pub struct OutputSpec {
 #[serde(rename_all = "snake_case")]
 pub enum VtkCompression {
     /// Raw little-endian values.
-    #[default]
     None,
     /// zlib blocks (`vtkZLibDataCompressor`), which ParaView, VTK and meshio
-    /// read.
+    /// read: 3–15× smaller files than raw at level 1 for up to twice the
+    /// (small) output time, so the default.
+    #[default]
     Zlib,
 }
 
@@ -1621,7 +1623,7 @@ impl Default for OutputSpec {
             history_interval: None,
             checkpoint_interval: None,
             checkpoint_keep: default_checkpoint_keep(),
-            vtk_compression: VtkCompression::None,
+            vtk_compression: VtkCompression::default(),
             vtk_compression_level: None,
         }
     }
