@@ -306,7 +306,8 @@ fn claim_out_dir(dir: &std::path::Path, force: bool) -> anyhow::Result<()> {
     for e in entries {
         let name = e.file_name().to_string_lossy().to_string();
         let path = e.path();
-        let ours_dir = name == "checkpoints" || name.starts_with("series_");
+        let ours_dir =
+            name == "checkpoints" || name.starts_with("series_") || name.ends_with("_npy");
         let ours_file = name == "history.csv"
             || name == "summary.json"
             || [".pvd", ".vtu", ".vti", ".vtp", ".csv", ".json", ".png"]

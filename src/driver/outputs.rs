@@ -6,6 +6,7 @@
 //! file rewritten at each snapshot, checkpoint and at the end, so a run
 //! killed at any moment leaves only complete files.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -139,6 +140,10 @@ impl Outputs {
                 let path = self.dir.join(format!("{}_{k:04}.csv", set.name));
                 write_csv(&path, set, self.dim).map_err(|e| Error::io(&path, e))?;
             }
+            if self.formats.contains(&Format::Npy) {
+                let path = self.dir.join(format!("{}_{k:04}_npy", set.name));
+                write_npy(&path, set, t, self.dim).map_err(|e| Error::io(&path, e))?;
+            }
         }
         self.times.push(t);
         self.output_s += start.elapsed().as_secs_f64();
@@ -240,6 +245,139 @@ fn write_vtk(path: &Path, set: &FieldSet<'_>, z: Compression) -> std::io::Result
             }
         }
     }
+}
+
+/// Values per tuple of `v` (1, 3 or 9) and their number.
+fn tuples(v: &Values<'_>) -> (usize, usize) {
+    match v {
+        Values::Scalar(x) => (1, x.len()),
+        Values::Vector(x) => (3, x.len()),
+        Values::Tensor(x) => (9, x.len()),
+        Values::Computed(c) => (c.components, c.n),
+    }
+}
+
+/// Writes `v` as `folder/file` (`.npy`, `<f8`) of shape `lead` followed by
+/// `()`, `(3,)` or `(3, 3)` for scalars, vectors and tensors; returns the
+/// shape.
+fn write_npy_values(
+    folder: &Path,
+    file: &str,
+    lead: &[usize],
+    v: &Values<'_>,
+) -> std::io::Result<Vec<usize>> {
+    let (c, _) = tuples(v);
+    let mut shape = lead.to_vec();
+    match c {
+        3 => shape.push(3),
+        9 => shape.extend([3, 3]),
+        _ => {}
+    }
+    crate::output::atomic_write(&folder.join(file), |w| {
+        let mut a = crate::output::npy::begin::<f64, _>(w, "<f8", &shape)?;
+        match v {
+            Values::Scalar(x) => a.extend(x.iter().copied())?,
+            Values::Vector(x) => a.extend(x.iter().flatten().copied())?,
+            Values::Tensor(x) => a.extend(x.iter().flatten().copied())?,
+            Values::Computed(f) => {
+                let mut buf = [0.0; 9];
+                for i in 0..f.n {
+                    (f.f)(i, &mut buf[..f.components]);
+                    a.extend(buf[..f.components].iter().copied())?;
+                }
+            }
+        }
+        a.finish()
+    })?;
+    Ok(shape)
+}
+
+/// A field's file name: its name with anything but letters, digits, `-`
+/// and `_` replaced by `_`, and `.npy`.
+fn npy_file(name: &str) -> String {
+    let stem: String = name
+        .chars()
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() || ch == '-' || ch == '_' {
+                ch
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{stem}.npy")
+}
+
+/// Writes `set` at time `t` as the folder `folder`: one `.npy` per field,
+/// the geometry (`points.npy` of particles, `points.npy` and `quads.npy`
+/// of a mesh; a grid's origin, spacing and cells in the metadata, its
+/// fields shaped `(n_z, n_y, n_x, …)` over the run's `dim` axes) and
+/// `meta.json`.
+fn write_npy(folder: &Path, set: &FieldSet<'_>, t: f64, dim: usize) -> std::io::Result<()> {
+    std::fs::create_dir_all(folder)?;
+    let mut meta = serde_json::Map::new();
+    meta.insert("set".into(), set.name.into());
+    meta.insert("time".into(), t.into());
+    let lead: Vec<usize> = match &set.geometry {
+        Geometry::Points(x) => {
+            let (_, n) = tuples(x);
+            write_npy_values(folder, "points.npy", &[n], x)?;
+            meta.insert("geometry".into(), "points".into());
+            vec![n]
+        }
+        Geometry::Quads {
+            points,
+            quads,
+            on_cells,
+            ..
+        } => {
+            write_npy_values(
+                folder,
+                "points.npy",
+                &[points.len()],
+                &Values::Vector(points.clone()),
+            )?;
+            crate::output::atomic_write(&folder.join("quads.npy"), |w| {
+                let mut a = crate::output::npy::begin::<u64, _>(w, "<u8", &[quads.len(), 4])?;
+                a.extend(quads.iter().flatten().map(|&q| u64::from(q)))?;
+                a.finish()
+            })?;
+            meta.insert("geometry".into(), "quads".into());
+            meta.insert("on_cells".into(), (*on_cells).into());
+            vec![if *on_cells { quads.len() } else { points.len() }]
+        }
+        Geometry::Image {
+            origin,
+            spacing,
+            cells,
+            on_cells,
+            ..
+        } => {
+            meta.insert("geometry".into(), "image".into());
+            meta.insert("origin".into(), serde_json::json!(&origin[..dim]));
+            meta.insert("spacing".into(), serde_json::json!(&spacing[..dim]));
+            meta.insert("cells".into(), serde_json::json!(&cells[..dim]));
+            meta.insert("on_cells".into(), (*on_cells).into());
+            let n = |d: usize| cells[d] + usize::from(!*on_cells);
+            (0..dim).rev().map(n).collect()
+        }
+    };
+    let mut fields = Vec::new();
+    for f in &set.fields {
+        let file = npy_file(&f.name);
+        let shape = write_npy_values(folder, &file, &lead, &f.values)?;
+        fields.push(serde_json::json!({
+            "name": f.name,
+            "unit": f.unit,
+            "file": file,
+            "shape": shape,
+        }));
+    }
+    meta.insert("fields".into(), fields.into());
+    crate::output::atomic_write(&folder.join("meta.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &meta).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })
 }
 
 /// Components of a symmetric tensor written to CSV in `dim` dimensions.

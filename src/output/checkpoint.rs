@@ -31,7 +31,6 @@ use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use npyz::WriterBuilder;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
@@ -960,30 +959,16 @@ fn read_array(dir: &Path, entry: &ArrayEntry) -> Result<ArrayData, CheckpointErr
 
 /// Encodes `data` of `shape` as a complete `.npy` file in memory.
 fn encode_npy(shape: &[usize], data: &ArrayData) -> io::Result<Vec<u8>> {
-    let shape: Vec<u64> = shape.iter().map(|&d| d as u64).collect();
-    let dtype = npyz::DType::Plain(
-        data.dtype()
-            .npy_descr()
-            .parse()
-            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?,
-    );
+    let descr = data.dtype().npy_descr();
     let mut out = Vec::with_capacity(128 + 8 * data.len());
     match data {
         ArrayData::F64(v) => {
-            let mut w = npyz::WriteOptions::<f64>::new()
-                .dtype(dtype)
-                .shape(&shape)
-                .writer(&mut out)
-                .begin_nd()?;
+            let mut w = super::npy::begin::<f64, _>(&mut out, descr, shape)?;
             w.extend(v.iter().copied())?;
             w.finish()?;
         }
         ArrayData::U64(v) => {
-            let mut w = npyz::WriteOptions::<u64>::new()
-                .dtype(dtype)
-                .shape(&shape)
-                .writer(&mut out)
-                .begin_nd()?;
+            let mut w = super::npy::begin::<u64, _>(&mut out, descr, shape)?;
             w.extend(v.iter().copied())?;
             w.finish()?;
         }

@@ -1,6 +1,7 @@
 //! Output writers: ParaView VTK XML files ([`vtk`]), plain CSV tables and
 //! histories ([`csv`]), checkpoint folders ([`checkpoint`]: a manifest and
-//! `.npy` arrays), and the [`atomic_write`] helper they share.
+//! `.npy` arrays), NumPy arrays ([`npy`], also a snapshot format), and the
+//! [`atomic_write`] helper they share.
 //!
 //! Every whole-file output is written through [`atomic_write`], so a crash or
 //! an interrupted run never leaves a half-written file behind: readers see
@@ -11,6 +12,7 @@
 
 pub mod checkpoint;
 pub mod csv;
+pub mod npy;
 pub mod vtk;
 
 use std::fs::{self, File};

@@ -1157,6 +1157,10 @@ pub enum Format {
     Vtk,
     /// CSV snapshots of particle fields.
     Csv,
+    /// NumPy arrays: one folder `NAME_NNNN_npy/` per snapshot and field set,
+    /// a `.npy` file per field (and the points or mesh) and `meta.json`
+    /// (time, geometry, each field's unit and shape).
+    Npy,
 }
 
 /// Which ICE discretisation variant.
