@@ -7,12 +7,24 @@ use std::path::Path;
 use mpmice::driver::{run_scene, RunOptions};
 use mpmice::scene::{self, Override};
 
-fn run(case: &str, set: &[&str], dir: &Path) {
+/// Runs `case` with `set` and NumPy and CSV snapshots into a temporary
+/// folder; returns it, snapshot folder `snap`'s path and its metadata.
+fn run(
+    case: &str,
+    set: &[&str],
+    snap: &str,
+) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let text =
         std::fs::read_to_string(format!("{}/cases/{case}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let o: Vec<Override> = set.iter().map(|a| Override::parse(a).unwrap()).collect();
+    let mut o: Vec<Override> = set.iter().map(|a| Override::parse(a).unwrap()).collect();
+    o.push(Override::parse(r#"output.formats=["npy", "csv"]"#).unwrap());
     let s = scene::parse_with(&text, &o).unwrap();
-    run_scene(&s, &RunOptions::quiet(dir, 1)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    run_scene(&s, &RunOptions::quiet(dir.path(), 1)).unwrap();
+    let snap = dir.path().join(snap);
+    let meta =
+        serde_json::from_str(&std::fs::read_to_string(snap.join("meta.json")).unwrap()).unwrap();
+    (dir, snap, meta)
 }
 
 /// A `.npy` file's shape and values (read with `npyz`, as NumPy would).
@@ -57,20 +69,15 @@ fn column(header: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
 /// grid's node fields are shaped (n_y, n_x).
 #[test]
 fn particle_arrays_are_the_csv_values() {
-    let dir = tempfile::tempdir().unwrap();
-    run(
+    let (dir, snap, meta) = run(
         "two_disks.toml",
         &[
             "grid.cells=[16, 16]",
             "time.end=0.5",
             "output.interval=0.25",
-            r#"output.formats=["npy", "csv"]"#,
         ],
-        dir.path(),
+        "particles_0001_npy",
     );
-    let snap = dir.path().join("particles_0001_npy");
-    let meta: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(snap.join("meta.json")).unwrap()).unwrap();
     assert_eq!(meta["geometry"], "points");
     assert!(
         (meta["time"].as_f64().unwrap() - 0.25).abs() < 1e-12,
@@ -112,19 +119,11 @@ fn particle_arrays_are_the_csv_values() {
 /// columns; the metadata gives the grid.
 #[test]
 fn cell_arrays_are_the_csv_values() {
-    let dir = tempfile::tempdir().unwrap();
-    run(
+    let (dir, snap, meta) = run(
         "sod.toml",
-        &[
-            "grid.cells=[100]",
-            "output.interval=0.1",
-            r#"output.formats=["npy", "csv"]"#,
-        ],
-        dir.path(),
+        &["grid.cells=[100]", "output.interval=0.1"],
+        "cells_0002_npy",
     );
-    let snap = dir.path().join("cells_0002_npy");
-    let meta: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(snap.join("meta.json")).unwrap()).unwrap();
     assert_eq!(meta["geometry"], "image");
     assert_eq!(meta["cells"], serde_json::json!([100]));
     assert_eq!(meta["on_cells"], true);
