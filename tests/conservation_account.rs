@@ -10,11 +10,7 @@ use mpmice::scene::{self, Override};
 fn run(case: &str, set: &[&str]) -> mpmice::driver::Summary {
     let text =
         std::fs::read_to_string(format!("{}/cases/{case}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let o: Vec<Override> = set.iter().map(|a| Override::parse(a).unwrap()).collect();
-    let s = scene::parse_with(&text, &o).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let opts = RunOptions::quiet(dir.path(), 1);
-    run_scene(&s, &opts).unwrap()
+    run_text(&text, set)
 }
 
 /// Sod to t = 0.2: no wave reaches the ends (the rarefaction head is at
