@@ -256,8 +256,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 if g.iter().any(|&x| x != 0.0) {
                     writeln!(
                         std::io::stdout(),
-                        "body force impulse: ({:.4e}, {:.4e}, {:.4e}) (the momentum drift is net of it)",
-                        g[0], g[1], g[2]
+                        "body force impulse: ({:.4e}, {:.4e}, {:.4e}), work {:.4e} outside the potential energy (the drifts are net of them)",
+                        g[0], g[1], g[2], b.body_work
                     )?;
                 }
             }

@@ -75,7 +75,8 @@ fn what_flows_in_is_accounted_for() {
 /// Gravity on a gas (Guilkey Eq. 33's Δt M g): Sod under g = −3 along the
 /// tube. Its impulse is reported beside the boundary's, and net of both the
 /// momentum drift stays at round-off (before, the impulse −3 M t ≈ −0.34
-/// counted as drift; measured 2.4e-15 now). The boundary faces' pressures
+/// counted as drift; measured 3.0e-15 now), and so is its work (energy
+/// drift −1.0e-14 net of it). The boundary faces' pressures
 /// change with time, and 9 % of the gas leaves through the lower end, so
 /// the impulse (−0.327) lies between −3 M₀ t (−0.3375) and −3 M_end t
 /// (−0.306).
@@ -95,6 +96,10 @@ fn gravity_on_a_gas_is_accounted_for() {
     assert!(lo < b.body_momentum[0] && b.body_momentum[0] < hi, "{b:?}");
     assert!(s.momentum_drift.abs() < 1e-13, "{}", s.momentum_drift);
     assert!(s.mass_drift.abs() < 1e-13, "{}", s.mass_drift);
+    // Gravity's work on the gas is reported apart too (ICE keeps no
+    // potential energy); net of it the energy is conserved.
+    assert!(b.body_work.abs() > 1e-3, "{b:?}");
+    assert!(s.energy_drift.abs() < 1e-13, "{}", s.energy_drift);
 }
 
 /// Runs a scene given as text.

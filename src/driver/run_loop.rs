@@ -261,7 +261,7 @@ impl LoopState {
         let b = x.unwrap_or_default();
         ck.put_f64(
             "loop.exchange",
-            vec![9],
+            vec![10],
             vec![
                 if x.is_some() { 1.0 } else { 0.0 },
                 b.mass,
@@ -272,6 +272,7 @@ impl LoopState {
                 b.body_momentum[0],
                 b.body_momentum[1],
                 b.body_momentum[2],
+                b.body_work,
             ],
         );
     }
@@ -282,20 +283,21 @@ impl LoopState {
         let s = ck.take_f64("loop.scalars", Some(&[11]))?;
         let c = ck.take_u64("loop.counters", Some(&[4]))?;
         let m = ck.take_f64("loop.initial_materials", Some(&[names.len(), 6]))?;
-        // Checkpoints before the body-force column hold 6 entries.
+        // Checkpoints before the body-force columns hold 6 entries.
         let mut x = ck.take_f64("loop.exchange", None)?;
-        if x.len() != 6 && x.len() != 9 {
+        if x.len() != 6 && x.len() != 10 {
             return Err(CheckpointError::Malformed {
                 what: "array loop.exchange".into(),
-                reason: format!("{} entries, expected 6 or 9", x.len()),
+                reason: format!("{} entries, expected 6 or 10", x.len()),
             });
         }
-        x.resize(9, 0.0);
+        x.resize(10, 0.0);
         let exchange = (x[0] != 0.0).then_some(BoundaryExchange {
             mass: x[1],
             momentum: [x[2], x[3], x[4]],
             energy: x[5],
             body_momentum: [x[6], x[7], x[8]],
+            body_work: x[9],
         });
         let materials = names
             .iter()
@@ -955,7 +957,7 @@ fn summarise<M: Model>(
         } else {
             dp
         },
-        energy_drift: (e1.total() - b.energy - e0.total()) / e_scale,
+        energy_drift: (e1.total() - b.energy - b.body_work - e0.total()) / e_scale,
         boundary_exchange: ls.exchange,
         initial_energy: e0,
         final_energy: e1,

@@ -46,6 +46,7 @@ pub fn stage_advect<const D: usize>(
         dt,
         &mut ws.exchange,
     );
+    super::boundary_exchange::add_gravity(state, params, &ws.vel_l, dt, &mut ws.exchange);
     // Step 12: advection with compatible fluxes.
     for r in 0..nm {
         if params.frame(r) != Frame::Eulerian {

@@ -13,7 +13,8 @@
 //! ([`super::EnergyForm::Conservative`]) at the boundary faces and the
 //! advected internal and kinetic energy; in the non-conservative form the
 //! kinetic energy through a face is `|F_mu|² / (2 F_M)` from the mass and
-//! momentum fluxes. Viscous boundary stresses and gravity are not in it.
+//! momentum fluxes. Gravity's impulse and work are added apart
+//! ([`add_gravity`]); viscous boundary stresses are not in it.
 
 use nalgebra::SVector;
 
@@ -32,9 +33,12 @@ pub struct BoundaryExchange {
     pub momentum: [f64; 3],
     /// Energy in (internal + kinetic + pressure work).
     pub energy: f64,
-    /// Momentum added by the body force (gravity), `∫ Σ m b dt`; its work
-    /// is in the potential energy.
+    /// Momentum added by the body force (gravity), `∫ Σ m b dt`.
     pub body_momentum: [f64; 3],
+    /// Energy the body force added where the model keeps no potential
+    /// energy (ICE: gravity's work `Δt M g·ū`, ū the Lagrangian step's mean
+    /// velocity); 0 where its work is in the potential energy (MPM).
+    pub body_work: f64,
 }
 
 impl BoundaryExchange {
@@ -46,6 +50,7 @@ impl BoundaryExchange {
             self.body_momentum[d] += o.body_momentum[d];
         }
         self.energy += o.energy;
+        self.body_work += o.body_work;
     }
 }
 
@@ -107,4 +112,37 @@ pub(super) fn add_pressure<const D: usize>(
         acc.momentum[d] += s * pstar[d][f] * area * dt;
         acc.energy += s * pstar[d][f] * mix_vflux[d][f] * vol;
     }
+}
+
+/// Adds gravity's impulse `Δt Σ M g` and work `Δt Σ M g·(u + u_L)/2` on
+/// the Eulerian materials (Guilkey Eq. 33's `Δt M g`), from the cells'
+/// masses and velocities at the step's start and their Lagrangian
+/// velocities `vel_l` (the exchange conserves each cell's momentum, so the
+/// sum over materials is the one before it); particle-borne materials take
+/// gravity on the nodes.
+pub(super) fn add_gravity<const D: usize>(
+    state: &super::IceState<D>,
+    params: &super::IceParams<D>,
+    vel_l: &[Vec<SVector<f64, D>>],
+    dt: f64,
+    acc: &mut BoundaryExchange,
+) {
+    let g = params.gravity;
+    if g.iter().all(|&x| x == 0.0) {
+        return;
+    }
+    let (mut mass, mut mom) = (0.0, SVector::<f64, D>::zeros());
+    for (r, mc) in state.cells.iter().enumerate() {
+        if params.frame(r) != super::Frame::Eulerian {
+            continue;
+        }
+        for &c in &state.layout.interior {
+            mass += mc.mass[c];
+            mom += (mc.velocity[c] + vel_l[r][c]) * (0.5 * mc.mass[c]);
+        }
+    }
+    for d in 0..D {
+        acc.body_momentum[d] += g[d] * mass * dt;
+    }
+    acc.body_work += g.dot(&mom) * dt;
 }

@@ -180,6 +180,49 @@ fn periodic_box_conserves_mass_momentum_energy() {
     assert!(rel(e1, e0) < 1e-13, "energy {e0} -> {e1}");
 }
 
+/// A uniform gas falling freely in a periodic box keeps its density,
+/// pressure and temperature, and its velocity grows by `g t` (Guilkey
+/// Eq. 33's `Δt M g`); gravity's work goes to the kinetic energy. In the
+/// conservative energy form the internal energy used to pay for it: T fell
+/// by `|g|² t²/(2 c_v)` (0.8 of its start in the `gravity = [-10]` box of
+/// issue 23's note, at t = 0.1).
+#[test]
+fn a_gas_falling_freely_keeps_its_state() {
+    let u0 = SVector::<f64, 2>::new(0.3, -0.2);
+    let g = SVector::<f64, 2>::new(0.5, -10.0);
+    for energy in [EnergyForm::Conservative, EnergyForm::FlowWork] {
+        let st = IceState::new(unit_square(8), vec![gas(1.4)], |_| {
+            vec![MaterialInit::new(1.0, 1.0, 1.0, u0)]
+        })
+        .unwrap();
+        let t0 = st.cells[0].temperature[st.layout.interior[0]];
+        let mut params = IceParams::new([
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+            [IceBoundary::Periodic, IceBoundary::Periodic],
+        ]);
+        params.gravity = g;
+        params.energy = energy;
+        let run = run_fluid(st, &params, 0.1, 10_000).unwrap();
+        let s = &run.state;
+        let u = u0 + g * s.time;
+        let vol = s.layout.cell_volume();
+        for &c in &s.layout.interior {
+            let mc = &s.cells[0];
+            assert!(
+                rel(mc.temperature[c], t0) < 1e-12,
+                "{energy:?}: T {}",
+                mc.temperature[c]
+            );
+            assert!(rel(mc.mass[c] / vol, 1.0) < 1e-12, "{energy:?}: rho");
+            assert!(
+                (mc.velocity[c] - u).norm() < 1e-12 * u.norm(),
+                "{energy:?}: u {}",
+                mc.velocity[c]
+            );
+        }
+    }
+}
+
 #[test]
 fn closed_wall_box_conserves_mass_and_energy() {
     // Sod between walls, run past the reflections of both waves.

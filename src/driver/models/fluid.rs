@@ -2,13 +2,13 @@
 //! run loop.
 
 use crate::driver::model::{
-    pad3, Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
+    Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
 };
 use crate::driver::models::arrays::{
     cell_energies, cell_fields, cell_material_totals, cell_watchdog, load_cells, save_cells,
 };
 use crate::error::Error;
-use crate::ice::{self, BoundaryExchange, IceParams, IceState, IceWorkspace};
+use crate::ice::{self, IceParams, IceState, IceWorkspace};
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 
 /// A fluid-only ICE run: the state, its parameters and its workspace.
@@ -121,23 +121,6 @@ impl<const D: usize> Model for Fluid<D> {
     }
 
     fn step(&mut self, dt: DtRequest) -> Result<StepStats, Error> {
-        // Gravity's impulse Δt M g (Guilkey Eq. 33's Δt M g, summed over
-        // the materials and cells at the step's start).
-        let g = self.params.gravity;
-        let mass = if g.iter().any(|&x| x != 0.0) {
-            let s = &self.state;
-            (0..s.num_materials())
-                .map(|r| {
-                    s.layout
-                        .interior
-                        .iter()
-                        .map(|&c| s.cells[r].mass[c])
-                        .sum::<f64>()
-                })
-                .sum()
-        } else {
-            0.0
-        };
         let info = if dt.exact {
             ice::step_with_dt(&mut self.state, &self.params, &mut self.ws, dt.value)?
         } else {
@@ -148,10 +131,7 @@ impl<const D: usize> Model for Fluid<D> {
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
             retries: 0,
-            boundary: Some(BoundaryExchange {
-                body_momentum: pad3(&(g * (mass * info.dt))),
-                ..self.ws.boundary_exchange()
-            }),
+            boundary: Some(self.ws.boundary_exchange()),
         })
     }
 
