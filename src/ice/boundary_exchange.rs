@@ -14,7 +14,7 @@
 //! advected internal and kinetic energy; in the non-conservative form the
 //! kinetic energy through a face is `|F_mu|² / (2 F_M)` from the mass and
 //! momentum fluxes. Gravity's impulse and work are added apart
-//! ([`add_gravity`]); viscous boundary stresses are not in it.
+//! (`add_gravity`); viscous boundary stresses are not in it.
 
 use nalgebra::SVector;
 
