@@ -331,12 +331,8 @@ fn write_npy(folder: &Path, set: &FieldSet<'_>, t: f64, dim: usize) -> std::io::
             on_cells,
             ..
         } => {
-            write_npy_values(
-                folder,
-                "points.npy",
-                &[points.len()],
-                &Values::Vector(points.clone()),
-            )?;
+            let xyz = Values::computed(points.len(), 3, |i, o| o.copy_from_slice(&points[i]));
+            write_npy_values(folder, "points.npy", &[points.len()], &xyz)?;
             crate::output::atomic_write(&folder.join("quads.npy"), |w| {
                 let mut a = crate::output::npy::begin::<u64, _>(w, "<u8", &[quads.len(), 4])?;
                 a.extend(quads.iter().flatten().map(|&q| u64::from(q)))?;

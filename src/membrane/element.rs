@@ -654,11 +654,7 @@ impl MembraneMesh {
 
     /// Σ ½ m |v|² (with v at the half step).
     pub fn kinetic_energy(&self) -> f64 {
-        self.mass
-            .iter()
-            .zip(&self.v)
-            .map(|(m, v)| 0.5 * m * v.norm_squared())
-            .sum()
+        crate::mpm::particles::kinetic_energy(&self.mass, &self.v)
     }
 
     /// Stored (strain) energy Σ_e U_e, measured from the initial state.

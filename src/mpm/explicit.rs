@@ -144,11 +144,7 @@ impl<const D: usize> GridState<D> {
     /// see (the null space of the grid-to-particle map); their own kinetic
     /// energy counts those, this does not.
     pub fn kinetic_energy(&self) -> f64 {
-        self.mass
-            .iter()
-            .zip(&self.velocity_new)
-            .map(|(m, v)| 0.5 * m * v.norm_squared())
-            .sum()
+        super::particles::kinetic_energy(&self.mass, &self.velocity_new)
     }
 }
 

@@ -304,11 +304,7 @@ impl<const D: usize> Particles<D> {
 
     /// Kinetic energy Σ ½ m_p |v_p|².
     pub fn kinetic_energy(&self) -> f64 {
-        self.mass
-            .iter()
-            .zip(&self.v)
-            .map(|(m, v)| 0.5 * m * v.norm_squared())
-            .sum()
+        kinetic_energy(&self.mass, &self.v)
     }
 
     /// Strain energy Σ V_p⁰ W(F_p).
@@ -374,6 +370,15 @@ impl<const D: usize> ParticleArray for Tensors<D> {
         }
         v.truncate(kept * s);
     }
+}
+
+/// Σ ½ m |v|² of lumped masses and their velocities (particles, grid nodes,
+/// membrane nodes), summed in order.
+pub fn kinetic_energy<const D: usize>(mass: &[f64], v: &[SVector<f64, D>]) -> f64 {
+    mass.iter()
+        .zip(v)
+        .map(|(m, v)| 0.5 * m * v.norm_squared())
+        .sum()
 }
 
 #[cfg(test)]

@@ -214,16 +214,12 @@ fn body_impulse<const D: usize>(
     partial.par_iter_mut().enumerate().for_each(|(b, out)| {
         let range = b * BODY_BLOCK..((b + 1) * BODY_BLOCK).min(p.len());
         *out = match uniform {
-            // Gravity: M g, from the masses alone.
-            Some(_) => SVector::from_element(p.mass[range].iter().sum()),
+            // Gravity: g Σ m, from the masses alone.
+            Some(g) => g * p.mass[range].iter().sum::<f64>(),
             None => range.fold(SVector::zeros(), |acc, i| {
                 acc + body.accel(&p.x0[i], &p.x[i], t) * p.mass[i]
             }),
         };
     });
-    let sum = partial.iter().sum::<SVector<f64, D>>();
-    match uniform {
-        Some(g) => g * (sum[0] * dt),
-        None => sum * dt,
-    }
+    partial.iter().sum::<SVector<f64, D>>() * dt
 }
