@@ -30,25 +30,38 @@ material = "steel"
 geometry = { type = "box", lower = [0.5], upper = [1.5] }
 "#;
 
+/// What [`drive_uniaxial`] measured.
+struct Uniaxial {
+    worst: f64,
+    peak: f64,
+    eps: f64,
+    eps_y: f64,
+    reverse: f64,
+    ebar_max: f64,
+    final_ebar: f64,
+}
+
 /// A bar so heavy that its particles keep their velocities (ρ = 1e20: the
 /// release waves from its free ends move at 5e-5 m/s) is given the linear
-/// velocity field v = ε̇ (x − 1), stretched to 7 yield strains and then
-/// reversed to compression past reverse yield. The centre point's stress
-/// must follow the closed-form uniaxial-strain path of the strain its
-/// updates accumulated, ε = Σ Δt L (read back from its F, which each step
-/// multiplies by 1 + Δt L):
+/// velocity field v = ε̇ (x − 1) for 140 steps of 1e-4 s, then the reverse
+/// field for 120 more (compression past reverse yield). The centre point's
+/// stress must follow the closed-form uniaxial-strain path of its strain:
 /// elastic to ε_y = σ₀/2μ, then q = σ₀ + H ε̄ with ε̄ = 2μ(ε − ε_y)/(3μ + H),
 /// σ₁₁ = Kε + 2q/3, σ₂₂ = Kε − q/3; elastic unloading, reverse yield at
 /// −(σ₀ + H ε̄_max). The plastic strain is the particles' output.
-#[test]
-fn homogeneous_uniaxial_strain_follows_the_closed_form() {
-    let scene = parse(SCENE).expect("scene parses");
+///
+/// Hypo-elastic (`log = false`): ε = Σ Δt L, the strain its updates
+/// accumulated (read back from its F, which each step multiplies by
+/// 1 + Δt L), and the stress is σ. Hencky (`log = true`): ε = ln F, the
+/// logarithmic strain, and the closed form holds for the Kirchhoff stress
+/// τ = J σ at any strain.
+fn drive_uniaxial(scene: &str, rate: f64, log: bool) -> Uniaxial {
+    let scene = parse(scene).expect("scene parses");
     let mut run = build_solid_run::<1>(&scene).expect("run builds");
     let (e, nu, sy, h) = (200e9, 0.3, 300e6, 2e9);
     let mu = e / (2.0 * (1.0 + nu));
     let k = e / (3.0 * (1.0 - 2.0 * nu));
     let eps_y = sy / (2.0 * mu);
-    let rate = 1.0;
     let n = run.particles.len();
     let set_field = |run: &mut mpmice::stepper::SolidRun<1>, a: f64| {
         for p in 0..n {
@@ -78,10 +91,15 @@ fn homogeneous_uniaxial_strain_follows_the_closed_form() {
             q_max = sy + h * ebar_max;
             reverse = peak - q_max / mu;
         }
-        // The strain increment the point's update saw: F ← (1 + Δt L) F.
         let f_old = run.particles.f.get(mid)[(0, 0)];
         run.step_dt(1e-4).expect("step");
-        eps += run.particles.f.get(mid)[(0, 0)] / f_old - 1.0;
+        let f_new = run.particles.f.get(mid)[(0, 0)];
+        eps = if log {
+            f_new.ln()
+        } else {
+            // The strain increment the point's update saw: F ← (1 + Δt L) F.
+            eps + f_new / f_old - 1.0
+        };
         let (q, eb) = if loading {
             if eps <= eps_y {
                 (2.0 * mu * eps, 0.0)
@@ -95,28 +113,62 @@ fn homogeneous_uniaxial_strain_follows_the_closed_form() {
             let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
             (-(sy + h * eb), eb)
         };
-        let s = run.particles.stress.get(mid);
+        let j = if log { f_new } else { 1.0 };
+        let s = run.particles.stress.get(mid) * j;
         let err = ((s[(0, 0)] - (k * eps + 2.0 * q / 3.0)).abs()
             + (s[(1, 1)] - (k * eps - q / 3.0)).abs())
             / sy
             + (run.particles.plastic_strain[mid] - eb).abs() / eps_y;
         worst = worst.max(err);
     }
-    let final_ebar = run.particles.plastic_strain[mid];
+    Uniaxial {
+        worst,
+        peak,
+        eps,
+        eps_y,
+        reverse,
+        ebar_max,
+        final_ebar: run.particles.plastic_strain[mid],
+    }
+}
+
+fn assert_uniaxial(u: &Uniaxial, what: &str, bound: f64) {
     println!(
-        "uniaxial strain in MPM: peak ε {peak:.4e} ({:.1} ε_y), final ε {eps:.4e}, ε̄ {final_ebar:.4e}, \
-         worst relative error {worst:.2e}",
-        peak / eps_y
+        "{what}: peak ε {:.4e} ({:.1} ε_y), final ε {:.4e}, ε̄ {:.4e}, worst relative error \
+         {:.2e}",
+        u.peak,
+        u.peak / u.eps_y,
+        u.eps,
+        u.final_ebar,
+        u.worst
     );
     assert!(
-        peak > 6.0 * eps_y && eps < reverse,
-        "the path must yield both ways"
+        u.peak > 6.0 * u.eps_y && u.eps < u.reverse,
+        "{what}: the path must yield both ways"
     );
     assert!(
-        final_ebar > 1.5 * ebar_max,
-        "reverse plastic flow: {final_ebar}"
+        u.final_ebar > 1.5 * u.ebar_max,
+        "{what}: reverse plastic flow: {}",
+        u.final_ebar
     );
-    assert!(worst < 1e-11, "{worst:e}");
+    assert!(u.worst < bound, "{what}: {:e}", u.worst);
+}
+
+#[test]
+fn homogeneous_uniaxial_strain_follows_the_closed_form() {
+    let u = drive_uniaxial(SCENE, 1.0, false);
+    assert_uniaxial(&u, "uniaxial strain in MPM, hypo-elastic", 1e-11);
+}
+
+/// The multiplicative (Hencky) model through the explicit MPM step, at
+/// large strain: ln F to 0.25 (126 yield strains) and back, exact in the
+/// logarithmic strain for the Kirchhoff stress.
+#[test]
+fn hencky_plasticity_follows_the_log_strain_closed_form_at_large_strain() {
+    let scene = SCENE.replace("model = \"linear_elastic\"", "model = \"hencky\"");
+    let u = drive_uniaxial(&scene, 20.0, true);
+    assert_uniaxial(&u, "uniaxial strain in MPM, Hencky", 1e-9);
+    assert!(u.peak > 0.2, "large strain: {}", u.peak);
 }
 
 /// Bad plasticity input names its key and the allowed values.
@@ -179,7 +231,15 @@ fn bad_plasticity_input_names_its_key() {
         (
             edit("dt = 1e-4", "dt = 1e-4\nmode = \"implicit\""),
             "materials[0].plasticity",
-            "explicit",
+            "hencky",
+        ),
+        (
+            edit(
+                "model = \"linear_elastic\"",
+                "model = \"hencky\"\nfailure = { model = \"tensile\", spall_strength = 1e9 }",
+            ),
+            "materials[0].failure",
+            "linear_elastic",
         ),
     ];
     for (text, path, needle) in cases {

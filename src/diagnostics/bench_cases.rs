@@ -34,6 +34,12 @@ pub enum BlockMaterial {
     /// above the block's stresses): the largest principal stress of every
     /// point each step.
     Tensile,
+    /// Hencky hyperelastic (the neo-Hookean's E, ν, ρ).
+    Hencky,
+    /// Hencky with multiplicative J2 plasticity and the
+    /// [`BlockMaterial::JohnsonCook`] flow stress (A = 0: every stressed
+    /// point flows).
+    HenckyJohnsonCook,
 }
 
 /// A 2D neo-Hookean block (E = 1e6, ν = 0.3, ρ = 1000) of 2×2 particles per
@@ -72,7 +78,9 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
         BlockMaterial::JohnsonCook
         | BlockMaterial::HypoElastic
         | BlockMaterial::JohnsonCookFailure
-        | BlockMaterial::Tensile => {
+        | BlockMaterial::Tensile
+        | BlockMaterial::Hencky
+        | BlockMaterial::HenckyJohnsonCook => {
             use crate::material::failure::{Failure, Fracturing, JohnsonCookFailure};
             use crate::material::plasticity::{FlowStress, JohnsonCook, J2};
             let j2 = J2 {
@@ -91,6 +99,8 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
             };
             let model = match material {
                 BlockMaterial::HypoElastic => SolidModel::LinearElastic,
+                BlockMaterial::Hencky => SolidModel::Hencky,
+                BlockMaterial::HenckyJohnsonCook => SolidModel::HenckyPlastic(j2),
                 BlockMaterial::JohnsonCookFailure => SolidModel::Fracturing(Fracturing {
                     plasticity: Some(j2),
                     failure: Failure::JohnsonCook(JohnsonCookFailure {

@@ -248,6 +248,49 @@ impl J2 {
         )
     }
 
+    /// Whether the plastic work heats the point (a temperature-dependent
+    /// flow stress and β > 0).
+    #[inline]
+    fn heats(&self) -> bool {
+        self.flow.softens_with_temperature() && self.taylor_quinney > 0.0
+    }
+
+    /// Flow stress after a plastic increment `de` over `dt` from ε̄ = `eps0`
+    /// at temperature `t0`, with the heating it implies at density `rho`
+    /// (a fixed point in T, converged by the outer iteration on Δε̄), and
+    /// that temperature.
+    #[inline]
+    fn flow_after(&self, eps0: f64, t0: f64, de: f64, dt: f64, rho: f64) -> (f64, f64) {
+        let rate = if dt > 0.0 { de / dt } else { 0.0 };
+        let mut t = t0;
+        let mut sy = self.flow.stress(eps0 + de, rate, t);
+        if self.heats() {
+            let heat = self.taylor_quinney / (rho * self.specific_heat);
+            for _ in 0..4 {
+                t = t0 + heat * sy * de;
+                sy = self.flow.stress(eps0 + de, rate, t);
+            }
+        }
+        (sy, t)
+    }
+
+    /// The slope H' = dσ_y/dΔε̄ of the flow stress along the return (strain
+    /// hardening, rate and heating together) at the converged increment
+    /// `de` of a step that started from ε̄ = `eps0`, T = `t0`: exact for
+    /// linear hardening, a central difference otherwise (one-sided at
+    /// Δε̄ = 0). Used by the consistent tangent of
+    /// [`crate::material::hencky`].
+    pub fn hardening_slope(&self, eps0: f64, t0: f64, de: f64, dt: f64, rho: f64) -> f64 {
+        if let FlowStress::Linear { hardening, .. } = self.flow {
+            return hardening;
+        }
+        let h = 1e-6 * de.max(1e-6);
+        let lo = (de - h).max(0.0);
+        let hi = de + h;
+        let f = |x: f64| self.flow_after(eps0, t0, x, dt, rho).0;
+        (f(hi) - f(lo)) / (hi - lo)
+    }
+
     /// Radial return of a trial stress (steps 3–5 of the module's update)
     /// with shear modulus `mu`, step `dt` and current density `rho` (for
     /// the heating). Updates `trial` into the returned stress and `state`.
@@ -269,22 +312,8 @@ impl J2 {
                 plastic_work: 0.0,
             };
         }
-        let heats = self.flow.softens_with_temperature() && self.taylor_quinney > 0.0;
-        let heat = self.taylor_quinney / (rho * self.specific_heat);
-        // Flow stress at Δε̄, with the heating it implies (a fixed point in
-        // T, converged by the outer Newton iteration on Δε̄).
-        let sigma_y = |de: f64| {
-            let rate = if dt > 0.0 { de / dt } else { 0.0 };
-            let mut t = t0;
-            let mut sy = self.flow.stress(eps0 + de, rate, t);
-            if heats {
-                for _ in 0..4 {
-                    t = t0 + heat * sy * de;
-                    sy = self.flow.stress(eps0 + de, rate, t);
-                }
-            }
-            (sy, t)
-        };
+        let heats = self.heats();
+        let sigma_y = |de: f64| self.flow_after(eps0, t0, de, dt, rho);
         let g = |de: f64| q_trial - 3.0 * mu * de - sigma_y(de).0;
         // g(0) > 0 and g(q/3μ) = −σ_y ≤ 0: a root in the bracket.
         let (mut lo, mut hi) = (0.0, q_trial / (3.0 * mu));

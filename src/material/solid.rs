@@ -86,11 +86,23 @@ pub enum SolidModel {
     /// `work` holds its strain energy per unit reference volume.
     #[serde(skip)]
     Membrane(MembraneLaw),
+    /// Hencky hyperelastic ([`crate::material::hencky`]):
+    /// τ = J σ = λ tr(ε) I + 2μ ε with ε = ½ ln(F Fᵀ). The particle's `work`
+    /// holds its stored energy per unit reference volume.
+    Hencky,
+    /// Hencky hyperelastic with J2 plasticity in the multiplicative split
+    /// F = Fₑ Fₚ (exponential-map return on the Kirchhoff stress,
+    /// [`crate::material::hencky`]); set by the scene for `model = "hencky"`
+    /// with a `plasticity` table. Explicit and implicit (with its consistent
+    /// tangent). The particle's `work` holds the stored energy plus the
+    /// plastic work dissipated, per unit reference volume.
+    #[serde(skip)]
+    HenckyPlastic(J2),
 }
 
 impl SolidModel {
     /// Names accepted in scene files.
-    pub const NAMES: &'static str = "linear_elastic, neo_hookean";
+    pub const NAMES: &'static str = "linear_elastic, neo_hookean, hencky";
 }
 
 /// A particle material as the MPM kernels see it: a solid, or a gas on
@@ -121,6 +133,7 @@ impl SolidMaterial {
         match &self.model {
             SolidModel::ElasticPlastic(j2) => Some(j2),
             SolidModel::Fracturing(f) => f.plasticity.as_ref(),
+            SolidModel::HenckyPlastic(j2) => Some(j2),
             _ => None,
         }
     }
@@ -177,9 +190,13 @@ impl SolidMaterial {
     /// gives a gas point its reference density ρ_ref = m/V⁰, its Jacobian at
     /// the start of the step and the largest gas sound speed (York Eq. 24);
     /// solids ignore it. `plastic` is the point's plastic state (read and
-    /// updated by [`SolidModel::ElasticPlastic`] only; the current density
-    /// for its heating is `gas.rho_ref / j`).
+    /// updated by the plastic models: [`SolidModel::ElasticPlastic`] heats
+    /// at the current density `gas.rho_ref / j`, [`SolidModel::HenckyPlastic`]
+    /// at the reference density `gas.rho_ref`, its plastic work being per
+    /// unit reference volume). Returns `false` where the
+    /// update cannot be made (a Hencky model's inverted step).
     #[inline]
+    #[must_use]
     #[allow(clippy::too_many_arguments)]
     pub fn update_stress(
         &self,
@@ -191,7 +208,7 @@ impl SolidMaterial {
         stress: &mut Matrix3<f64>,
         work: &mut f64,
         plastic: &mut PlasticState,
-    ) {
+    ) -> bool {
         let ElasticConstants { lambda, mu } = self.elastic;
         match self.model {
             SolidModel::GasPoint(g) => {
@@ -238,11 +255,29 @@ impl SolidMaterial {
                 // energy) and stays in the work.
                 *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
             }
+            SolidModel::Hencky | SolidModel::HenckyPlastic(_) => {
+                // The explicit step's relative deformation: F ← (I + Δt L) F.
+                let f_rel = Matrix3::identity() + l * dt;
+                return self
+                    .hencky_update(
+                        &f_rel,
+                        f_new,
+                        j,
+                        gas.j_old,
+                        dt,
+                        gas.rho_ref,
+                        stress,
+                        work,
+                        plastic,
+                    )
+                    .is_some();
+            }
             // The explicit step updates a membrane point in its local frame
             // (`mpm::explicit`, York Sec. 3.2); without a frame the stress
             // is kept.
             SolidModel::Membrane(_) => {}
         }
+        true
     }
 
     /// Stress at the end of an implicit step from the incremental deformation
@@ -278,7 +313,13 @@ impl SolidMaterial {
             SolidModel::NeoHookean => neo_hookean_stress_j(lambda, mu, f_new, j),
             // Gas points are explicit only (the scene rejects them in implicit
             // mode, and `spatial_tangent` gives none): the stress is kept.
-            SolidModel::GasPoint(_) | SolidModel::Membrane(_) => *stress_old,
+            // The implicit step updates the Hencky models through
+            // `hencky_tangent_update` (they need the plastic state and
+            // give their own tangent).
+            SolidModel::GasPoint(_)
+            | SolidModel::Membrane(_)
+            | SolidModel::Hencky
+            | SolidModel::HenckyPlastic(_) => *stress_old,
         }
     }
 
@@ -301,8 +342,84 @@ impl SolidMaterial {
             SolidModel::GasPoint(_)
             | SolidModel::ElasticPlastic(_)
             | SolidModel::Fracturing(_)
-            | SolidModel::Membrane(_) => None,
+            | SolidModel::Membrane(_)
+            | SolidModel::Hencky
+            | SolidModel::HenckyPlastic(_) => None,
         }
+    }
+
+    /// Whether the implicit mode can run this material: an isotropic
+    /// [`Self::spatial_tangent`], or the Hencky models' general one
+    /// ([`crate::material::hencky::Tangent`]).
+    pub fn has_implicit_tangent(&self) -> bool {
+        self.spatial_tangent(1.0).is_some()
+            || matches!(
+                self.model,
+                SolidModel::Hencky | SolidModel::HenckyPlastic(_)
+            )
+    }
+
+    /// One step of a Hencky model ([`crate::material::hencky::step`]) from
+    /// the relative deformation gradient `f_rel`, the new total `f_new`
+    /// (determinant `j`; `j_old` at the start of the step): updates the
+    /// Cauchy `stress`, the `work` (stored energy plus plastic work, per
+    /// unit reference volume) and the plastic `state`, and returns the
+    /// plastic work of the step, or `None` for a model that is not Hencky
+    /// or an inverted step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn hencky_update(
+        &self,
+        f_rel: &Matrix3<f64>,
+        f_new: &Matrix3<f64>,
+        j: f64,
+        j_old: f64,
+        dt: f64,
+        rho0: f64,
+        stress: &mut Matrix3<f64>,
+        work: &mut f64,
+        plastic: &mut PlasticState,
+    ) -> Option<f64> {
+        self.hencky_tangent_update(
+            f_rel, f_new, j, j_old, dt, rho0, stress, work, plastic, None,
+        )
+    }
+
+    /// [`Self::hencky_update`], writing the tangent ∂τ/∂h into `tangent`
+    /// when given.
+    #[allow(clippy::too_many_arguments)]
+    pub fn hencky_tangent_update(
+        &self,
+        f_rel: &Matrix3<f64>,
+        f_new: &Matrix3<f64>,
+        j: f64,
+        j_old: f64,
+        dt: f64,
+        rho0: f64,
+        stress: &mut Matrix3<f64>,
+        work: &mut f64,
+        plastic: &mut PlasticState,
+        tangent: Option<&mut crate::material::hencky::Tangent>,
+    ) -> Option<f64> {
+        let j2 = match &self.model {
+            SolidModel::Hencky => None,
+            SolidModel::HenckyPlastic(j2) => Some(j2),
+            _ => return None,
+        };
+        let ElasticConstants { lambda, mu } = self.elastic;
+        let tau_old = *stress * j_old;
+        let s = crate::material::hencky::step(
+            lambda, mu, j2, f_rel, f_new, &tau_old, dt, rho0, plastic, tangent,
+        )?;
+        let w_new = crate::material::hencky::stored_energy(&s.tau, lambda, mu);
+        if j2.is_some() {
+            *work += w_new - crate::material::hencky::stored_energy(&tau_old, lambda, mu)
+                + s.ret.plastic_work;
+        } else {
+            // Hyperelastic: the work is the stored energy of F.
+            *work = w_new;
+        }
+        *stress = s.tau / j;
+        Some(s.ret.plastic_work)
     }
 
     /// Strain energy per unit reference volume.
@@ -314,7 +431,9 @@ impl SolidMaterial {
             | SolidModel::GasPoint(_)
             | SolidModel::ElasticPlastic(_)
             | SolidModel::Fracturing(_)
-            | SolidModel::Membrane(_) => work,
+            | SolidModel::Membrane(_)
+            | SolidModel::Hencky
+            | SolidModel::HenckyPlastic(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();
@@ -467,7 +586,7 @@ mod tests {
         let dt = 1.0 / steps as f64;
         let mut work = 0.0;
         for _ in 0..steps {
-            m.update_stress(
+            let ok = m.update_stress(
                 &l,
                 &Matrix3::identity(),
                 1.0,
@@ -477,6 +596,7 @@ mod tests {
                 &mut work,
                 &mut PlasticState::default(),
             );
+            assert!(ok);
         }
         assert!((s.trace() - tr0).abs() < 1e-12);
         assert!((s.norm() - n0).abs() < 5e-3 * n0);

@@ -1366,7 +1366,10 @@ fn g2p<
                     // SAFETY: as above.
                     state.damage = unsafe { *damage.get(p) };
                 }
-                material.update_stress(&l3, &f_new, j, dt, &gas, &mut sp, wp, &mut state);
+                if !material.update_stress(&l3, &f_new, j, dt, &gas, &mut sp, wp, &mut state) {
+                    failed.fetch_min(p, Ordering::Relaxed);
+                    return;
+                }
                 // SAFETY: as above.
                 unsafe { stress.set(p, &sp) };
                 if plastic {

@@ -43,7 +43,7 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
         ),
     };
     // Validation has checked the plasticity and failure tables (and that
-    // they go with the hypo-elastic model).
+    // they go with the hypo-elastic model, or plasticity with Hencky's).
     let j2 = m.plasticity.as_ref().and_then(|pl| pl.j2().ok());
     let failure = m.failure.as_ref().and_then(|f| f.failure(j2.as_ref()).ok());
     let model = match (j2, failure) {
@@ -51,6 +51,7 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
             plasticity,
             failure,
         }),
+        (Some(j2), None) if m.model == Some(SolidModel::Hencky) => SolidModel::HenckyPlastic(j2),
         (Some(j2), None) => SolidModel::ElasticPlastic(j2),
         _ => m.model.unwrap_or(SolidModel::NeoHookean),
     };

@@ -380,8 +380,10 @@ pub enum FlowKind {
     JohnsonCook,
 }
 
-/// J2 plasticity of a hypo-elastic solid (`materials[i].plasticity`;
-/// `model = "linear_elastic"`, explicit mode). Keys by `flow`: `linear`
+/// J2 plasticity of a solid (`materials[i].plasticity`): with
+/// `model = "linear_elastic"` on the hypo-elastic path (explicit mode), with
+/// `model = "hencky"` in the multiplicative split F = Fₑ Fₚ (explicit or
+/// implicit mode; yield on the Kirchhoff stress). Keys by `flow`: `linear`
 /// needs `yield_stress` (and `hardening_modulus`, default 0); `power_law`
 /// needs `yield_stress`, `hardening_coefficient`, `hardening_exponent`;
 /// `johnson_cook` needs `a`, `b`, `n`, `c`, `m`, `melt_temperature` and
@@ -761,7 +763,8 @@ pub struct MaterialSpec {
     #[serde(default)]
     pub rigid: bool,
     /// J2 plasticity (solids with `model = "linear_elastic"`, explicit
-    /// mode): see [`PlasticitySpec`].
+    /// mode, or `model = "hencky"`, multiplicative, explicit or implicit):
+    /// see [`PlasticitySpec`].
     pub plasticity: Option<PlasticitySpec>,
     /// Failure and damage (solids with `model = "linear_elastic"`,
     /// explicit mode): see [`FailureSpec`].
@@ -1668,11 +1671,14 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         ));
     }
     if let Some(pl) = &m.plasticity {
-        if m.model != Some(SolidModel::LinearElastic) {
+        if !matches!(
+            m.model,
+            Some(SolidModel::LinearElastic | SolidModel::Hencky)
+        ) {
             return Err(err(
                 p("plasticity"),
-                "J2 plasticity is built for the hypo-elastic path only; allowed with model = \
-                 \"linear_elastic\"",
+                "J2 plasticity is built for the hypo-elastic and the Hencky paths; allowed with \
+                 model = \"linear_elastic\" or \"hencky\"",
             ));
         }
         if m.rigid {
@@ -3537,11 +3543,17 @@ impl Scene {
                      semi_implicit",
                 ));
             }
-            if let Some(i) = self.materials.iter().position(|m| m.plasticity.is_some()) {
+            if let Some(i) = self
+                .materials
+                .iter()
+                .position(|m| m.plasticity.is_some() && m.model != Some(SolidModel::Hencky))
+            {
                 return Err(err(
                     format!("materials[{i}].plasticity"),
-                    "J2 plasticity runs in explicit mode only (implicit MPM has no consistent \
-                     tangent for it yet); allowed: time.mode = explicit, semi_implicit",
+                    "the hypo-elastic J2 plasticity runs in explicit mode only (it has no \
+                     consistent tangent); allowed: time.mode = explicit, semi_implicit, or \
+                     model = \"hencky\" (multiplicative plasticity with its tangent) in \
+                     implicit mode",
                 ));
             }
             if let Some(i) = self.materials.iter().position(|m| m.failure.is_some()) {

@@ -17,6 +17,7 @@ pub mod mpm_studies;
 pub mod multiphase_rod;
 pub mod multiphase_spall;
 pub mod multiphase_studies;
+pub mod plasticity_studies;
 pub mod reaction_studies;
 pub mod taylor_studies;
 pub mod york_studies;
@@ -154,6 +155,11 @@ pub const STUDIES: &[Study] = &[
         "axisym_lame",
         "axisymmetric r-z explicit MPM: Lame thick cylinder and sphere under internal pressure, sigma_r, sigma_theta, u_r vs h",
         axisym_studies::axisym_lame,
+    ),
+    (
+        "hencky_simple_shear",
+        "multiplicative (Hencky) J2 plasticity: simple shear of one point to gamma = 1, tau_xy error vs the shear step, three flow laws",
+        plasticity_studies::hencky_simple_shear,
     ),
     (
         "taylor_anvil",
