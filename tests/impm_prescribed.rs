@@ -197,19 +197,16 @@ fn newton_with_a_grip_and_gravity_converges_quadratically() {
 }
 
 /// Kirchhoff (τ_yy, τ_xx) of Hencky + J2 (linear hardening) in uniaxial
-/// strain at logarithmic strain `e` on monotone loading (`material::hencky`'s
-/// closed form), and ε̄.
+/// strain at logarithmic strain `e` on monotone loading, and ε̄
+/// (`UniaxialStrainResponse` in the logarithmic strain).
 fn hencky_uniaxial(e: f64, young: f64, nu: f64, sy: f64, h: f64) -> (f64, f64, f64) {
-    let mu = young / (2.0 * (1.0 + nu));
-    let k = young / (3.0 * (1.0 - 2.0 * nu));
-    let ey = sy / (2.0 * mu);
-    let (q, eb) = if e.abs() <= ey {
-        (2.0 * mu * e, 0.0)
-    } else {
-        let eb = 2.0 * mu * (e.abs() - ey) / (3.0 * mu + h);
-        (e.signum() * (sy + h * eb), eb)
-    };
-    (k * e + 2.0 * q / 3.0, k * e - q / 3.0, eb)
+    mpmice::material::plasticity::UniaxialStrainResponse {
+        bulk: young / (3.0 * (1.0 - 2.0 * nu)),
+        mu: young / (2.0 * (1.0 + nu)),
+        yield_stress: sy,
+        hardening: h,
+    }
+    .at(e, None)
 }
 
 /// The elastic-plastic bar (`cases/bar_stretch_plastic_impm.toml`) through
@@ -298,4 +295,63 @@ fn plastic_grip_scene_matches_the_closed_form() {
             }
         }
     }
+}
+
+/// The plastic grip bar in 3D (one cell in x and z, rollers on the four
+/// sides): the same closed form, through the 3D tangent assembly.
+#[test]
+fn plastic_grip_scene_in_3d_matches_the_closed_form() {
+    let path = format!(
+        "{}/cases/bar_stretch_plastic_impm.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let t = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("dim = 2", "dim = 3")
+        .replace(
+            "lower = [0.0, 0.0]\nupper = [1.0, 16.0]",
+            "lower = [0.0, 0.0, 0.0]\nupper = [1.0, 16.0, 1.0]",
+        )
+        .replace("cells = [1, 16]", "cells = [1, 16, 1]")
+        .replace(
+            "y_upper = \"free\" }",
+            "y_upper = \"free\", z_lower = \"symmetry\", z_upper = \"symmetry\" }",
+        )
+        .replace(
+            "displacement = [0.0, 4.0]",
+            "displacement = [0.0, 4.0, 0.0]",
+        )
+        .replace(
+            "components = [false, true]",
+            "components = [false, true, false]",
+        )
+        .replace(
+            "region = { type = \"box\", lower = [0.0, 8.0], upper = [1.0, 10.0] }",
+            "region = { type = \"box\", lower = [0.0, 8.0, 0.0], upper = [1.0, 10.0, 1.0] }",
+        )
+        .replace(
+            "geometry = { type = \"box\", lower = [0.0, 0.0], upper = [1.0, 10.0] }",
+            "geometry = { type = \"box\", lower = [0.0, 0.0, 0.0], upper = [1.0, 10.0, 1.0] }",
+        );
+    let sc = mpmice::scene::parse(&t).expect("valid 3D scene");
+    let mut run = mpmice::scene::build_implicit_run::<3>(&sc).expect("build");
+    run.run().expect("run");
+    let (tyy, txx, eb) = hencky_uniaxial(f64::ln(1.5), 1e6, 0.3, 2e4, 1e5);
+    let (syy, sxx) = (tyy / 1.5, txx / 1.5);
+    let p = &run.particles;
+    let mut worst = 0.0f64;
+    for i in 0..p.len() {
+        if p.x0[i][1] < 8.0 {
+            let st = p.stress.get(i);
+            worst = worst
+                .max((st[(1, 1)] - syy).abs() / 2e4)
+                .max((st[(0, 0)] - sxx).abs() / 2e4)
+                .max((st[(2, 2)] - sxx).abs() / 2e4)
+                .max((p.plastic_strain[i] - eb).abs() / eb);
+        }
+    }
+    let iters: Vec<usize> = run.stats.iter().map(|s| s.newton_iterations).collect();
+    eprintln!("3D Hencky + J2 grip s = 1.5: worst error {worst:.2e}; Newton per step {iters:?}");
+    assert!(worst < 1e-9, "{worst:e}");
+    assert_eq!(run.steps, 4);
 }

@@ -2,6 +2,7 @@
 //! `plasticity` table, the plastic state carried by the particles, and a
 //! homogeneous uniaxial-strain load and unload against the closed form.
 
+use mpmice::material::plasticity::UniaxialStrainResponse;
 use mpmice::scene::{build_solid_run, parse};
 
 const SCENE: &str = r#"
@@ -60,7 +61,12 @@ fn drive_uniaxial(scene: &str, rate: f64, log: bool) -> Uniaxial {
     let mut run = build_solid_run::<1>(&scene).expect("run builds");
     let (e, nu, sy, h) = (200e9, 0.3, 300e6, 2e9);
     let mu = e / (2.0 * (1.0 + nu));
-    let k = e / (3.0 * (1.0 - 2.0 * nu));
+    let exact = UniaxialStrainResponse {
+        bulk: e / (3.0 * (1.0 - 2.0 * nu)),
+        mu,
+        yield_stress: sy,
+        hardening: h,
+    };
     let eps_y = sy / (2.0 * mu);
     let n = run.particles.len();
     let set_field = |run: &mut mpmice::stepper::SolidRun<1>, a: f64| {
@@ -77,7 +83,7 @@ fn drive_uniaxial(scene: &str, rate: f64, log: bool) -> Uniaxial {
             da.total_cmp(&db)
         })
         .unwrap();
-    let (mut eps, mut peak, mut ebar_max, mut q_max) = (0.0, 0.0, 0.0, 0.0);
+    let (mut eps, mut peak, mut ebar_max) = (0.0, 0.0, 0.0);
     let mut loading = true;
     let mut worst: f64 = 0.0;
     let mut reverse = f64::NAN;
@@ -87,9 +93,8 @@ fn drive_uniaxial(scene: &str, rate: f64, log: bool) -> Uniaxial {
             set_field(&mut run, -rate);
             loading = false;
             peak = eps;
-            ebar_max = 2.0 * mu * (peak - eps_y) / (3.0 * mu + h);
-            q_max = sy + h * ebar_max;
-            reverse = peak - q_max / mu;
+            ebar_max = exact.at(peak, None).2;
+            reverse = exact.reverse_yield(peak);
         }
         let f_old = run.particles.f.get(mid)[(0, 0)];
         run.step_dt(1e-4).expect("step");
@@ -100,24 +105,10 @@ fn drive_uniaxial(scene: &str, rate: f64, log: bool) -> Uniaxial {
             // The strain increment the point's update saw: F ← (1 + Δt L) F.
             eps + f_new / f_old - 1.0
         };
-        let (q, eb) = if loading {
-            if eps <= eps_y {
-                (2.0 * mu * eps, 0.0)
-            } else {
-                let eb = 2.0 * mu * (eps - eps_y) / (3.0 * mu + h);
-                (sy + h * eb, eb)
-            }
-        } else if eps >= reverse {
-            (q_max - 2.0 * mu * (peak - eps), ebar_max)
-        } else {
-            let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
-            (-(sy + h * eb), eb)
-        };
+        let (s11, s22, eb) = exact.at(eps, (!loading).then_some(peak));
         let j = if log { f_new } else { 1.0 };
         let s = run.particles.stress.get(mid) * j;
-        let err = ((s[(0, 0)] - (k * eps + 2.0 * q / 3.0)).abs()
-            + (s[(1, 1)] - (k * eps - q / 3.0)).abs())
-            / sy
+        let err = ((s[(0, 0)] - s11).abs() + (s[(1, 1)] - s22).abs()) / sy
             + (run.particles.plastic_strain[mid] - eb).abs() / eps_y;
         worst = worst.max(err);
     }

@@ -234,28 +234,8 @@ pub fn step(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::plasticity::FlowStress;
-
-    const E: f64 = 200e9;
-    const NU: f64 = 0.3;
-    const SY: f64 = 300e6;
-    const H: f64 = 2e9;
-
-    fn lame() -> (f64, f64) {
-        let mu = E / (2.0 * (1.0 + NU));
-        (E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU)), mu)
-    }
-
-    fn linear(sy: f64, h: f64) -> J2 {
-        J2 {
-            flow: FlowStress::Linear {
-                yield_stress: sy,
-                hardening: h,
-            },
-            taylor_quinney: 0.9,
-            specific_heat: 450.0,
-        }
-    }
+    use crate::material::plasticity::steel::{lame, linear, H, SY};
+    use crate::material::plasticity::{FlowStress, UniaxialStrainResponse};
 
     fn virgin() -> PlasticState {
         PlasticState {
@@ -296,34 +276,20 @@ mod tests {
         let (lambda, mu) = lame();
         let (sy, h) = (0.002 * mu, 0.05 * mu);
         let j2 = linear(sy, h);
-        let k = lambda + 2.0 * mu / 3.0;
+        let exact = UniaxialStrainResponse {
+            bulk: lambda + 2.0 * mu / 3.0,
+            mu,
+            yield_stress: sy,
+            hardening: h,
+        };
         let eps_y = sy / (2.0 * mu);
         let peak = 0.3;
-        let ebar_max = 2.0 * mu * (peak - eps_y) / (3.0 * mu + h);
-        let q_max = sy + h * ebar_max;
-        let reverse = peak - 2.0 * q_max / (2.0 * mu);
-        let end = reverse - 0.2;
+        let end = exact.reverse_yield(peak) - 0.2;
         let mut eps_path: Vec<f64> = (1..=23)
             .map(|i| peak * (i as f64 / 23.0).powf(1.3))
             .collect();
         eps_path.extend((1..=31).map(|i| peak + (end - peak) * i as f64 / 31.0));
-        let exact = |k_idx: usize, eps: f64| {
-            let loading = k_idx < 23;
-            let (q, eb) = if loading {
-                if eps <= eps_y {
-                    (2.0 * mu * eps, 0.0)
-                } else {
-                    let eb = 2.0 * mu * (eps - eps_y) / (3.0 * mu + h);
-                    (sy + h * eb, eb)
-                }
-            } else if eps >= reverse {
-                (q_max - 2.0 * mu * (peak - eps), ebar_max)
-            } else {
-                let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
-                (-(sy + h * eb), eb)
-            };
-            (k * eps + 2.0 * q / 3.0, k * eps - q / 3.0, eb)
-        };
+        let exact = |k_idx: usize, eps: f64| exact.at(eps, (k_idx >= 23).then_some(peak));
         for angle in [0.0, 0.7] {
             let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), angle).into_inner();
             let path: Vec<Matrix3<f64>> = eps_path
@@ -354,20 +320,18 @@ mod tests {
 
     /// Isochoric pure shear F = diag(e^γ/2, e^−γ/2, 1) (logarithmic shear
     /// strain γ/2 on the principal axes, the equivalent of an engineering
-    /// shear γ): τ₁₁ = −τ₂₂ = μγ to γ_y = σ₀/(√3 μ), then
+    /// shear γ) through `gammas` (one step each), with the steel's linear
+    /// hardening: calls `check(τ, ε̄, τ₁₁ exact, ε̄ exact)` after each step,
+    /// where τ₁₁ = −τ₂₂ = μγ to γ_y = σ₀/(√3 μ), then
     /// ε̄ = √3 μ (γ − γ_y)/(3μ + H) and τ₁₁ = (σ₀ + H ε̄)/√3.
-    #[test]
-    fn pure_shear_matches_the_log_strain_closed_form() {
+    fn pure_shear(gammas: &[f64], mut check: impl FnMut(&Matrix3<f64>, f64, f64, f64)) {
         let (_, mu) = lame();
-        let j2 = linear(SY, H);
         let gamma_y = SY / (3f64.sqrt() * mu);
-        let gammas: Vec<f64> = (1..=17).map(|i| 0.5 * i as f64 / 17.0).collect();
         let path: Vec<Matrix3<f64>> = gammas
             .iter()
             .map(|&g| Matrix3::from_diagonal(&Vector3::new((0.5 * g).exp(), (-0.5 * g).exp(), 1.0)))
             .collect();
-        let mut worst: f64 = 0.0;
-        drive(Some(&j2), &path, |i, _, tau, ebar| {
+        drive(Some(&linear(SY, H)), &path, |i, _, tau, ebar| {
             let g = gammas[i];
             let (t, eb) = if g <= gamma_y {
                 (mu * g, 0.0)
@@ -375,12 +339,37 @@ mod tests {
                 let eb = 3f64.sqrt() * mu * (g - gamma_y) / (3.0 * mu + H);
                 ((SY + H * eb) / 3f64.sqrt(), eb)
             };
+            check(tau, ebar, t, eb);
+        });
+    }
+
+    #[test]
+    fn pure_shear_matches_the_log_strain_closed_form() {
+        let (_, mu) = lame();
+        let gamma_y = SY / (3f64.sqrt() * mu);
+        let gammas: Vec<f64> = (1..=17).map(|i| 0.5 * i as f64 / 17.0).collect();
+        let mut worst: f64 = 0.0;
+        pure_shear(&gammas, |tau, ebar, t, eb| {
             let err = ((tau[(0, 0)] - t).abs() + (tau[(1, 1)] + t).abs() + tau.trace().abs()) / SY
                 + (ebar - eb).abs() / gamma_y;
             worst = worst.max(err);
         });
         println!("pure shear: worst relative error {worst:.2e}");
         assert!(worst < 1e-9, "worst relative error {worst:e}");
+    }
+
+    /// Extreme plastic strain (issue 18's hard case, ε̄ > 10): pure shear to
+    /// γ = 25 (principal stretches e^±12.5) in 40 steps stays exact.
+    #[test]
+    fn extreme_plastic_strain_stays_exact() {
+        let gammas: Vec<f64> = (1..=40).map(|i| 25.0 * i as f64 / 40.0).collect();
+        let (mut worst, mut last): (f64, f64) = (0.0, 0.0);
+        pure_shear(&gammas, |tau, ebar, t, eb| {
+            worst = worst.max((tau[(0, 0)] - t).abs() / t + (ebar - eb).abs() / eb);
+            last = ebar;
+        });
+        println!("pure shear to γ = 25: ε̄ {last:.3}, worst relative error {worst:.2e}");
+        assert!(last > 10.0 && worst < 1e-9, "{last} {worst:e}");
     }
 
     /// Without plasticity the model is hyperelastic: τ depends on F alone,
@@ -405,28 +394,11 @@ mod tests {
         .unwrap()
         .tau;
         // The plastic path with an unreachable yield stress, in 7 steps.
-        let j2 = linear(1e30, 0.0);
+        let path: Vec<Matrix3<f64>> = (1..=7)
+            .map(|i| Matrix3::identity() + (f - Matrix3::identity()) * (i as f64 / 7.0))
+            .collect();
         let mut tau = Matrix3::zeros();
-        let mut f_old = Matrix3::identity();
-        for i in 1..=7 {
-            let fi = Matrix3::identity() + (f - Matrix3::identity()) * (i as f64 / 7.0);
-            let f_rel = fi * f_old.try_inverse().unwrap();
-            tau = step(
-                lambda,
-                mu,
-                Some(&j2),
-                &f_rel,
-                &fi,
-                &tau,
-                1.0,
-                1.0,
-                &mut st,
-                None,
-            )
-            .unwrap()
-            .tau;
-            f_old = fi;
-        }
+        drive(Some(&linear(1e30, 0.0)), &path, |_, _, t, _| tau = *t);
         let rel = (tau - direct).norm() / direct.norm();
         println!("elastic Hencky: path dependence {rel:.2e}");
         assert!(rel < 1e-12, "path dependence {rel:e}");
@@ -513,7 +485,7 @@ mod tests {
             };
             let mut a: Tangent = [[Matrix3::zeros(); 3]; 3];
             let mut st = st0;
-            step(
+            let tau = step(
                 lambda,
                 mu,
                 *j2,
@@ -525,7 +497,8 @@ mod tests {
                 &mut st,
                 Some(&mut a),
             )
-            .unwrap();
+            .unwrap()
+            .tau;
             let scale = a.iter().flatten().map(|m| m.norm()).fold(0.0, f64::max);
             let eps = 1e-7;
             let mut worst: f64 = 0.0;
@@ -545,20 +518,6 @@ mod tests {
             // Newton's stiffness (module doc) is symmetric, so the implicit
             // solve may keep one triangle: K_ij^ac = K_ji^ca.
             let (gi, gj) = (Vector3::new(0.3, -1.1, 0.7), Vector3::new(-0.4, 0.2, 0.9));
-            let tau = step(
-                lambda,
-                mu,
-                *j2,
-                f_rel,
-                &f_new,
-                &tau0,
-                1e-3,
-                7800.0,
-                &mut st0.clone(),
-                None,
-            )
-            .unwrap()
-            .tau;
             let k = |gi: &Vector3<f64>, gj: &Vector3<f64>, aa: usize, cc: usize| {
                 let mut v = -(tau.row(aa).transpose().dot(gj)) * gi[cc];
                 for b in 0..3 {

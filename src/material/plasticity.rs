@@ -165,6 +165,22 @@ impl FlowStress {
 }
 
 impl JohnsonCook {
+    /// Johnson & Cook 1983's 4340 steel (A 792 MPa, B 510 MPa, n 0.26,
+    /// C 0.014, m 1.03, T_melt 1793 K; room 293 K, ε̇₀ 1 /s) with the
+    /// strain-rate coefficient `c` (0: rate-independent).
+    pub fn steel_4340(c: f64) -> Self {
+        Self {
+            a: 792e6,
+            b: 510e6,
+            n: 0.26,
+            c,
+            m: 1.03,
+            rate0: 1.0,
+            t_room: 293.0,
+            t_melt: 1793.0,
+        }
+    }
+
     /// 1 − T*ᵐ, T* clamped to [0, 1] (no strength at and above melt).
     #[inline]
     pub fn thermal_factor(&self, t: f64) -> f64 {
@@ -408,29 +424,104 @@ impl J2 {
     }
 }
 
+/// The exact response of J2 plasticity with linear hardening to uniaxial
+/// strain ε (D = ε̇ e₁⊗e₁), loaded monotonically from rest and, past
+/// `peak`, reversed: elastic to ε_y = σ₀/2μ, then q = σ₀ + H ε̄ with
+/// ε̄ = 2μ(|ε| − ε_y)/(3μ + H); σ₁₁ = Kε + 2q/3, σ₂₂ = σ₃₃ = Kε − q/3
+/// (q signed); on reversal elastic (q falls by 2μ Δε) to the reverse yield
+/// at −(σ₀ + H ε̄_max), then hardening again. The small-strain radial return
+/// ([`J2::update`]) follows it exactly in the strain its updates
+/// accumulate, and the Hencky model ([`crate::material::hencky`]) in the
+/// logarithmic strain for the Kirchhoff stress: the tests' reference.
+#[derive(Debug, Clone, Copy)]
+pub struct UniaxialStrainResponse {
+    /// Bulk modulus K.
+    pub bulk: f64,
+    /// Shear modulus μ.
+    pub mu: f64,
+    /// Initial yield stress σ₀.
+    pub yield_stress: f64,
+    /// Hardening modulus H.
+    pub hardening: f64,
+}
+
+impl UniaxialStrainResponse {
+    /// (σ₁₁, σ₂₂, ε̄) at strain `eps`: still loading from rest when `peak` is
+    /// `None`, else unloading (and reverse loading) from a positive `peak`.
+    pub fn at(&self, eps: f64, peak: Option<f64>) -> (f64, f64, f64) {
+        let Self {
+            bulk,
+            mu,
+            yield_stress: sy,
+            hardening: h,
+        } = *self;
+        let ey = sy / (2.0 * mu);
+        let hardened = |e: f64| 2.0 * mu * (e - ey) / (3.0 * mu + h);
+        let (q, eb) = match peak {
+            None if eps.abs() <= ey => (2.0 * mu * eps, 0.0),
+            None => {
+                let eb = hardened(eps.abs());
+                (eps.signum() * (sy + h * eb), eb)
+            }
+            Some(peak) => {
+                let eb_max = hardened(peak).max(0.0);
+                let q_max = sy + h * eb_max;
+                let reverse = peak - q_max / mu;
+                if eps >= reverse {
+                    (q_max - 2.0 * mu * (peak - eps), eb_max)
+                } else {
+                    let eb = eb_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + h);
+                    (-(sy + h * eb), eb)
+                }
+            }
+        };
+        (bulk * eps + 2.0 * q / 3.0, bulk * eps - q / 3.0, eb)
+    }
+
+    /// The strain at which reverse yield starts after `peak`.
+    pub fn reverse_yield(&self, peak: f64) -> f64 {
+        let ey = self.yield_stress / (2.0 * self.mu);
+        let eb_max = (2.0 * self.mu * (peak - ey) / (3.0 * self.mu + self.hardening)).max(0.0);
+        peak - (self.yield_stress + self.hardening * eb_max) / self.mu
+    }
+}
+
 #[cfg(test)]
-mod tests {
-    use super::*;
+pub(crate) mod steel {
+    //! The test steel shared by the plasticity tests.
+    use super::{FlowStress, J2};
 
-    const E: f64 = 200e9;
-    const NU: f64 = 0.3;
-    const SY: f64 = 300e6;
-    const H: f64 = 2e9;
+    pub const E: f64 = 200e9;
+    pub const NU: f64 = 0.3;
+    pub const SY: f64 = 300e6;
+    pub const H: f64 = 2e9;
 
-    fn lame() -> (f64, f64) {
+    /// (λ, μ).
+    pub fn lame() -> (f64, f64) {
         let mu = E / (2.0 * (1.0 + NU));
         (E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU)), mu)
     }
 
-    fn linear() -> J2 {
+    /// Linear hardening σ₀ + H ε̄ (β 0.9, c_p 450).
+    pub fn linear(sy: f64, h: f64) -> J2 {
         J2 {
             flow: FlowStress::Linear {
-                yield_stress: SY,
-                hardening: H,
+                yield_stress: sy,
+                hardening: h,
             },
             taylor_quinney: 0.9,
             specific_heat: 450.0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::steel::{lame, H, SY};
+    use super::*;
+
+    fn linear() -> J2 {
+        super::steel::linear(SY, H)
     }
 
     /// Drives one point through the strain path `strain(t)` (rate `rate`
@@ -460,21 +551,21 @@ mod tests {
         }
     }
 
-    /// Uniaxial strain ε (D = ε̇ e₁⊗e₁): elastic to ε_y = σ₀/2μ, then
-    /// q = σ₀ + H ε̄ with ε̄ = 2μ(ε − ε_y)/(3μ + H); σ₁₁ = Kε + 2q/3,
-    /// σ₂₂ = Kε − q/3. Unloading is elastic (q falls by 2μ Δε) until the
-    /// reverse yield at −(σ₀ + H ε̄_max). Exact for any step size.
+    /// Uniaxial strain (D = ε̇ e₁⊗e₁) to 10 ε_y and back past reverse
+    /// yield against [`UniaxialStrainResponse`]. Exact for any step size.
     #[test]
     fn uniaxial_strain_matches_the_closed_form() {
         let (lambda, mu) = lame();
-        let k = lambda + 2.0 * mu / 3.0;
+        let exact = UniaxialStrainResponse {
+            bulk: lambda + 2.0 * mu / 3.0,
+            mu,
+            yield_stress: SY,
+            hardening: H,
+        };
         let dir = Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         let eps_y = SY / (2.0 * mu);
         let peak = 10.0 * eps_y;
-        let ebar_max = 2.0 * mu * (peak - eps_y) / (3.0 * mu + H);
-        let q_max = SY + H * ebar_max;
-        // Reverse yield when 2μ(peak − ε) = q_max + (σ₀ + H ε̄_max).
-        let reverse = peak - 2.0 * q_max / (2.0 * mu);
+        let reverse = exact.reverse_yield(peak);
         let mut worst: f64 = 0.0;
         let mut loading = true;
         drive(
@@ -485,22 +576,7 @@ mod tests {
                 if (eps - peak).abs() < 1e-12 * peak {
                     loading = false;
                 }
-                // Signed von Mises stress along the path.
-                let (q, eb) = if loading {
-                    if eps <= eps_y {
-                        (2.0 * mu * eps, 0.0)
-                    } else {
-                        let eb = 2.0 * mu * (eps - eps_y) / (3.0 * mu + H);
-                        (SY + H * eb, eb)
-                    }
-                } else if eps >= reverse {
-                    (q_max - 2.0 * mu * (peak - eps), ebar_max)
-                } else {
-                    let eb = ebar_max + 2.0 * mu * (reverse - eps) / (3.0 * mu + H);
-                    (-(SY + H * eb), eb)
-                };
-                let s11 = k * eps + 2.0 * q / 3.0;
-                let s22 = k * eps - q / 3.0;
+                let (s11, s22, eb) = exact.at(eps, (!loading).then_some(peak));
                 let err = ((s[(0, 0)] - s11).abs() + (s[(1, 1)] - s22).abs()) / SY
                     + (ebar - eb).abs() / eps_y;
                 worst = worst.max(err);
@@ -532,19 +608,8 @@ mod tests {
     }
 
     fn jc(c: f64) -> J2 {
-        // Johnson & Cook 1983's 4340 steel: A 792 MPa, B 510 MPa, n 0.26,
-        // C 0.014, m 1.03, T_melt 1793 K.
         J2 {
-            flow: FlowStress::JohnsonCook(JohnsonCook {
-                a: 792e6,
-                b: 510e6,
-                n: 0.26,
-                c,
-                m: 1.03,
-                rate0: 1.0,
-                t_room: 293.0,
-                t_melt: 1793.0,
-            }),
+            flow: FlowStress::JohnsonCook(JohnsonCook::steel_4340(c)),
             taylor_quinney: 0.9,
             specific_heat: 477.0,
         }

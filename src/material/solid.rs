@@ -269,6 +269,7 @@ impl SolidMaterial {
                         stress,
                         work,
                         plastic,
+                        None,
                     )
                     .is_some();
             }
@@ -314,7 +315,7 @@ impl SolidMaterial {
             // Gas points are explicit only (the scene rejects them in implicit
             // mode, and `spatial_tangent` gives none): the stress is kept.
             // The implicit step updates the Hencky models through
-            // `hencky_tangent_update` (they need the plastic state and
+            // `hencky_update` (they need the plastic state and
             // give their own tangent).
             SolidModel::GasPoint(_)
             | SolidModel::Membrane(_)
@@ -363,31 +364,11 @@ impl SolidMaterial {
     /// the relative deformation gradient `f_rel`, the new total `f_new`
     /// (determinant `j`; `j_old` at the start of the step): updates the
     /// Cauchy `stress`, the `work` (stored energy plus plastic work, per
-    /// unit reference volume) and the plastic `state`, and returns the
-    /// plastic work of the step, or `None` for a model that is not Hencky
-    /// or an inverted step.
+    /// unit reference volume) and the plastic `state`, writes the tangent
+    /// ∂τ/∂h into `tangent` when given, and returns the plastic work of the
+    /// step, or `None` for a model that is not Hencky or an inverted step.
     #[allow(clippy::too_many_arguments)]
     pub fn hencky_update(
-        &self,
-        f_rel: &Matrix3<f64>,
-        f_new: &Matrix3<f64>,
-        j: f64,
-        j_old: f64,
-        dt: f64,
-        rho0: f64,
-        stress: &mut Matrix3<f64>,
-        work: &mut f64,
-        plastic: &mut PlasticState,
-    ) -> Option<f64> {
-        self.hencky_tangent_update(
-            f_rel, f_new, j, j_old, dt, rho0, stress, work, plastic, None,
-        )
-    }
-
-    /// [`Self::hencky_update`], writing the tangent ∂τ/∂h into `tangent`
-    /// when given.
-    #[allow(clippy::too_many_arguments)]
-    pub fn hencky_tangent_update(
         &self,
         f_rel: &Matrix3<f64>,
         f_new: &Matrix3<f64>,

@@ -1567,7 +1567,7 @@ impl<const D: usize> ImplicitRun<D> {
                 let mut a = assembling.then(|| [[Matrix3::zeros(); 3]; 3]);
                 let rho0 = parts.mass[p] / parts.vol0[p];
                 if mat
-                    .hencky_tangent_update(
+                    .hencky_update(
                         &df,
                         &f_new,
                         j,

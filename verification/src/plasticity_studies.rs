@@ -54,16 +54,7 @@ pub fn hencky_simple_shear(quick: bool) -> Result<StudyResult> {
         (
             "Johnson-Cook 4340 steel, adiabatic (beta 0.9)",
             J2 {
-                flow: FlowStress::JohnsonCook(JohnsonCook {
-                    a: 792e6,
-                    b: 510e6,
-                    n: 0.26,
-                    c: 0.014,
-                    m: 1.03,
-                    rate0: 1.0,
-                    t_room: 293.0,
-                    t_melt: 1793.0,
-                }),
+                flow: FlowStress::JohnsonCook(JohnsonCook::steel_4340(0.014)),
                 taylor_quinney: 0.9,
                 specific_heat: 477.0,
             },
