@@ -353,11 +353,17 @@ impl SolidMaterial {
     /// [`Self::spatial_tangent`], or the Hencky models' general one
     /// ([`crate::material::hencky::Tangent`]).
     pub fn has_implicit_tangent(&self) -> bool {
-        self.spatial_tangent(1.0).is_some()
-            || matches!(
-                self.model,
-                SolidModel::Hencky | SolidModel::HenckyPlastic(_)
-            )
+        self.spatial_tangent(1.0).is_some() || self.is_hencky()
+    }
+
+    /// Whether this is a Hencky model ([`SolidModel::Hencky`] or
+    /// [`SolidModel::HenckyPlastic`]), updated by [`Self::hencky_update`].
+    #[inline]
+    pub fn is_hencky(&self) -> bool {
+        matches!(
+            self.model,
+            SolidModel::Hencky | SolidModel::HenckyPlastic(_)
+        )
     }
 
     /// One step of a Hencky model ([`crate::material::hencky::step`]) from

@@ -1501,12 +1501,7 @@ impl<const D: usize> ImplicitRun<D> {
         ev.df.resize(np, Matrix3::identity());
         ev.stress.resize(np, Matrix3::zeros());
         ev.j.resize(np, 1.0);
-        let hencky = self.materials.iter().any(|m| {
-            matches!(
-                m.model,
-                crate::material::SolidModel::Hencky | crate::material::SolidModel::HenckyPlastic(_)
-            )
-        });
+        let hencky = self.materials.iter().any(SolidMaterial::is_hencky);
         if hencky {
             ev.plastic.resize(np, PlasticState::default());
             ev.work.resize(np, 0.0);
@@ -1553,10 +1548,7 @@ impl<const D: usize> ImplicitRun<D> {
             // A Hencky model: its update from the plastic state at the start
             // of the step, with the tangent ∂τ/∂h when assembling.
             let mut tangent = None;
-            let sigma = if matches!(
-                mat.model,
-                crate::material::SolidModel::Hencky | crate::material::SolidModel::HenckyPlastic(_)
-            ) {
+            let sigma = if mat.is_hencky() {
                 let mut sigma = parts.stress.get(p);
                 let mut st = PlasticState {
                     plastic_strain: parts.plastic_strain_of(p),
@@ -1849,13 +1841,7 @@ impl<const D: usize> ImplicitRun<D> {
             parts.f.set(p, &(ev.df[p] * parts.f.get(p)));
             parts.stress.set(p, &ev.stress[p]);
             parts.vol[p] = ev.j[p] * parts.vol0[p];
-            if !ev.plastic.is_empty()
-                && matches!(
-                    mat.model,
-                    crate::material::SolidModel::Hencky
-                        | crate::material::SolidModel::HenckyPlastic(_)
-                )
-            {
+            if !ev.plastic.is_empty() && mat.is_hencky() {
                 parts.work[p] = ev.work[p];
                 if let Some(e) = parts.plastic_strain.get_mut(p) {
                     *e = ev.plastic[p].plastic_strain;
