@@ -716,3 +716,35 @@ fn the_particle_watchdog_finds_every_impossible_value() {
     let v = particle_watchdog(&p, &gas.materials).expect("found");
     assert_eq!((v.field, v.at), ("internal_energy", Location::Particle(i)));
 }
+
+/// A reactant burning against another solid feeds product cells that the
+/// solid fills, where the product is a trace: the burn's step limit
+/// ([`mpmice::coupling::reaction::MAX_GROWTH`]) collapses Δt, and the
+/// guard names the burn, not a wave speed. The slab of `reaction_burn`
+/// with a steel slab against its burning face (n = 0, K = 1.8): the cell
+/// beyond the face (cell 50 of 250 on [0, 0.5]) is fed at exactly
+/// K A = 1.8 kg/s per m².
+#[test]
+fn a_burn_against_a_solid_names_the_burn_that_limits_the_step() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let text = edit(
+        &case_text("reaction_burn.toml"),
+        "[[objects]]\nmaterial = \"pbx\"",
+        "[[materials]]\nname = \"steel\"\ntype = \"solid\"\nmodel = \"neo_hookean\"\n\
+         density = 7830.0\nbulk_modulus = 160e9\nshear_modulus = 77e9\n\n\
+         [[objects]]\nmaterial = \"steel\"\n\
+         geometry = { type = \"box\", lower = [0.1], upper = [0.2] }\n\n\
+         [[objects]]\nmaterial = \"pbx\"",
+    );
+    let s = mpmice::scene::parse(&text).expect("parses");
+    let e = check_scene(&s, &opts(tmp.path())).expect_err("refused");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert!(matches!(e, Error::Progress { step: 0, .. }), "{msg}");
+    for part in [
+        "Δt set by cell [50] of material `products`",
+        "the burn of `pbx` feeds it 1.800e0 kg/s",
+    ] {
+        assert!(msg.contains(part), "`{part}` missing: {msg}");
+    }
+}

@@ -1360,6 +1360,37 @@ impl<const D: usize> CoupledRun<D> {
         t
     }
 
+    /// Where a reaction limits the next step most, at the current state
+    /// ([`reaction::limiting_cell`]); `None` where nothing burns. For the
+    /// run loop's diagnostics.
+    pub fn burn_limit(&self) -> Option<reaction::BurnLimit> {
+        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let mut best: Option<reaction::BurnLimit> = None;
+        for (k, r) in self.reactions.iter().enumerate() {
+            let mass = &self.fluid.cells[r.product].mass;
+            let found = reaction::limiting_cell(
+                &self.fluid.layout,
+                &r.law,
+                &self.fluid.pressure,
+                &self.fields[r.field].particles,
+                uniform_t,
+                mass,
+            );
+            if let Some((cell, inflow, dt)) = found {
+                if best.as_ref().is_none_or(|b| dt < b.dt) {
+                    best = Some(reaction::BurnLimit {
+                        reaction: k,
+                        cell,
+                        mass: mass[cell],
+                        inflow,
+                        dt,
+                    });
+                }
+            }
+        }
+        best
+    }
+
     /// Applies every reaction's surface burn over a step of `dt`.
     fn react(&mut self, dt: f64) {
         let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);

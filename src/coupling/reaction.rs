@@ -311,27 +311,27 @@ fn exposed_faces<const D: usize>(
     area
 }
 
-/// One step of the surface burn of `particles` (the reactant field; every
-/// particle is reactant) into `product` (module doc): `pressure` per cell,
-/// `temperature` per particle (`None`: every particle at `uniform_t`).
-/// Returns what was converted in this step and the largest step the burn
-/// allows next (at the rates of this step: [`MAX_GROWTH`]), and removes the
-/// particles that burnt out. With `dt = 0` it changes nothing and only
-/// returns that limit.
-#[allow(clippy::too_many_arguments)]
-pub fn burn<const D: usize>(
+/// Temperature of reactant particle `p`: `uniform_t` where the solid's
+/// temperature is not tracked, else its own.
+#[inline]
+fn temperature<const D: usize>(particles: &Particles<D>, p: usize, uniform_t: Option<f64>) -> f64 {
+    uniform_t.unwrap_or_else(|| particles.temperature_of(p))
+}
+
+/// The burn's rates at `pressure` over a step of `dt` (module doc), into
+/// `s`: each cell's reactant fraction `θ`, eligible mass, the fraction of
+/// it burnt, its exposed area, each product cell's inflow rate and each
+/// particle's cell. Reads the particles only.
+fn tally<const D: usize>(
     layout: &CellLayout<D>,
     law: &BurnLaw,
-    reactant_cv: f64,
     dt: f64,
     pressure: &[f64],
-    particles: &mut Particles<D>,
+    particles: &Particles<D>,
     uniform_t: Option<f64>,
-    product: &mut ProductCells<'_, D>,
-    scratch: &mut BurnScratch<D>,
-) -> (ReactionTotals, f64) {
+    s: &mut BurnScratch<D>,
+) {
     let n_cells = layout.len();
-    let s = scratch;
     let zero = (0.0, SVector::<f64, D>::zeros(), 0.0);
     for v in [
         &mut s.theta,
@@ -349,16 +349,12 @@ pub fn burn<const D: usize>(
     }
     s.cell_of.clear();
     let vol = layout.cell_volume();
-    let temperature_of = |p: usize, particles: &Particles<D>| match uniform_t {
-        Some(t) => t,
-        None => particles.temperature_of(p),
-    };
     for p in 0..particles.len() {
         let c = cell_containing(layout, &particles.x[p]);
         s.cell_of.push(c.unwrap_or(usize::MAX));
         if let Some(c) = c {
             s.theta[c] += particles.vol[p].max(particles.vol0[p]) / vol;
-            if temperature_of(p, particles) >= law.threshold_temperature {
+            if temperature(particles, p, uniform_t) >= law.threshold_temperature {
                 s.eligible[c] += particles.mass[p];
             }
         }
@@ -383,14 +379,85 @@ pub fn burn<const D: usize>(
             }
         }
     }
-    // The next step's limit: no product cell may receive more than its
-    // own mass in one step (module doc).
-    let mut dt_limit = f64::INFINITY;
+}
+
+/// The product cell that limits the next step most ([`MAX_GROWTH`] times
+/// its mass over its inflow rate) and that limit; `None` where nothing
+/// flows in.
+fn growth_limit<const D: usize>(
+    layout: &CellLayout<D>,
+    inflow: &[f64],
+    product_mass: &[f64],
+) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
     for &c in &layout.interior {
-        if s.inflow[c] > 0.0 {
-            dt_limit = dt_limit.min(MAX_GROWTH * product.mass[c] / s.inflow[c]);
+        if inflow[c] > 0.0 {
+            let dt = MAX_GROWTH * product_mass[c] / inflow[c];
+            if best.is_none_or(|(_, b)| dt < b) {
+                best = Some((c, dt));
+            }
         }
     }
+    best
+}
+
+/// Where a run's burn limits the next step ([`MAX_GROWTH`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BurnLimit {
+    /// The reaction (index into the run's reactions).
+    pub reaction: usize,
+    /// The product cell.
+    pub cell: usize,
+    /// The product's mass in it \[kg\].
+    pub mass: f64,
+    /// The rate at which the burn feeds it \[kg/s\].
+    pub inflow: f64,
+    /// The limit \[s\].
+    pub dt: f64,
+}
+
+/// Where the burn limits the next step, at the current state (rates at
+/// `pressure`, the reactant `particles` at `uniform_t` or their own
+/// temperatures, the product's mass per cell): the product cell, its
+/// inflow rate \[kg/s\] and the limit \[s\] ([`MAX_GROWTH`]); `None`
+/// where nothing burns. For the run loop's diagnostics (it allocates).
+pub fn limiting_cell<const D: usize>(
+    layout: &CellLayout<D>,
+    law: &BurnLaw,
+    pressure: &[f64],
+    particles: &Particles<D>,
+    uniform_t: Option<f64>,
+    product_mass: &[f64],
+) -> Option<(usize, f64, f64)> {
+    let mut s = BurnScratch::default();
+    tally(layout, law, 0.0, pressure, particles, uniform_t, &mut s);
+    growth_limit(layout, &s.inflow, product_mass).map(|(c, dt)| (c, s.inflow[c], dt))
+}
+
+/// One step of the surface burn of `particles` (the reactant field; every
+/// particle is reactant) into `product` (module doc): `pressure` per cell,
+/// `temperature` per particle (`None`: every particle at `uniform_t`).
+/// Returns what was converted in this step and the largest step the burn
+/// allows next (at the rates of this step: [`MAX_GROWTH`]), and removes the
+/// particles that burnt out. With `dt = 0` it changes nothing and only
+/// returns that limit.
+#[allow(clippy::too_many_arguments)]
+pub fn burn<const D: usize>(
+    layout: &CellLayout<D>,
+    law: &BurnLaw,
+    reactant_cv: f64,
+    dt: f64,
+    pressure: &[f64],
+    particles: &mut Particles<D>,
+    uniform_t: Option<f64>,
+    product: &mut ProductCells<'_, D>,
+    scratch: &mut BurnScratch<D>,
+) -> (ReactionTotals, f64) {
+    let s = scratch;
+    tally(layout, law, dt, pressure, particles, uniform_t, s);
+    // The next step's limit: no product cell may receive more than its
+    // own mass in one step (module doc).
+    let dt_limit = growth_limit(layout, &s.inflow, product.mass).map_or(f64::INFINITY, |l| l.1);
     // The particles give mass, momentum and energy to their cell's tally.
     let mut out = ReactionTotals::default();
     let mut any_out = false;
@@ -402,13 +469,13 @@ pub fn burn<const D: usize>(
             continue;
         }
         let f = s.fraction[c];
-        if f <= 0.0 || temperature_of(p, particles) < law.threshold_temperature {
+        if f <= 0.0 || temperature(particles, p, uniform_t) < law.threshold_temperature {
             continue;
         }
         let m = particles.mass[p];
         let dm = if f >= 1.0 { m } else { m * f };
         let v = particles.v[p];
-        let e_in = reactant_cv * temperature_of(p, particles) + law.heat_of_reaction;
+        let e_in = reactant_cv * temperature(particles, p, uniform_t) + law.heat_of_reaction;
         let de = dm * (e_in + 0.5 * v.norm_squared());
         let g = &mut s.given[c];
         g.0 += dm;

@@ -42,6 +42,17 @@ pub enum LimitCause {
         /// The solver's reason.
         what: String,
     },
+    /// A surface burn's step limit (`crate::coupling::reaction::MAX_GROWTH`):
+    /// the product cell would receive more than that many times its own
+    /// mass in one step.
+    Burn {
+        /// The reactant's scene name.
+        reactant: String,
+        /// The product's mass in the cell \[kg\].
+        mass: f64,
+        /// The rate at which the burn feeds the cell \[kg/s\].
+        inflow: f64,
+    },
 }
 
 impl std::fmt::Display for DtLimiter {
@@ -56,6 +67,16 @@ impl std::fmt::Display for DtLimiter {
                 f,
                 "{} of material `{}`: the last Δt cut, after the implicit solve at Δt {:.3e} s failed ({what})",
                 self.site, self.material, self.dt
+            ),
+            LimitCause::Burn { reactant, mass, inflow } => write!(
+                f,
+                "{} of material `{}`: the burn of `{reactant}` feeds it {inflow:.3e} kg/s and \
+                 its mass there is {mass:.3e} kg (a product cell may grow by at most {} \
+                 times its mass in a step), Δt limit {:.3e} s",
+                self.site,
+                self.material,
+                crate::coupling::reaction::MAX_GROWTH,
+                self.dt
             ),
         }
     }

@@ -258,15 +258,35 @@ impl<const D: usize> Model for Coupled<D> {
     }
 
     fn dt_limiter(&self) -> Option<crate::driver::limiter::DtLimiter> {
-        use crate::driver::limiter::{cell_limiter, particle_limiter, tighter};
+        use crate::driver::limiter::{
+            cell_limiter, particle_limiter, tighter, DtLimiter, LimitCause,
+        };
         let run = &self.run;
         let cells = cell_limiter(&run.fluid, 0..run.num_fluids());
-        run.fields.iter().fold(cells, |best, f| {
+        let waves = run.fields.iter().fold(cells, |best, f| {
             tighter(
                 best,
                 particle_limiter(&run.grid, &run.materials, &f.particles, &[]),
             )
-        })
+        });
+        let burn = run.burn_limit().map(|b| {
+            let r = &run.reactions[b.reaction];
+            let particles = &run.fields[r.field].particles;
+            DtLimiter {
+                site: format!("cell {:?}", run.fluid.layout.coords(b.cell)),
+                material: run.fluid.materials[r.product].name.clone(),
+                cause: LimitCause::Burn {
+                    reactant: particles
+                        .material
+                        .first()
+                        .map_or_else(String::new, |&m| run.materials[m as usize].name.clone()),
+                    mass: b.mass,
+                    inflow: b.inflow,
+                },
+                dt: b.dt,
+            }
+        });
+        tighter(waves, burn)
     }
 
     fn describe(&self) -> Description {
