@@ -717,24 +717,25 @@ fn the_particle_watchdog_finds_every_impossible_value() {
     assert_eq!((v.field, v.at), ("internal_energy", Location::Particle(i)));
 }
 
-/// A reactant burning against another solid feeds product cells that the
-/// solid fills, where the product is a trace: the burn's step limit
-/// ([`mpmice::coupling::reaction::MAX_GROWTH`]) collapses Δt, and the
-/// guard names the burn, not a wave speed. The slab of `reaction_burn`
-/// with a steel slab against its burning face (n = 0, K = 1.8): the cell
-/// beyond the face (cell 50 of 250 on [0, 0.5]) is fed at exactly
-/// K A = 1.8 kg/s per m².
+/// A burn into a product that is only a trace in the gas beyond the face
+/// (the tube holds air; the product is not in its region, so it starts at
+/// the trace fraction 1e-10): the burn's step limit
+/// ([`mpmice::coupling::reaction::MAX_GROWTH`]) collapses Δt, and the guard
+/// names the burn, not a wave speed. The slab of `reaction_burn` (n = 0,
+/// K = 1.8): the cell beyond its face (cell 50 of 250 on [0, 0.5]) is fed
+/// at exactly K A = 1.8 kg/s per m².
 #[test]
-fn a_burn_against_a_solid_names_the_burn_that_limits_the_step() {
+fn a_burn_into_a_trace_names_the_burn_that_limits_the_step() {
     let tmp = tempfile::tempdir().expect("tmp");
     let text = edit(
-        &case_text("reaction_burn.toml"),
+        &edit(
+            &case_text("reaction_burn.toml"),
+            "states = [{ material = \"products\", volume_fraction = 1.0, density = 0.4 }]",
+            "states = [{ material = \"air\", volume_fraction = 1.0, temperature = 300.0 }]",
+        ),
         "[[objects]]\nmaterial = \"pbx\"",
-        "[[materials]]\nname = \"steel\"\ntype = \"solid\"\nmodel = \"neo_hookean\"\n\
-         density = 7830.0\nbulk_modulus = 160e9\nshear_modulus = 77e9\n\n\
-         [[objects]]\nmaterial = \"steel\"\n\
-         geometry = { type = \"box\", lower = [0.1], upper = [0.2] }\n\n\
-         [[objects]]\nmaterial = \"pbx\"",
+        "[[materials]]\nname = \"air\"\ntype = \"fluid\"\neos = \"ideal_gas\"\n\
+         gamma = 1.4\ncv = 717.5\n\n[[objects]]\nmaterial = \"pbx\"",
     );
     let s = mpmice::scene::parse(&text).expect("parses");
     let e = check_scene(&s, &opts(tmp.path())).expect_err("refused");

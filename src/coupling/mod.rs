@@ -366,6 +366,9 @@ pub struct CoupledRun<const D: usize> {
     /// step ([`reaction`]).
     pub reactions: Vec<reaction::Reaction>,
     burn_scratch: reaction::BurnScratch<D>,
+    /// Per cell: the fluids' volume share (the burn's
+    /// [`reaction::ProductCells::fluid_share`]).
+    burn_share: Vec<f64>,
 }
 
 impl<const D: usize> CoupledRun<D> {
@@ -552,6 +555,7 @@ impl<const D: usize> CoupledRun<D> {
             ws,
             reactions: Vec::new(),
             burn_scratch: reaction::BurnScratch::default(),
+            burn_share: Vec::new(),
         };
         run.initialise()?;
         Ok(run)
@@ -1365,6 +1369,8 @@ impl<const D: usize> CoupledRun<D> {
     /// run loop's diagnostics.
     pub fn burn_limit(&self) -> Option<reaction::BurnLimit> {
         let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let mut share = Vec::new();
+        self.fluid_share(&mut share);
         let mut best: Option<reaction::BurnLimit> = None;
         for (k, r) in self.reactions.iter().enumerate() {
             let mass = &self.fluid.cells[r.product].mass;
@@ -1375,6 +1381,7 @@ impl<const D: usize> CoupledRun<D> {
                 &self.fields[r.field].particles,
                 uniform_t,
                 mass,
+                &share,
             );
             if let Some((cell, inflow, dt)) = found {
                 if best.as_ref().is_none_or(|b| dt < b.dt) {
@@ -1391,9 +1398,41 @@ impl<const D: usize> CoupledRun<D> {
         best
     }
 
+    /// Per cell into `out`: the fluids' share `φ` of the material volume
+    /// `Σ_r M_r v_r` where the particle materials fill the cell, so that its
+    /// equilibration normalises on that volume
+    /// ([`ice::pressure::normalising_weight`] = 1); 1 elsewhere and
+    /// without normalisation (the burn's
+    /// [`reaction::ProductCells::fluid_share`]).
+    fn fluid_share(&self, out: &mut Vec<f64>) {
+        let state = &self.fluid;
+        let vol = state.layout.cell_volume();
+        out.clear();
+        out.resize(state.layout.len(), 1.0);
+        if !self.ice.normalise_volume {
+            return;
+        }
+        for &c in &state.layout.interior {
+            let (mut solid, mut fluid) = (0.0, 0.0);
+            for (r, mc) in state.cells.iter().enumerate() {
+                let mv = mc.mass[c] * mc.sp_vol[c];
+                if self.ice.frame(r) == ice::Frame::Eulerian {
+                    fluid += mv;
+                } else {
+                    solid += mv;
+                }
+            }
+            if ice::pressure::normalising_weight(solid, vol) >= 1.0 {
+                out[c] = fluid / (fluid + solid);
+            }
+        }
+    }
+
     /// Applies every reaction's surface burn over a step of `dt`.
     fn react(&mut self, dt: f64) {
         let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let mut share = std::mem::take(&mut self.burn_share);
+        self.fluid_share(&mut share);
         for r in &mut self.reactions {
             let product_cv = self.fluid.materials[r.product].eos.specific_heat_cv();
             let pc = &mut self.fluid.cells[r.product];
@@ -1401,6 +1440,8 @@ impl<const D: usize> CoupledRun<D> {
                 mass: &mut pc.mass,
                 velocity: &mut pc.velocity,
                 temperature: &mut pc.temperature,
+                sp_vol: &mut pc.sp_vol,
+                fluid_share: &share,
                 cv: product_cv,
             };
             let (step, dt_limit) = reaction::burn(
@@ -1419,6 +1460,35 @@ impl<const D: usize> CoupledRun<D> {
             r.totals.energy += step.energy;
             r.totals.heat += step.heat;
         }
+        self.burn_share = share;
+        self.mark_fed_cells();
+    }
+
+    /// Sets [`ice::IceParams::isothermal_exempt_cells`] to the cells the
+    /// reactions feed and burn in at the current state (a dry run of their
+    /// rates, [`reaction::mark_fed`]), so that a product is not held
+    /// isothermal where the burn feeds it or will soon (held isothermal
+    /// in the burning cells too, the very fast burn of `tests/reaction.rs`
+    /// balanced its energy to −4.3e-2 instead of −6.1e-3), and is
+    /// elsewhere. A function of the state alone, so that a restart sets the
+    /// same cells.
+    pub fn mark_fed_cells(&mut self) {
+        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let mut fed = std::mem::take(&mut self.ice.isothermal_exempt_cells);
+        fed.clear();
+        fed.resize(self.fluid.layout.len(), false);
+        for r in &self.reactions {
+            reaction::mark_fed(
+                &self.fluid.layout,
+                &r.law,
+                &self.fluid.pressure,
+                &self.fields[r.field].particles,
+                uniform_t,
+                &mut self.burn_scratch,
+                &mut fed,
+            );
+        }
+        self.ice.isothermal_exempt_cells = fed;
     }
 }
 

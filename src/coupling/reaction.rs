@@ -43,6 +43,24 @@
 //! included, so that mass, momentum and total energy are conserved to
 //! round-off by the exchange. A particle whose mass is used up is removed.
 //!
+//! **Volume** (Guilkey Eq. 40's `v Γ` terms, which sum to zero over the
+//! materials of a cell: the product takes the volume the reactant frees).
+//! Where the cells are not normalised (no solid) the equilibration fits the
+//! product into the cell volume and its specific volume does not enter.
+//! Where a solid fills the product cell, the equilibration normalises on
+//! the cell's material volume `Σ_r M_r v_r` (Guilkey Sec. 3.3 step 2;
+//! [`crate::ice::pressure::SOLID_FILL_FOR_NORMALISING`]), so the product's
+//! `M v` is what gives it room. Added at its own specific volume there it
+//! would make its own room and never pressurise: a reactant confined by a
+//! steel wall burnt without any pressure rise. The product's added volume
+//! is therefore `(1 − φ) ΔV_s + φ Δm v`, with `ΔV_s` the volume the burnt
+//! particles leave, `v` the product's specific volume in the cell and `φ`
+//! the fluids' share of the cell's material volume: where solid holds the
+//! cell (`φ → 0`) the freed volume is all the product gets, and its
+//! pressure rises as it accumulates; where gas holds most of it (`φ → 1`,
+//! e.g. a burning face in open gas, whose cell a solid's interpolated
+//! volume reaches) the gas there makes room as before.
+//!
 //! **Time step.** A burn puts its product into the few cells beside the
 //! surface, whose product mass may be tiny; at a fast rate one step could
 //! add many times that mass, and the next equilibration would have to find
@@ -52,15 +70,16 @@
 //! that no product cell receives more than [`MAX_GROWTH`] times its own mass
 //! in it, at the rates of the step before (the first step's from a dry run
 //! at the start); a slow burn is not limited by it (`cases/reaction_burn.toml`
-//! takes the same 3487 steps with and without it).
+//! takes the same 3487 steps with and without it). Cells where solid holds
+//! most of the material volume ([`GROWTH_LIMIT_SHARE`]) are exempt: the
+//! product there is a trace (against a steel wall the limit was 1e-18 s),
+//! and it arrives with the volume the reactant frees, so its pressure is
+//! bounded by the product's state at the reactant's density.
 //!
 //! **Splitting.** The exchange is applied at the end of a coupled step with
 //! that step's `Δt`, pressure and positions; the next step's equilibration
 //! (Guilkey Eq. 13) then finds the pressure at which the added product mass
-//! fits in the cell. (Where a solid fills the cell the equilibration
-//! normalises on the total material volume, so product added there takes
-//! a larger share instead of raising the pressure: a confined burn does
-//! not pressurise yet.) This is the operator-split form of the `Σ v_r Γ_r`
+//! fits in its room. This is the operator-split form of the `Σ v_r Γ_r`
 //! term of Guilkey Eq. 29 (the linearised volume change of the reaction in
 //! the pressure increment) and needs no retry logic: a step whose pressure
 //! stage halves `Δt` has not burnt anything yet.
@@ -73,6 +92,13 @@ use crate::mpm::Particles;
 /// The most a product cell's mass may grow in one step, relative to
 /// itself: the burn's limit on the time step (module doc).
 pub const MAX_GROWTH: f64 = 1.0;
+
+/// The fluids' share of a product cell's material volume below which the
+/// cell does not limit the step ([`MAX_GROWTH`]): solid holds most of it,
+/// so the product arrives with most of the reactant's volume and its
+/// pressure is bounded by the product's state at the reactant's density,
+/// not by how much its mass grows (module doc).
+pub const GROWTH_LIMIT_SHARE: f64 = 0.5;
 
 /// A surface burn law `Γ = A K pⁿ` (Guilkey Sec. 5).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -159,10 +185,11 @@ pub struct BurnScratch<const D: usize> {
     eligible: Vec<f64>,
     /// Fraction of `M_c` burnt this step.
     fraction: Vec<f64>,
-    /// Per burning cell: the mass, momentum and energy its particles gave.
-    given: Vec<(f64, SVector<f64, D>, f64)>,
-    /// Per product cell: the mass, momentum and energy it receives.
-    gained: Vec<(f64, SVector<f64, D>, f64)>,
+    /// Per burning cell: the mass, momentum, energy and volume its
+    /// particles gave.
+    given: Vec<Transfer<D>>,
+    /// Per product cell: the mass, momentum, energy and volume it receives.
+    gained: Vec<Transfer<D>>,
     /// Per product cell: the mass rate it receives at the current rates.
     inflow: Vec<f64>,
     /// Per burning cell: its exposed area.
@@ -189,6 +216,27 @@ impl<const D: usize> Default for BurnScratch<D> {
     }
 }
 
+/// What the burn moves from a cell's particles to the product: mass,
+/// momentum, energy and the volume the mass leaves.
+#[derive(Debug, Clone, Copy)]
+struct Transfer<const D: usize> {
+    mass: f64,
+    momentum: SVector<f64, D>,
+    energy: f64,
+    volume: f64,
+}
+
+impl<const D: usize> Default for Transfer<D> {
+    fn default() -> Self {
+        Self {
+            mass: 0.0,
+            momentum: SVector::zeros(),
+            energy: 0.0,
+            volume: 0.0,
+        }
+    }
+}
+
 /// The product's cell state the exchange updates.
 pub struct ProductCells<'a, const D: usize> {
     /// Mass per cell.
@@ -197,6 +245,13 @@ pub struct ProductCells<'a, const D: usize> {
     pub velocity: &'a mut [SVector<f64, D>],
     /// Temperature per cell.
     pub temperature: &'a mut [f64],
+    /// Specific volume per cell.
+    pub sp_vol: &'a mut [f64],
+    /// Per cell: the fluids' share `φ` of the material volume where a solid
+    /// fills the cell, so that the equilibration normalises on the material
+    /// volume there ([`crate::ice::pressure::normalising_weight`] = 1); 1
+    /// elsewhere.
+    pub fluid_share: &'a [f64],
     /// `c_v` of the product.
     pub cv: f64,
 }
@@ -332,7 +387,7 @@ fn tally<const D: usize>(
     s: &mut BurnScratch<D>,
 ) {
     let n_cells = layout.len();
-    let zero = (0.0, SVector::<f64, D>::zeros(), 0.0);
+    let zero = Transfer::default();
     for v in [
         &mut s.theta,
         &mut s.eligible,
@@ -383,15 +438,18 @@ fn tally<const D: usize>(
 
 /// The product cell that limits the next step most ([`MAX_GROWTH`] times
 /// its mass over its inflow rate) and that limit; `None` where nothing
-/// flows in.
+/// flows in. Cells where solid holds most of the material volume
+/// (`fluid_share` below [`GROWTH_LIMIT_SHARE`]) do not limit: the product
+/// brings most of its volume there (module doc).
 fn growth_limit<const D: usize>(
     layout: &CellLayout<D>,
     inflow: &[f64],
     product_mass: &[f64],
+    fluid_share: &[f64],
 ) -> Option<(usize, f64)> {
     let mut best: Option<(usize, f64)> = None;
     for &c in &layout.interior {
-        if inflow[c] > 0.0 {
+        if inflow[c] > 0.0 && fluid_share[c] >= GROWTH_LIMIT_SHARE {
             let dt = MAX_GROWTH * product_mass[c] / inflow[c];
             if best.is_none_or(|(_, b)| dt < b) {
                 best = Some((c, dt));
@@ -399,6 +457,28 @@ fn growth_limit<const D: usize>(
         }
     }
     best
+}
+
+/// Marks in `fed` the cells the burn feeds at the current state (rates at
+/// `pressure`, the reactant `particles` at `uniform_t` or their own
+/// temperatures) and the cells of the burning reactant, which become
+/// product cells as the front passes; `scratch` is overwritten. Leaves the
+/// other entries.
+pub fn mark_fed<const D: usize>(
+    layout: &CellLayout<D>,
+    law: &BurnLaw,
+    pressure: &[f64],
+    particles: &Particles<D>,
+    uniform_t: Option<f64>,
+    scratch: &mut BurnScratch<D>,
+    fed: &mut [bool],
+) {
+    tally(layout, law, 0.0, pressure, particles, uniform_t, scratch);
+    for &c in &layout.interior {
+        if scratch.inflow[c] > 0.0 || scratch.eligible[c] > 0.0 {
+            fed[c] = true;
+        }
+    }
 }
 
 /// Where a run's burn limits the next step ([`MAX_GROWTH`]).
@@ -418,9 +498,10 @@ pub struct BurnLimit {
 
 /// Where the burn limits the next step, at the current state (rates at
 /// `pressure`, the reactant `particles` at `uniform_t` or their own
-/// temperatures, the product's mass per cell): the product cell, its
-/// inflow rate \[kg/s\] and the limit \[s\] ([`MAX_GROWTH`]); `None`
-/// where nothing burns. For the run loop's diagnostics (it allocates).
+/// temperatures, the product's mass and the fluids' volume share per cell):
+/// the product cell, its inflow rate \[kg/s\] and the limit \[s\]
+/// ([`MAX_GROWTH`]); `None` where nothing burns. For the run loop's
+/// diagnostics (it allocates).
 pub fn limiting_cell<const D: usize>(
     layout: &CellLayout<D>,
     law: &BurnLaw,
@@ -428,10 +509,11 @@ pub fn limiting_cell<const D: usize>(
     particles: &Particles<D>,
     uniform_t: Option<f64>,
     product_mass: &[f64],
+    fluid_share: &[f64],
 ) -> Option<(usize, f64, f64)> {
     let mut s = BurnScratch::default();
     tally(layout, law, 0.0, pressure, particles, uniform_t, &mut s);
-    growth_limit(layout, &s.inflow, product_mass).map(|(c, dt)| (c, s.inflow[c], dt))
+    growth_limit(layout, &s.inflow, product_mass, fluid_share).map(|(c, dt)| (c, s.inflow[c], dt))
 }
 
 /// One step of the surface burn of `particles` (the reactant field; every
@@ -457,7 +539,8 @@ pub fn burn<const D: usize>(
     tally(layout, law, dt, pressure, particles, uniform_t, s);
     // The next step's limit: no product cell may receive more than its
     // own mass in one step (module doc).
-    let dt_limit = growth_limit(layout, &s.inflow, product.mass).map_or(f64::INFINITY, |l| l.1);
+    let dt_limit = growth_limit(layout, &s.inflow, product.mass, product.fluid_share)
+        .map_or(f64::INFINITY, |l| l.1);
     // The particles give mass, momentum and energy to their cell's tally.
     let mut out = ReactionTotals::default();
     let mut any_out = false;
@@ -478,9 +561,16 @@ pub fn burn<const D: usize>(
         let e_in = reactant_cv * temperature(particles, p, uniform_t) + law.heat_of_reaction;
         let de = dm * (e_in + 0.5 * v.norm_squared());
         let g = &mut s.given[c];
-        g.0 += dm;
-        g.1 += v * dm;
-        g.2 += de;
+        g.mass += dm;
+        g.momentum += v * dm;
+        g.energy += de;
+        // The volume the burnt mass leaves, at the particle's current
+        // specific volume.
+        g.volume += if f >= 1.0 {
+            particles.vol[p]
+        } else {
+            f * particles.vol[p]
+        };
         out.mass += dm;
         out.energy += de;
         out.heat += dm * law.heat_of_reaction;
@@ -498,33 +588,41 @@ pub fn burn<const D: usize>(
     // Each burning cell's tally goes to the product beyond its exposed
     // faces (where the gas has room), shared by their areas.
     for &c in &layout.interior {
-        let (dm, dp, de) = s.given[c];
-        if dm > 0.0 {
+        let t = s.given[c];
+        if t.mass > 0.0 {
             let area = s.area[c];
             let gained = &mut s.gained;
             exposed_faces(layout, &s.theta, c, |n, a| {
                 let w = a / area;
                 let g = &mut gained[n];
-                g.0 += w * dm;
-                g.1 += dp * w;
-                g.2 += w * de;
+                g.mass += w * t.mass;
+                g.momentum += t.momentum * w;
+                g.energy += w * t.energy;
+                g.volume += w * t.volume;
             });
         }
     }
     // The product's new state: mass-weighted velocity, the whole energy
     // (the kinetic energy of the inelastic mixing included) in its
-    // temperature.
+    // temperature, and in a solid-filled cell its specific volume (module
+    // doc).
     for &c in &layout.interior {
-        let (dm, dp, de) = s.gained[c];
-        if dm > 0.0 {
+        let t = s.gained[c];
+        if t.mass > 0.0 {
             let m0 = product.mass[c];
             let u0 = product.velocity[c];
             let e0 = m0 * (product.cv * product.temperature[c] + 0.5 * u0.norm_squared());
-            let m = m0 + dm;
-            let u = (u0 * m0 + dp) / m;
+            let m = m0 + t.mass;
+            let u = (u0 * m0 + t.momentum) / m;
             product.mass[c] = m;
             product.velocity[c] = u;
-            product.temperature[c] = ((e0 + de) / m - 0.5 * u.norm_squared()) / product.cv;
+            product.temperature[c] = ((e0 + t.energy) / m - 0.5 * u.norm_squared()) / product.cv;
+            let phi = product.fluid_share[c];
+            if phi < 1.0 {
+                let v0 = product.sp_vol[c];
+                let added = (1.0 - phi) * t.volume + phi * t.mass * v0;
+                product.sp_vol[c] = (m0 * v0 + added) / m;
+            }
         }
     }
     if any_out {
@@ -583,6 +681,7 @@ mod tests {
         mass: Vec<f64>,
         velocity: Vec<Vector2<f64>>,
         temperature: Vec<f64>,
+        sp_vol: Vec<f64>,
     }
 
     fn product(layout: &CellLayout<2>) -> Product {
@@ -591,17 +690,20 @@ mod tests {
             mass: vec![0.0; n],
             velocity: vec![Vector2::zeros(); n],
             temperature: vec![0.0; n],
+            sp_vol: vec![0.0; n],
         };
         for (i, &c) in layout.interior.iter().enumerate() {
             pr.mass[c] = 1e-3 * (1.0 + (i % 3) as f64);
             pr.velocity[c] = Vector2::new(3.0 - (i % 5) as f64, 0.5 * (i % 2) as f64);
             pr.temperature[c] = 300.0 + i as f64;
+            pr.sp_vol[c] = 2.0 + 0.1 * (i % 7) as f64;
         }
         pr
     }
 
-    /// Mass, momentum and energy (the reactant's `c_v T + Q + ½|v|²`, the
-    /// product's `c_v T + ½|u|²`) before and after.
+    /// Mass, momentum, energy (the reactant's `c_v T + Q + ½|v|²`, the
+    /// product's `c_v T + ½|u|²`) and material volume (the particles' and
+    /// the product's `M v`) before and after.
     fn totals(
         layout: &CellLayout<2>,
         p: &Particles<2>,
@@ -609,11 +711,13 @@ mod tests {
         cv_s: f64,
         cv_g: f64,
         q: f64,
-    ) -> (f64, Vector2<f64>, f64) {
+    ) -> (f64, Vector2<f64>, f64, f64) {
         let mut m = 0.0;
         let mut mom = Vector2::zeros();
         let mut e = 0.0;
+        let mut v = 0.0;
         for i in 0..p.len() {
+            v += p.vol[i];
             m += p.mass[i];
             mom += p.v[i] * p.mass[i];
             e += p.mass[i] * (cv_s * p.temperature[i] + q + 0.5 * p.v[i].norm_squared());
@@ -622,12 +726,15 @@ mod tests {
             m += pr.mass[c];
             mom += pr.velocity[c] * pr.mass[c];
             e += pr.mass[c] * (cv_g * pr.temperature[c] + 0.5 * pr.velocity[c].norm_squared());
+            v += pr.mass[c] * pr.sp_vol[c];
         }
-        (m, mom, e)
+        (m, mom, e, v)
     }
 
-    /// The exchange conserves mass, momentum and total energy to round-off,
-    /// also when it burns whole cells out (removing their particles).
+    /// The exchange conserves mass, momentum, total energy and material
+    /// volume (the product takes the volume the burnt reactant leaves) to
+    /// round-off, also when it burns whole cells out (removing their
+    /// particles).
     #[test]
     fn exchange_conserves_mass_momentum_and_energy() {
         let layout = layout();
@@ -645,6 +752,8 @@ mod tests {
                     mass: &mut pr.mass,
                     velocity: &mut pr.velocity,
                     temperature: &mut pr.temperature,
+                    sp_vol: &mut pr.sp_vol,
+                    fluid_share: &vec![0.0; layout.len()],
                     cv: cv_g,
                 };
                 burn(
@@ -664,6 +773,10 @@ mod tests {
             assert!((before.1 - after.1).norm() / pscale < 1e-13);
             assert!(
                 rel(before.2, after.2, before.2) < 1e-13,
+                "{before:?} {after:?}"
+            );
+            assert!(
+                rel(before.3, after.3, before.3) < 1e-13,
                 "{before:?} {after:?}"
             );
             if k > 50.0 {
@@ -688,6 +801,8 @@ mod tests {
             mass: &mut pr.mass,
             velocity: &mut pr.velocity,
             temperature: &mut pr.temperature,
+            sp_vol: &mut pr.sp_vol,
+            fluid_share: &vec![0.0; layout.len()],
             cv: 700.0,
         };
         let out = burn(

@@ -169,6 +169,13 @@ pub struct IceParams<const D: usize> {
     /// isothermal, the very fast burn of `tests/reaction.rs` balanced its
     /// energy to −4.09e-2 instead of −6.41e-3).
     pub isothermal_exempt: Vec<bool>,
+    /// Where the materials of [`Self::isothermal_exempt`] are exempt, per
+    /// cell (empty: everywhere): the cells a burn feeds or burns in.
+    /// Elsewhere a product trace is held isothermal like any other (inside
+    /// a steel wall beside a confined burn its exempt trace took the work
+    /// of the wall's volume noise, reached a sound speed of 4.5e5 m/s and
+    /// cut Δt 100-fold).
+    pub isothermal_exempt_cells: Vec<bool>,
 }
 
 /// Default of [`IceParams::isothermal_fraction`].
@@ -317,6 +324,7 @@ impl<const D: usize> IceParams<D> {
             rigid_faces_sharp: false,
             isothermal_fraction: ISOTHERMAL_FRACTION,
             isothermal_exempt: Vec::new(),
+            isothermal_exempt_cells: Vec::new(),
         }
     }
 

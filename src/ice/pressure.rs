@@ -55,6 +55,15 @@ fn fill_primary_ghosts<const D: usize>(state: &mut IceState<D>, bcs: &Boundaries
 /// pressure before the temperature went negative (h = 0.00125).
 pub const SOLID_FILL_FOR_NORMALISING: f64 = 1.0e-2;
 
+/// The weight `w = min(1, V_solid / (f V))` of the free normalisation in a
+/// cell whose particle materials fill `solid_volume` of `cell_volume`
+/// ([`SOLID_FILL_FOR_NORMALISING`]); at 1 the cell's reference volume is
+/// its total material volume.
+#[inline]
+pub fn normalising_weight(solid_volume: f64, cell_volume: f64) -> f64 {
+    (solid_volume / (SOLID_FILL_FOR_NORMALISING * cell_volume)).min(1.0)
+}
+
 /// How far (as a factor) the total material volume of a cell without solid
 /// may depart from the cell volume in the normalised equilibration (see
 /// [`SOLID_FILL_FOR_NORMALISING`]).
@@ -259,7 +268,7 @@ fn reference_volume(inp: &CellInputs<'_>, out: &CellEquilibrium<'_>, c: usize) -
         }
     }
     if sum.is_finite() && sum > 0.0 {
-        let w = (solid / (SOLID_FILL_FOR_NORMALISING * inp.vol)).min(1.0);
+        let w = normalising_weight(solid, inp.vol);
         let r = FLUID_NORMALISING_RANGE;
         let bounded = sum.clamp(inp.vol / r, inp.vol * r);
         bounded + w * (sum - bounded)

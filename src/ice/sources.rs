@@ -207,7 +207,7 @@ pub(super) fn cell_sources<const D: usize, const N: usize>(
         cell.t[r] = if cons {
             // `M c_v T/(M c_v)`: the flow work comes later.
             mc.temperature[c]
-        } else if isothermal_in(inp, cell, r) {
+        } else if isothermal_in(inp, cell, r, c) {
             (me + cell.heat[r]) / (m * cv)
         } else {
             // Guilkey Eq. 34: Δ(me) = −Δt V f^θ p Σ_s ∇·(θu*)_s.
@@ -245,9 +245,12 @@ pub(super) fn isothermal_in<const D: usize, const N: usize>(
     inp: &LagrangianInputs<'_, D, N>,
     cell: &LagrangianCell<D>,
     r: usize,
+    c: usize,
 ) -> bool {
-    let exempt = inp.params.isothermal_exempt.get(r) == Some(&true);
-    inp.nm() > 1 && cell.theta[r] < inp.params.isothermal_fraction && !exempt
+    let params = inp.params;
+    let exempt = params.isothermal_exempt.get(r) == Some(&true)
+        && params.isothermal_exempt_cells.get(c).is_none_or(|&e| e);
+    inp.nm() > 1 && cell.theta[r] < params.isothermal_fraction && !exempt
 }
 
 /// Heat sources: internal energy added to material `r` of cell `c` at a
@@ -341,7 +344,7 @@ pub(super) fn conservative_energy<const D: usize, const N: usize>(
         if inp.lagr[r] {
             continue;
         }
-        if isothermal_in(inp, cell, r) {
+        if isothermal_in(inp, cell, r, c) {
             continue;
         }
         let f_theta = cell.theta[r] * inp.kappa[r][c] / stk_e;

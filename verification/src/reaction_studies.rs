@@ -42,15 +42,19 @@ fn burning_area(n: usize, inside: impl Fn(Vector2<f64>) -> bool) -> f64 {
         heat_of_reaction: 0.0,
     };
     let len = layout.len();
-    let (mut m, mut u, mut t) = (
+    let (mut m, mut u, mut t, mut v) = (
         vec![1.0; len],
         vec![Vector2::zeros(); len],
         vec![300.0; len],
+        vec![1.0; len],
     );
+    let fluid_share = vec![1.0; len];
     let mut cells = ProductCells {
         mass: &mut m,
         velocity: &mut u,
         temperature: &mut t,
+        sp_vol: &mut v,
+        fluid_share: &fluid_share,
         cv: 700.0,
     };
     let dt = 1e-9;

@@ -242,6 +242,7 @@ impl<const D: usize> Model for Coupled<D> {
                 r.totals.heat = t[2];
                 r.dt_limit = t[3];
             }
+            run.mark_fed_cells();
         }
         run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
         Ok(())
