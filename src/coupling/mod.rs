@@ -1364,11 +1364,18 @@ impl<const D: usize> CoupledRun<D> {
         t
     }
 
+    /// The reactants' temperature where the solids' is not tracked (no heat
+    /// exchange: `[coupling] solid_temperature`), else `None` (their
+    /// particles' own).
+    fn reactant_temperature(&self) -> Option<f64> {
+        (!self.heat_on).then_some(self.coupling.solid_temperature)
+    }
+
     /// Where a reaction limits the next step most, at the current state
     /// ([`reaction::limiting_cell`]); `None` where nothing burns. For the
     /// run loop's diagnostics.
     pub fn burn_limit(&self) -> Option<reaction::BurnLimit> {
-        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let uniform_t = self.reactant_temperature();
         let mut share = Vec::new();
         self.fluid_share(&mut share);
         let mut best: Option<reaction::BurnLimit> = None;
@@ -1430,7 +1437,7 @@ impl<const D: usize> CoupledRun<D> {
 
     /// Applies every reaction's surface burn over a step of `dt`.
     fn react(&mut self, dt: f64) {
-        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let uniform_t = self.reactant_temperature();
         let mut share = std::mem::take(&mut self.burn_share);
         self.fluid_share(&mut share);
         for r in &mut self.reactions {
@@ -1473,7 +1480,7 @@ impl<const D: usize> CoupledRun<D> {
     /// elsewhere. A function of the state alone, so that a restart sets the
     /// same cells.
     pub fn mark_fed_cells(&mut self) {
-        let uniform_t = (!self.heat_on).then_some(self.coupling.solid_temperature);
+        let uniform_t = self.reactant_temperature();
         let mut fed = std::mem::take(&mut self.ice.isothermal_exempt_cells);
         fed.clear();
         fed.resize(self.fluid.layout.len(), false);
