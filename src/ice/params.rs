@@ -170,7 +170,7 @@ pub struct IceParams<const D: usize> {
     /// energy to −4.09e-2 instead of −6.41e-3).
     pub isothermal_exempt: Vec<bool>,
     /// Where the materials of [`Self::isothermal_exempt`] are exempt, per
-    /// cell (empty: everywhere): the cells a burn feeds or burns in.
+    /// cell: the cells a burn feeds or burns in (set with the flags).
     /// Elsewhere a product trace is held isothermal like any other (inside
     /// a steel wall beside a confined burn its exempt trace took the work
     /// of the wall's volume noise, reached a sound speed of 4.5e5 m/s and

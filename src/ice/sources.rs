@@ -249,7 +249,7 @@ pub(super) fn isothermal_in<const D: usize, const N: usize>(
 ) -> bool {
     let params = inp.params;
     let exempt = params.isothermal_exempt.get(r) == Some(&true)
-        && params.isothermal_exempt_cells.get(c).is_none_or(|&e| e);
+        && params.isothermal_exempt_cells.get(c) == Some(&true);
     inp.nm() > 1 && cell.theta[r] < params.isothermal_fraction && !exempt
 }
 
