@@ -19,7 +19,7 @@ fn run_of(edits: &[(&str, &str)]) -> CoupledRun<1> {
 }
 
 /// Mass of the fluids (in cells) and of the particles.
-fn masses(run: &CoupledRun<1>) -> (f64, f64) {
+fn masses<const D: usize>(run: &CoupledRun<D>) -> (f64, f64) {
     let nf = run.num_fluids();
     let fluid: f64 = run.fluid.cells[..nf]
         .iter()
@@ -433,24 +433,8 @@ heat_of_reaction = 5e6
     );
     let mut run = build_coupled_run::<2>(&parse(&text).unwrap()).unwrap();
     let total = |run: &CoupledRun<2>| {
-        let nf = run.num_fluids();
-        let fluid: f64 = run.fluid.cells[..nf]
-            .iter()
-            .map(|mc| {
-                run.fluid
-                    .layout
-                    .interior
-                    .iter()
-                    .map(|&c| mc.mass[c])
-                    .sum::<f64>()
-            })
-            .sum();
-        fluid
-            + run
-                .fields
-                .iter()
-                .map(|f| f.particles.total_mass())
-                .sum::<f64>()
+        let (fluid, solid) = masses(run);
+        fluid + solid
     };
     let m0 = total(&run);
     for _ in 0..400 {

@@ -111,28 +111,18 @@ fn advect_material<const D: usize>(
     let cell = AdvectedCell {
         st: state,
         fields: &fields,
-        fx: &ws.fluxes,
         cv: cvr,
         r,
         trace_fraction: params.isothermal_fraction,
         vol: layout.cell_volume(),
     };
-    let mut result = advect_cells(&cell, outs);
+    let mut result = advect_cells(&cell, &ws.fluxes, outs);
     if result.is_err() {
         // Only where the fluxes as computed fail (a trace sending out more
         // than it has): every run that passed without it is unchanged, at
         // no cost.
         limit_outflow(layout, &mc.mass, &mut ws.fluxes);
-        let cell = AdvectedCell {
-            st: state,
-            fields: &fields,
-            fx: &ws.fluxes,
-            cv: cvr,
-            r,
-            trace_fraction: params.isothermal_fraction,
-            vol: layout.cell_volume(),
-        };
-        result = advect_cells(&cell, outs);
+        result = advect_cells(&cell, &ws.fluxes, outs);
     }
     super::boundary_exchange::add_advected(layout, &ws.fluxes, conservative, &mut ws.exchange);
     result
@@ -145,6 +135,7 @@ fn advect_material<const D: usize>(
 /// The first [`IceError::NonPhysical`] in index order.
 fn advect_cells<const D: usize>(
     cell: &AdvectedCell<'_, D>,
+    fx: &AdvectionFluxes<D>,
     outs: (
         Out<'_, f64>,
         Out<'_, SVector<f64, D>>,
@@ -155,7 +146,7 @@ fn advect_cells<const D: usize>(
     let (o_m, o_u, o_t, o_v) = outs;
     try_rows(&cell.st.layout, |row| {
         for c in row {
-            let (m, u, temp, v) = cell.advect(c)?;
+            let (m, u, temp, v) = cell.advect(c, fx)?;
             // SAFETY: cell c is written by this task only.
             unsafe {
                 o_m.set(c, m);
@@ -215,8 +206,6 @@ struct AdvectedCell<'a, const D: usize> {
     st: &'a IceState<D>,
     /// The advected quantities (Lagrangian values).
     fields: &'a AdvectedFields<'a, D>,
-    /// Their face fluxes.
-    fx: &'a AdvectionFluxes<D>,
     /// `c_v` of the material.
     cv: f64,
     /// The material.
@@ -288,15 +277,19 @@ impl<const D: usize> TraceRepair<D> {
 
 impl<const D: usize> AdvectedCell<'_, D> {
     /// Mass, velocity, temperature and specific volume of the material in
-    /// cell `c` after advection: the Lagrangian content plus the net
-    /// inflow; internal energy = advected total − kinetic with the
-    /// conservative form where positive.
+    /// cell `c` after advection with the face fluxes `fx`: the Lagrangian
+    /// content plus the net inflow; internal energy = advected total −
+    /// kinetic with the conservative form where positive.
     ///
     /// # Errors
     /// [`IceError::NonPhysical`] for a non-positive mass, temperature or
     /// specific volume.
-    fn advect(&self, c: usize) -> Result<(f64, SVector<f64, D>, f64, f64), IceError> {
-        let (st, fields, fx, r) = (self.st, self.fields, self.fx, self.r);
+    fn advect(
+        &self,
+        c: usize,
+        fx: &AdvectionFluxes<D>,
+    ) -> Result<(f64, SVector<f64, D>, f64, f64), IceError> {
+        let (st, fields, r) = (self.st, self.fields, self.r);
         let layout = &st.layout;
         let m0 = fields.mass[c];
         let m = m0 + net_inflow(layout, &fx.mass, c);
