@@ -239,8 +239,10 @@ pub const TRACE_MASS_FLOOR: f64 = 1e-20;
 /// θ = 1e-10 in a steel wall loaded by a confined burn went to −1.36 K at
 /// t = 4.4 μs). The energy and momentum this sets differ from the
 /// conservative ones by at most the trace's, below
-/// [`IceParams::isothermal_fraction`] of its cell's volume. Only where the
-/// conservative update failed: every run that passed before is unchanged.
+/// [`IceParams::isothermal_fraction`] of its cell's volume. The
+/// temperature is repaired only where the conservative update failed; the
+/// mass floor also applies where a trace merely decayed below it (a run
+/// that passed before changes only there).
 struct TraceRepair<const D: usize> {
     /// Convex mean of `e`.
     e: f64,
