@@ -334,7 +334,7 @@ fn confined_burn_drives_the_lid_as_the_lumped_model() {
 /// advection. It used to stop at step 128 (t = 4.4 μs, "non-physical
 /// temperature after advection = −1.36" of air in cell [19, 19]); the
 /// outflow limit and the trace repair of `ice::advect` carry it on. Over
-/// 400 steps (t ≈ 6.5 μs, before any wave reaches the domain's free
+/// 400 steps (t ≈ 6.7 μs, before any wave reaches the domain's free
 /// faces) every fluid's mass, temperature and velocity stay positive and
 /// finite, and the total mass is conserved to 1e-12 (what the trace floor
 /// adds is 1e-20 of a cell).
