@@ -55,7 +55,9 @@ fn bench(c: &mut Criterion) {
     g.finish();
     // The cost of the constitutive models on the same block (GIMP, one
     // thread): hypo-elastic, + Johnson–Cook plasticity (every point flows),
-    // + Johnson–Cook failure, and hypo-elastic with tensile failure.
+    // + Johnson–Cook failure, hypo-elastic with tensile failure, and Hencky
+    // with multiplicative Johnson–Cook plasticity, without and with
+    // Johnson–Cook failure.
     let mut g = c.benchmark_group("mpm_step_2d_100k_materials");
     g.sample_size(10);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -68,6 +70,11 @@ fn bench(c: &mut Criterion) {
         (BlockMaterial::JohnsonCook, "johnson_cook"),
         (BlockMaterial::JohnsonCookFailure, "johnson_cook_failure"),
         (BlockMaterial::Tensile, "tensile_failure"),
+        (BlockMaterial::HenckyJohnsonCook, "hencky_johnson_cook"),
+        (
+            BlockMaterial::HenckyJohnsonCookFailure,
+            "hencky_johnson_cook_failure",
+        ),
     ] {
         let mut run = rotating_block_of(ShapeKind::Gimp, material);
         g.throughput(Throughput::Elements(run.particles.len() as u64));

@@ -1,11 +1,12 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [3d] [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile|hencky|hencky_jc]`
+//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [3d] [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile|hencky|hencky_jc|hencky_jcf]`
 //! (`gas`: the same block as gas points, York Sec. 3.3; `jc`: hypo-elastic
 //! with Johnson–Cook plasticity; `hypo`: hypo-elastic, no plasticity;
 //! `jcf`: `jc` with Johnson–Cook failure; `tensile`: hypo-elastic with a
 //! spall strength; `hencky`: Hencky hyperelastic; `hencky_jc`: Hencky with
-//! multiplicative Johnson–Cook plasticity).
+//! multiplicative Johnson–Cook plasticity; `hencky_jcf`: `hencky_jc` with
+//! Johnson–Cook failure).
 //! A leading `3d` (or `MPM_THROUGHPUT_3D=1` in the environment) runs the 3D
 //! block instead (`rotating_block_3d`: 52³ = 140 608 neo-Hookean particles
 //! on a 32³ grid, the `mpm_step_3d_141k` bench); it has no material choice,
@@ -42,6 +43,7 @@ fn main() {
         Some("tensile") => BlockMaterial::Tensile,
         Some("hencky") => BlockMaterial::Hencky,
         Some("hencky_jc") => BlockMaterial::HenckyJohnsonCook,
+        Some("hencky_jcf") => BlockMaterial::HenckyJohnsonCookFailure,
         _ => BlockMaterial::NeoHookean,
     };
     if three_d {

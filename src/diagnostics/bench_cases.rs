@@ -40,6 +40,10 @@ pub enum BlockMaterial {
     /// [`BlockMaterial::JohnsonCook`] flow stress (A = 0: every stressed
     /// point flows).
     HenckyJohnsonCook,
+    /// [`BlockMaterial::HenckyJohnsonCook`] with the Johnson–Cook failure
+    /// of [`BlockMaterial::JohnsonCookFailure`]: the damage update on the
+    /// Hencky path.
+    HenckyJohnsonCookFailure,
 }
 
 /// A 2D neo-Hookean block (E = 1e6, ν = 0.3, ρ = 1000) of 2×2 particles per
@@ -80,7 +84,8 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
         | BlockMaterial::JohnsonCookFailure
         | BlockMaterial::Tensile
         | BlockMaterial::Hencky
-        | BlockMaterial::HenckyJohnsonCook => {
+        | BlockMaterial::HenckyJohnsonCook
+        | BlockMaterial::HenckyJohnsonCookFailure => {
             use crate::material::failure::{Failure, Fracturing, JohnsonCookFailure};
             use crate::material::plasticity::{FlowStress, JohnsonCook, J2};
             let j2 = J2 {
@@ -97,23 +102,25 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
                 taylor_quinney: 0.9,
                 specific_heat: 477.0,
             };
+            let jc_failure = Fracturing {
+                plasticity: Some(j2),
+                failure: Failure::JohnsonCook(JohnsonCookFailure {
+                    d1: 0.54,
+                    d2: 4.89,
+                    d3: -3.03,
+                    d4: 0.014,
+                    d5: 1.12,
+                    rate0: 1.0,
+                    t_room: 300.0,
+                    t_melt: 1800.0,
+                }),
+            };
             let model = match material {
                 BlockMaterial::HypoElastic => SolidModel::LinearElastic,
                 BlockMaterial::Hencky => SolidModel::Hencky,
                 BlockMaterial::HenckyJohnsonCook => SolidModel::HenckyPlastic(j2),
-                BlockMaterial::JohnsonCookFailure => SolidModel::Fracturing(Fracturing {
-                    plasticity: Some(j2),
-                    failure: Failure::JohnsonCook(JohnsonCookFailure {
-                        d1: 0.54,
-                        d2: 4.89,
-                        d3: -3.03,
-                        d4: 0.014,
-                        d5: 1.12,
-                        rate0: 1.0,
-                        t_room: 300.0,
-                        t_melt: 1800.0,
-                    }),
-                }),
+                BlockMaterial::HenckyJohnsonCookFailure => SolidModel::HenckyFracturing(jc_failure),
+                BlockMaterial::JohnsonCookFailure => SolidModel::Fracturing(jc_failure),
                 BlockMaterial::Tensile => SolidModel::Fracturing(Fracturing {
                     plasticity: None,
                     failure: Failure::Tensile {

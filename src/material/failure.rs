@@ -1,6 +1,7 @@
-//! Failure of hypo-elastic(-plastic) solids: Johnson–Cook ductile damage
-//! and brittle tensile failure (a spall strength), with the failed point's
-//! stress (no tension, compression kept).
+//! Failure of hypo-elastic(-plastic) and Hencky(-plastic) solids:
+//! Johnson–Cook ductile damage and brittle tensile failure (a spall
+//! strength), with the failed point's stress (no tension, compression
+//! kept).
 //!
 //! A point carries a damage D ∈ [0, 1]; it has failed when D = 1 (D is set
 //! to exactly 1 then, so the flag is `D ≥ 1`).
@@ -29,7 +30,10 @@
 //! σ_m ← σ_m + K tr(D) Δt (the Jaumann spin leaves an isotropic stress
 //! unchanged), clamped at σ_m ≤ 0, and its deviator is zero:
 //! σ = min(σ_m, 0) I. It resists compression as soon as it is compressed
-//! (voids close at once) and opens freely in tension.
+//! (voids close at once) and opens freely in tension. On the Hencky path
+//! ([`crate::material::solid::SolidMaterial::hencky_update`]) the same rule holds
+//! for the Kirchhoff mean stress, whose volumetric response is exactly
+//! `K ln J`: τ_m ← min(τ_m + K ln(J/Jⁿ), 0).
 
 use nalgebra::Matrix3;
 
@@ -82,6 +86,50 @@ pub enum Failure {
 }
 
 impl Failure {
+    /// Accumulates the damage of one step in `state.damage` (set to
+    /// exactly 1 at failure): `stress` is the Cauchy stress at the end of
+    /// the step (after any return) and `dplastic` its plastic increment
+    /// Δε̄ over `dt`. Johnson–Cook adds Δε̄/ε_f (Johnson & Cook 1985 Eq. 1)
+    /// at the stress triaxiality, rate and temperature at the end of the
+    /// step; the tensile model fails the point where its largest principal
+    /// stress reaches the spall strength.
+    pub fn accumulate(
+        &self,
+        stress: &Matrix3<f64>,
+        dplastic: f64,
+        dt: f64,
+        state: &mut PlasticState,
+    ) {
+        match *self {
+            Failure::JohnsonCook(jc) => {
+                if dplastic > 0.0 {
+                    let q = super::plasticity::von_mises(stress);
+                    let triaxiality = if q > 0.0 {
+                        stress.trace() / 3.0 / q
+                    } else {
+                        0.0
+                    };
+                    let rate = if dt > 0.0 { dplastic / dt } else { 0.0 };
+                    let ef = jc.failure_strain(triaxiality, rate, state.temperature);
+                    // Johnson & Cook 1985 Eq. 1: D = Σ Δε̄/ε_f.
+                    state.damage = if ef > 0.0 {
+                        state.damage + dplastic / ef
+                    } else {
+                        1.0
+                    };
+                }
+            }
+            Failure::Tensile { spall_strength } => {
+                if max_principal(stress) >= spall_strength {
+                    state.damage = 1.0;
+                }
+            }
+        }
+        if state.damage >= 1.0 {
+            state.damage = 1.0;
+        }
+    }
+
     /// Checks the parameters' ranges.
     ///
     /// # Errors
@@ -217,33 +265,8 @@ impl Fracturing {
                 0.0
             }
         };
-        match self.failure {
-            Failure::JohnsonCook(jc) => {
-                if dplastic > 0.0 {
-                    let q = super::plasticity::von_mises(stress);
-                    let triaxiality = if q > 0.0 {
-                        stress.trace() / 3.0 / q
-                    } else {
-                        0.0
-                    };
-                    let rate = if dt > 0.0 { dplastic / dt } else { 0.0 };
-                    let ef = jc.failure_strain(triaxiality, rate, state.temperature);
-                    // Johnson & Cook 1985 Eq. 1: D = Σ Δε̄/ε_f.
-                    state.damage = if ef > 0.0 {
-                        state.damage + dplastic / ef
-                    } else {
-                        1.0
-                    };
-                }
-            }
-            Failure::Tensile { spall_strength } => {
-                if max_principal(stress) >= spall_strength {
-                    state.damage = 1.0;
-                }
-            }
-        }
+        self.failure.accumulate(stress, dplastic, dt, state);
         if state.damage >= 1.0 {
-            state.damage = 1.0;
             *stress = failed_stress(stress);
         }
     }
@@ -253,6 +276,7 @@ impl Fracturing {
 mod tests {
     use super::*;
     use crate::material::plasticity::{FlowStress, JohnsonCook};
+    use crate::material::solid::{ElasticConstants, SolidMaterial, SolidModel};
 
     #[test]
     fn max_principal_matches_the_eigen_solver() {
@@ -492,6 +516,185 @@ mod tests {
         let p = -s.trace() / 3.0;
         assert!((p / (bulk * 1e-3) - 1.0).abs() < 1e-12, "{p}");
         assert_eq!(s, Matrix3::identity() * (-p));
+    }
+
+    /// A Hencky solid ([`SolidModel::HenckyFracturing`]) from the relative
+    /// and total deformation gradients `f_rel`, `f_new` of one explicit
+    /// step; returns the new stress and work.
+    fn hencky_step(
+        m: &SolidMaterial,
+        f_old: &Matrix3<f64>,
+        f_new: &Matrix3<f64>,
+        stress: &mut Matrix3<f64>,
+        work: &mut f64,
+        st: &mut PlasticState,
+    ) {
+        let f_rel = f_new * f_old.try_inverse().unwrap();
+        let (j, j_old) = (f_new.determinant(), f_old.determinant());
+        m.hencky_update(
+            &f_rel, f_new, j, j_old, 1e-6, 7800.0, stress, work, st, None,
+        )
+        .expect("a Hencky step");
+    }
+
+    fn hencky(fr: Fracturing) -> SolidMaterial {
+        SolidMaterial {
+            name: "steel".into(),
+            density: 7800.0,
+            model: SolidModel::HenckyFracturing(fr),
+            elastic: ElasticConstants {
+                lambda: 1e11,
+                mu: 8e10,
+            },
+        }
+    }
+
+    /// Hencky with brittle failure in uniaxial strain F = diag(λ₁, 1, 1):
+    /// σ₁₁ = (λ + 2μ) ln λ₁ / λ₁ exactly, so the point fails at the first
+    /// stretch that reaches the spall strength. It then carries no
+    /// tension, and compressed by ln(J/J₀) = −1e-3 from any opened state
+    /// its Kirchhoff pressure is K·1e-3 (voids close at once) with no
+    /// deviator; its work is the energy stored at failure (now dissipated)
+    /// plus the (tr τ)²/(18K) it stores again.
+    #[test]
+    fn hencky_point_fails_at_the_spall_strength_and_keeps_compression_only() {
+        let sigma_s = 2e9;
+        let m = hencky(Fracturing {
+            plasticity: None,
+            failure: Failure::Tensile {
+                spall_strength: sigma_s,
+            },
+        });
+        let ElasticConstants { lambda, mu } = m.elastic;
+        let bulk = lambda + 2.0 * mu / 3.0;
+        let (mut s, mut w, mut st) = (Matrix3::zeros(), 0.0, PlasticState::default());
+        let mut f = Matrix3::identity();
+        let stretch = |k: usize| 1.0 + 1e-4 * k as f64;
+        let mut k = 0;
+        let mut w_fail = 0.0;
+        while st.damage < 1.0 {
+            k += 1;
+            let f1 = Matrix3::from_diagonal(&nalgebra::Vector3::new(stretch(k), 1.0, 1.0));
+            let w0 = w;
+            hencky_step(&m, &f, &f1, &mut s, &mut w, &mut st);
+            let l1 = stretch(k);
+            let exact = (lambda + 2.0 * mu) * l1.ln() / l1;
+            if st.damage < 1.0 {
+                assert!(
+                    (s[(0, 0)] / exact - 1.0).abs() < 1e-12,
+                    "{} vs {exact}",
+                    s[(0, 0)]
+                );
+                // The work is the stored energy ½ (λ + 2μ) (ln λ₁)².
+                let stored = 0.5 * (lambda + 2.0 * mu) * l1.ln().powi(2);
+                assert!((w / stored - 1.0).abs() < 1e-12, "{w} vs {stored}");
+            } else {
+                // The step's stored energy stays in the work (dissipated).
+                w_fail = w;
+                assert!(w > w0);
+            }
+            f = f1;
+        }
+        let first = (1..k)
+            .find(|&i| (lambda + 2.0 * mu) * stretch(i).ln() / stretch(i) >= sigma_s)
+            .unwrap_or(k);
+        assert_eq!(k, first, "fails at the first stretch past σ_s");
+        assert_eq!(s, Matrix3::zeros());
+        // Pulled further (and sheared): no stress, no work.
+        for i in 1..=20 {
+            let mut f1 = f;
+            f1[(0, 0)] *= 1.0 + 1e-3;
+            f1[(0, 1)] += 1e-3 * i as f64;
+            hencky_step(&m, &f, &f1, &mut s, &mut w, &mut st);
+            assert_eq!(s, Matrix3::zeros());
+            f = f1;
+        }
+        assert_eq!(w, w_fail);
+        // Compress: J falls by the factor exp(−1e-3) in 10 steps.
+        let j0 = f.determinant();
+        for _ in 0..10 {
+            let f1 = f * (-1e-4f64 / 3.0).exp();
+            hencky_step(&m, &f, &f1, &mut s, &mut w, &mut st);
+            f = f1;
+        }
+        let j = f.determinant();
+        assert!(((j / j0).ln() + 1e-3).abs() < 1e-15);
+        let tau_m = s.trace() / 3.0 * j;
+        assert!((tau_m / (-bulk * 1e-3) - 1.0).abs() < 1e-9, "{tau_m}");
+        assert_eq!(s, Matrix3::identity() * (s.trace() / 3.0));
+        let stored = 0.5 * bulk * 1e-6;
+        assert!(
+            ((w - w_fail) / stored - 1.0).abs() < 1e-9,
+            "{} vs {stored}",
+            w - w_fail
+        );
+    }
+
+    /// Johnson–Cook damage on the Hencky path in isochoric plane strain
+    /// F = diag(eᵃ, e⁻ᵃ, 1): the Kirchhoff mean stress is K ln J = 0, so
+    /// the triaxiality is exactly 0 and, with D₄ = D₅ = 0, ε_f = D₁ + D₂.
+    /// With linear hardening on this coaxial path the return is exact:
+    /// ε̄ₚ = (3μ ε̄ − σ₀)/(3μ + H) with ε̄ = 2a/√3, so D = ε̄ₚ/ε_f at every
+    /// step and the point fails at the first step where ε̄ₚ ≥ ε_f.
+    #[test]
+    fn hencky_johnson_cook_damage_is_the_plastic_strain_over_the_failure_strain() {
+        let (sigma0, h) = (4e8, 2e9);
+        let (d1, d2) = (0.1, 0.15);
+        let m = hencky(Fracturing {
+            plasticity: Some(J2 {
+                flow: FlowStress::Linear {
+                    yield_stress: sigma0,
+                    hardening: h,
+                },
+                taylor_quinney: 0.0,
+                specific_heat: 477.0,
+            }),
+            failure: Failure::JohnsonCook(JohnsonCookFailure {
+                d1,
+                d2,
+                d3: -1.5,
+                d4: 0.0,
+                d5: 0.0,
+                rate0: 1.0,
+                t_room: 300.0,
+                t_melt: 1800.0,
+            }),
+        });
+        let mu = m.elastic.mu;
+        let ef = d1 + d2;
+        let (mut s, mut w, mut st) = (Matrix3::zeros(), 0.0, PlasticState::default());
+        let mut f = Matrix3::identity();
+        let da = 2e-3;
+        let mut failed_at = None;
+        for k in 1..=400 {
+            let a = da * k as f64;
+            let f1 = Matrix3::from_diagonal(&nalgebra::Vector3::new(a.exp(), (-a).exp(), 1.0));
+            hencky_step(&m, &f, &f1, &mut s, &mut w, &mut st);
+            f = f1;
+            let eps_p = ((3.0 * mu * 2.0 * a / 3f64.sqrt() - sigma0) / (3.0 * mu + h)).max(0.0);
+            if st.damage >= 1.0 {
+                assert!(eps_p >= ef * (1.0 - 1e-9), "fails early at ε̄ₚ = {eps_p}");
+                // Isochoric: no pressure to keep.
+                assert!(s.norm() <= 1e-6 * sigma0, "{s}");
+                failed_at = Some(k);
+                break;
+            }
+            assert!(
+                (st.plastic_strain - eps_p).abs() < 1e-12,
+                "{} vs {eps_p}",
+                st.plastic_strain
+            );
+            assert!(
+                (st.damage - eps_p / ef).abs() < 1e-12,
+                "{} vs {}",
+                st.damage,
+                eps_p / ef
+            );
+        }
+        let k = failed_at.expect("the point fails");
+        let a_prev = da * (k - 1) as f64;
+        let eps_prev = (3.0 * mu * 2.0 * a_prev / 3f64.sqrt() - sigma0) / (3.0 * mu + h);
+        assert!(eps_prev < ef, "the step before failure is short of ε_f");
     }
 
     #[test]

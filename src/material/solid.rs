@@ -98,6 +98,13 @@ pub enum SolidModel {
     /// plastic work dissipated, per unit reference volume.
     #[serde(skip)]
     HenckyPlastic(J2),
+    /// Hencky, optionally J2-plastic as [`SolidModel::HenckyPlastic`], with
+    /// a failure model ([`Fracturing`]); set by the scene for
+    /// `model = "hencky"` with a `failure` table. Explicit only. A failed
+    /// point keeps only a compressive Kirchhoff pressure
+    /// ([`crate::material::failure`]).
+    #[serde(skip)]
+    HenckyFracturing(Fracturing),
 }
 
 impl SolidModel {
@@ -132,7 +139,7 @@ impl SolidMaterial {
     pub fn plasticity(&self) -> Option<&J2> {
         match &self.model {
             SolidModel::ElasticPlastic(j2) => Some(j2),
-            SolidModel::Fracturing(f) => f.plasticity.as_ref(),
+            SolidModel::Fracturing(f) | SolidModel::HenckyFracturing(f) => f.plasticity.as_ref(),
             SolidModel::HenckyPlastic(j2) => Some(j2),
             _ => None,
         }
@@ -142,7 +149,7 @@ impl SolidMaterial {
     #[inline]
     pub fn failure(&self) -> Option<&Failure> {
         match &self.model {
-            SolidModel::Fracturing(f) => Some(&f.failure),
+            SolidModel::Fracturing(f) | SolidModel::HenckyFracturing(f) => Some(&f.failure),
             _ => None,
         }
     }
@@ -255,7 +262,7 @@ impl SolidMaterial {
                 // energy) and stays in the work.
                 *work += dt * j * 0.5 * (old + *stress).component_mul(&d).sum();
             }
-            SolidModel::Hencky | SolidModel::HenckyPlastic(_) => {
+            SolidModel::Hencky | SolidModel::HenckyPlastic(_) | SolidModel::HenckyFracturing(_) => {
                 // The explicit step's relative deformation: F ← (I + Δt L) F.
                 let f_rel = Matrix3::identity() + l * dt;
                 return self
@@ -320,7 +327,8 @@ impl SolidMaterial {
             SolidModel::GasPoint(_)
             | SolidModel::Membrane(_)
             | SolidModel::Hencky
-            | SolidModel::HenckyPlastic(_) => *stress_old,
+            | SolidModel::HenckyPlastic(_)
+            | SolidModel::HenckyFracturing(_) => *stress_old,
         }
     }
 
@@ -345,7 +353,8 @@ impl SolidMaterial {
             | SolidModel::Fracturing(_)
             | SolidModel::Membrane(_)
             | SolidModel::Hencky
-            | SolidModel::HenckyPlastic(_) => None,
+            | SolidModel::HenckyPlastic(_)
+            | SolidModel::HenckyFracturing(_) => None,
         }
     }
 
@@ -356,13 +365,14 @@ impl SolidMaterial {
         self.spatial_tangent(1.0).is_some() || self.is_hencky()
     }
 
-    /// Whether this is a Hencky model ([`SolidModel::Hencky`] or
-    /// [`SolidModel::HenckyPlastic`]), updated by [`Self::hencky_update`].
+    /// Whether this is a Hencky model ([`SolidModel::Hencky`],
+    /// [`SolidModel::HenckyPlastic`] or [`SolidModel::HenckyFracturing`]),
+    /// updated by [`Self::hencky_update`].
     #[inline]
     pub fn is_hencky(&self) -> bool {
         matches!(
             self.model,
-            SolidModel::Hencky | SolidModel::HenckyPlastic(_)
+            SolidModel::Hencky | SolidModel::HenckyPlastic(_) | SolidModel::HenckyFracturing(_)
         )
     }
 
@@ -370,7 +380,9 @@ impl SolidMaterial {
     /// the relative deformation gradient `f_rel`, the new total `f_new`
     /// (determinant `j`; `j_old` at the start of the step): updates the
     /// Cauchy `stress`, the `work` (stored energy plus plastic work, per
-    /// unit reference volume) and the plastic `state`, writes the tangent
+    /// unit reference volume) and the plastic `state` (with a failure
+    /// model its damage too; a failed point keeps only a compressive
+    /// Kirchhoff pressure, [`crate::material::failure`]), writes the tangent
     /// ∂τ/∂h into `tangent` when given, and returns the plastic work of the
     /// step, or `None` for a model that is not Hencky or an inverted step.
     #[allow(clippy::too_many_arguments)]
@@ -387,25 +399,51 @@ impl SolidMaterial {
         plastic: &mut PlasticState,
         tangent: Option<&mut crate::material::hencky::Tangent>,
     ) -> Option<f64> {
-        let j2 = match &self.model {
-            SolidModel::Hencky => None,
-            SolidModel::HenckyPlastic(j2) => Some(j2),
+        let (j2, failure) = match &self.model {
+            SolidModel::Hencky => (None, None),
+            SolidModel::HenckyPlastic(j2) => (Some(j2), None),
+            SolidModel::HenckyFracturing(f) => (f.plasticity.as_ref(), Some(&f.failure)),
             _ => return None,
         };
         let ElasticConstants { lambda, mu } = self.elastic;
+        let stored = |tau: &Matrix3<f64>| crate::material::hencky::stored_energy(tau, lambda, mu);
         let tau_old = *stress * j_old;
+        if failure.is_some() && plastic.damage >= 1.0 {
+            // A failed point (module `failure`): the Kirchhoff mean stress
+            // follows Hencky's volumetric response K ln J from where it
+            // was, with no tension; its work is the change of the energy it
+            // stores, (tr τ)²/(18K).
+            if j <= 0.0 || j_old <= 0.0 {
+                return None;
+            }
+            let bulk = lambda + 2.0 * mu / 3.0;
+            let mean = (tau_old.trace() / 3.0 + bulk * (j / j_old).ln()).min(0.0);
+            let tau = Matrix3::identity() * mean;
+            *work += stored(&tau) - stored(&tau_old);
+            *stress = tau / j;
+            return Some(0.0);
+        }
         let s = crate::material::hencky::step(
             lambda, mu, j2, f_rel, f_new, &tau_old, dt, rho0, plastic, tangent,
         )?;
-        let w_new = crate::material::hencky::stored_energy(&s.tau, lambda, mu);
-        if j2.is_some() {
-            *work += w_new - crate::material::hencky::stored_energy(&tau_old, lambda, mu)
-                + s.ret.plastic_work;
+        let w_new = stored(&s.tau);
+        let mut tau = s.tau;
+        if j2.is_some() || failure.is_some() {
+            // Stored energy plus plastic work; at failure the energy the
+            // point stored becomes dissipated (the fracture energy) and
+            // stays in the work.
+            *work += w_new - stored(&tau_old) + s.ret.plastic_work;
         } else {
             // Hyperelastic: the work is the stored energy of F.
             *work = w_new;
         }
-        *stress = s.tau / j;
+        if let Some(failure) = failure {
+            failure.accumulate(&(tau / j), s.ret.dplastic, dt, plastic);
+            if plastic.damage >= 1.0 {
+                tau = crate::material::failure::failed_stress(&tau);
+            }
+        }
+        *stress = tau / j;
         Some(s.ret.plastic_work)
     }
 
@@ -420,7 +458,8 @@ impl SolidMaterial {
             | SolidModel::Fracturing(_)
             | SolidModel::Membrane(_)
             | SolidModel::Hencky
-            | SolidModel::HenckyPlastic(_) => work,
+            | SolidModel::HenckyPlastic(_)
+            | SolidModel::HenckyFracturing(_) => work,
             SolidModel::NeoHookean => {
                 let ElasticConstants { lambda, mu } = self.elastic;
                 let j = f.determinant();

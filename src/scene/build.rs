@@ -43,14 +43,21 @@ fn solid_material(m: &MaterialSpec) -> SolidMaterial {
         ),
     };
     // Validation has checked the plasticity and failure tables (and that
-    // they go with the hypo-elastic model, or plasticity with Hencky's).
+    // they go with the hypo-elastic or the Hencky model).
     let j2 = m.plasticity.as_ref().and_then(|pl| pl.j2().ok());
     let failure = m.failure.as_ref().and_then(|f| f.failure(j2.as_ref()).ok());
     let model = match (j2, failure) {
-        (plasticity, Some(failure)) => SolidModel::Fracturing(Fracturing {
-            plasticity,
-            failure,
-        }),
+        (plasticity, Some(failure)) => {
+            let f = Fracturing {
+                plasticity,
+                failure,
+            };
+            if m.model == Some(SolidModel::Hencky) {
+                SolidModel::HenckyFracturing(f)
+            } else {
+                SolidModel::Fracturing(f)
+            }
+        }
         (Some(j2), None) if m.model == Some(SolidModel::Hencky) => SolidModel::HenckyPlastic(j2),
         (Some(j2), None) => SolidModel::ElasticPlastic(j2),
         _ => m.model.unwrap_or(SolidModel::NeoHookean),

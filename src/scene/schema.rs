@@ -523,8 +523,9 @@ pub enum FailureKind {
     Tensile,
 }
 
-/// Failure of a hypo-elastic(-plastic) solid (`materials[i].failure`;
-/// `model = "linear_elastic"`, explicit mode; see
+/// Failure of a hypo-elastic or Hencky (plastic or not) solid
+/// (`materials[i].failure`; `model = "linear_elastic"` or `"hencky"`,
+/// explicit mode; see
 /// [`crate::material::failure`]). `johnson_cook` needs `d1`, `d2`, `d3`
 /// (`d4`, `d5` default 0; `reference_rate`, `room_temperature` and
 /// `melt_temperature` default to the Johnson–Cook flow stress's, else 1 /s,
@@ -1688,11 +1689,14 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
             .map_err(|(k, msg)| err(p(&format!("plasticity.{k}")), msg))?;
     }
     if let Some(f) = &m.failure {
-        if m.model != Some(SolidModel::LinearElastic) {
+        if !matches!(
+            m.model,
+            Some(SolidModel::LinearElastic | SolidModel::Hencky)
+        ) {
             return Err(err(
                 p("failure"),
-                "failure is built for the hypo-elastic path only; allowed with model = \
-                 \"linear_elastic\"",
+                "failure is built for the hypo-elastic and the Hencky paths; allowed with \
+                 model = \"linear_elastic\" or \"hencky\"",
             ));
         }
         if m.rigid {
