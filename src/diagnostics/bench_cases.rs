@@ -67,8 +67,56 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
         [[Boundary::Fixed; 2]; 2],
     );
     let h = 1.0 / n as f64;
-    let (gamma, p0) = (1.4, 1e5);
-    let (mat, rho, speed) = match material {
+    let (mat, rho, speed) = block_material(material, h);
+    let vol = h * h / 4.0;
+    let mut p = Particles::<2>::default();
+    for j in 0..320 {
+        for i in 0..320 {
+            let x = SVector::from([
+                0.1 + (i as f64 + 0.5) * h / 2.0,
+                0.1 + (j as f64 + 0.5) * h / 2.0,
+            ]);
+            let v = SVector::from([-(x[1] - 0.5), x[0] - 0.5]) * 0.01;
+            p.push(x, v, rho * vol, vol, SVector::repeat(h / 4.0), 0);
+            if material == BlockMaterial::GasPoint {
+                gas_point_at_rest(&mut p);
+            }
+        }
+    }
+    let params = ExplicitParams {
+        shape,
+        scheme: UpdateScheme::Usl,
+        mass_floor: 1e-12,
+        damping: 0.0,
+        pic_fraction: 0.0,
+    };
+    let dt = 0.3 * h / speed;
+    let time = TimeControl {
+        end: f64::INFINITY,
+        cfl: 0.3,
+        dt: Some(dt),
+        max_steps: None,
+    };
+    SolidRun::new(grid, vec![mat], p, params, time)
+}
+
+/// Pressure p₀ and γ of the [`BlockMaterial::GasPoint`] block.
+const GAS_P0: f64 = 1e5;
+const GAS_GAMMA: f64 = 1.4;
+
+/// The last particle pushed onto `p` as a gas point at p₀ (York Eq. 22:
+/// ρ_ref e = p/(γ − 1) per unit reference volume).
+fn gas_point_at_rest<const D: usize>(p: &mut Particles<D>) {
+    let k = p.len() - 1;
+    p.work[k] = GAS_P0 / (GAS_GAMMA - 1.0);
+    p.stress.set(k, &(nalgebra::Matrix3::identity() * -GAS_P0));
+}
+
+/// The block's material on a grid of cell size `h`, its density and wave
+/// speed (for Δt).
+fn block_material(material: BlockMaterial, h: f64) -> (SolidMaterial, f64, f64) {
+    let (gamma, p0) = (GAS_GAMMA, GAS_P0);
+    match material {
         BlockMaterial::NeoHookean => {
             let mat = SolidMaterial {
                 name: "block".into(),
@@ -160,40 +208,7 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
             };
             (mat, 1.2, (gamma * p0 / 1.2f64).sqrt())
         }
-    };
-    let vol = h * h / 4.0;
-    let mut p = Particles::<2>::default();
-    for j in 0..320 {
-        for i in 0..320 {
-            let x = SVector::from([
-                0.1 + (i as f64 + 0.5) * h / 2.0,
-                0.1 + (j as f64 + 0.5) * h / 2.0,
-            ]);
-            let v = SVector::from([-(x[1] - 0.5), x[0] - 0.5]) * 0.01;
-            p.push(x, v, rho * vol, vol, SVector::repeat(h / 4.0), 0);
-            if material == BlockMaterial::GasPoint {
-                // York Eq. 22: ρ_ref e = p/(γ − 1) per unit reference volume.
-                let k = p.len() - 1;
-                p.work[k] = p0 / (gamma - 1.0);
-                p.stress.set(k, &(nalgebra::Matrix3::identity() * -p0));
-            }
-        }
     }
-    let params = ExplicitParams {
-        shape,
-        scheme: UpdateScheme::Usl,
-        mass_floor: 1e-12,
-        damping: 0.0,
-        pic_fraction: 0.0,
-    };
-    let dt = 0.3 * h / speed;
-    let time = TimeControl {
-        end: f64::INFINITY,
-        cfl: 0.3,
-        dt: Some(dt),
-        max_steps: None,
-    };
-    SolidRun::new(grid, vec![mat], p, params, time)
 }
 
 /// Cells per side of the [`rotating_block_3d`] grid (the unit cube).
@@ -212,6 +227,23 @@ pub const BLOCK_3D_CELLS: usize = 26;
 /// works; fixed Δt at Courant number 0.3 of the dilatational wave speed,
 /// USL.
 pub fn rotating_block_3d(shape: ShapeKind) -> SolidRun<3> {
+    rotating_block_3d_of(
+        shape,
+        BlockMaterial::NeoHookean,
+        SVector::from([0.0, 0.0, 1.0]),
+    )
+}
+
+/// [`rotating_block_3d`] made of `material` (as [`rotating_block_of`]) and
+/// rotating about the unit `axis` through the cube's centre. About z the
+/// deformation keeps the plane-strain structure (no (1,3), (2,3)
+/// coupling); about a skew axis every component is non-zero, so that a
+/// Hencky model's 3D eigen-solver does the work.
+pub fn rotating_block_3d_of(
+    shape: ShapeKind,
+    material: BlockMaterial,
+    axis: SVector<f64, 3>,
+) -> SolidRun<3> {
     let n = BLOCK_3D_GRID_CELLS;
     let grid = Grid::<3>::new(
         SVector::zeros(),
@@ -220,14 +252,9 @@ pub fn rotating_block_3d(shape: ShapeKind) -> SolidRun<3> {
         [[Boundary::Fixed; 2]; 3],
     );
     let h = 1.0 / n as f64;
-    let rho = 1000.0;
-    let mat = SolidMaterial {
-        name: "block".into(),
-        density: rho,
-        model: SolidModel::NeoHookean,
-        elastic: ElasticConstants::from_young_poisson(1e6, 0.3),
-    };
-    let speed = mat.wave_speed(rho);
+    let (mat, rho, speed) = block_material(material, h);
+    let omega = axis.normalize() * 0.01;
+    let centre = SVector::<f64, 3>::repeat(0.5);
     let lower = ((n - BLOCK_3D_CELLS) / 2) as f64 * h;
     let per_side = 2 * BLOCK_3D_CELLS;
     let vol = h * h * h / 8.0;
@@ -237,8 +264,11 @@ pub fn rotating_block_3d(shape: ShapeKind) -> SolidRun<3> {
             for i in 0..per_side {
                 let at = |m: usize| lower + (m as f64 + 0.5) * h / 2.0;
                 let x = SVector::from([at(i), at(j), at(k)]);
-                let v = SVector::from([-(x[1] - 0.5), x[0] - 0.5, 0.0]) * 0.01;
+                let v = omega.cross(&(x - centre));
                 p.push(x, v, rho * vol, vol, SVector::repeat(h / 4.0), 0);
+                if material == BlockMaterial::GasPoint {
+                    gas_point_at_rest(&mut p);
+                }
             }
         }
     }
