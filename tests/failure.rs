@@ -4,6 +4,7 @@
 //! (`cases/tensile_bar_spall.toml`, hypo-elastic and Hencky, alone and in
 //! air in the coupled MPM-ICE step) against the elastic wave solution.
 
+use mpmice::driver::models::arrays::cell_material_totals;
 use mpmice::scene::{build_solid_run, parse};
 
 /// A bar so heavy (ρ = 1e20) that its particles keep the velocity field
@@ -416,17 +417,8 @@ fn coupled_bar_in_air_spalls_where_the_pulses_meet() {
     let scene = parse(&text).expect("coupled case parses");
     let mut run = mpmice::scene::build_coupled_run::<1>(&scene).expect("run builds");
     let total_mass = |run: &mpmice::coupling::CoupledRun<1>| {
-        let nf = run.num_fluids();
-        let fluid: f64 = run.fluid.cells[..nf]
-            .iter()
-            .map(|mc| {
-                run.fluid
-                    .layout
-                    .interior
-                    .iter()
-                    .map(|&c| mc.mass[c])
-                    .sum::<f64>()
-            })
+        let fluid: f64 = (0..run.num_fluids())
+            .map(|r| cell_material_totals(&run.fluid, r).mass)
             .sum();
         fluid + run.fields[0].particles.total_mass()
     };

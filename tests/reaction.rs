@@ -4,6 +4,7 @@
 //! reactant against a wall in a closed tube of its product.
 
 use mpmice::coupling::CoupledRun;
+use mpmice::driver::models::arrays::cell_material_totals;
 use mpmice::scene::{build_coupled_run, parse};
 
 const CASE: &str = include_str!("../cases/reaction_burn.toml");
@@ -20,17 +21,8 @@ fn run_of(edits: &[(&str, &str)]) -> CoupledRun<1> {
 
 /// Mass of the fluids (in cells) and of the particles.
 fn masses<const D: usize>(run: &CoupledRun<D>) -> (f64, f64) {
-    let nf = run.num_fluids();
-    let fluid: f64 = run.fluid.cells[..nf]
-        .iter()
-        .map(|mc| {
-            run.fluid
-                .layout
-                .interior
-                .iter()
-                .map(|&c| mc.mass[c])
-                .sum::<f64>()
-        })
+    let fluid: f64 = (0..run.num_fluids())
+        .map(|r| cell_material_totals(&run.fluid, r).mass)
         .sum();
     let solid: f64 = run.fields.iter().map(|f| f.particles.total_mass()).sum();
     (fluid, solid)

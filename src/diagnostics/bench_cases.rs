@@ -83,6 +83,17 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
             }
         }
     }
+    block_run(grid, mat, p, shape, 0.3 * h / speed)
+}
+
+/// The block's run: USL with `shape`, no damping, a fixed `dt`.
+fn block_run<const D: usize>(
+    grid: Grid<D>,
+    mat: SolidMaterial,
+    p: Particles<D>,
+    shape: ShapeKind,
+    dt: f64,
+) -> SolidRun<D> {
     let params = ExplicitParams {
         shape,
         scheme: UpdateScheme::Usl,
@@ -90,7 +101,6 @@ pub fn rotating_block_of(shape: ShapeKind, material: BlockMaterial) -> SolidRun<
         damping: 0.0,
         pic_fraction: 0.0,
     };
-    let dt = 0.3 * h / speed;
     let time = TimeControl {
         end: f64::INFINITY,
         cfl: 0.3,
@@ -272,20 +282,7 @@ pub fn rotating_block_3d_of(
             }
         }
     }
-    let params = ExplicitParams {
-        shape,
-        scheme: UpdateScheme::Usl,
-        mass_floor: 1e-12,
-        damping: 0.0,
-        pic_fraction: 0.0,
-    };
-    let time = TimeControl {
-        end: f64::INFINITY,
-        cfl: 0.3,
-        dt: Some(0.3 * h / speed),
-        max_steps: None,
-    };
-    SolidRun::new(grid, vec![mat], p, params, time)
+    block_run(grid, mat, p, shape, 0.3 * h / speed)
 }
 
 #[cfg(test)]
