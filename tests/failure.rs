@@ -165,19 +165,46 @@ struct Spall {
     zone: f64,
 }
 
+/// The text of `cases/tensile_bar_spall.toml` with `from` replaced by `to`
+/// (each edit's anchor must occur once).
+fn spall_case(edits: &[(&str, &str)]) -> String {
+    let path = format!(
+        "{}/cases/tensile_bar_spall.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut text = std::fs::read_to_string(path).expect("case reads");
+    for (from, to) in edits {
+        assert_eq!(text.matches(from).count(), 1, "anchor `{from}`");
+        text = text.replacen(from, to, 1);
+    }
+    text
+}
+
+/// The largest |X − L/2| of the failed points, `None` before any fails;
+/// asserts that every failed point carries no tension (σ = σ₁₁ I with
+/// σ₁₁ ≤ 0, exactly: no deviator).
+fn failed_zone(p: &mpmice::mpm::Particles<1>) -> Option<f64> {
+    let mut zone = None;
+    for i in (0..p.len()).filter(|&i| p.failed(i)) {
+        let s = p.stress.get(i);
+        assert!(s[(0, 0)] <= 0.0, "failed point {i} in tension: {s}");
+        assert_eq!(
+            s,
+            nalgebra::Matrix3::identity() * s[(0, 0)],
+            "deviator of {i}"
+        );
+        zone = Some(zone.unwrap_or(0.0f64).max((p.x0[i][0] - 0.5).abs()));
+    }
+    zone
+}
+
 /// Runs the spall case on `cells` cells, asserting on every step that the
 /// failed points carry no tension (σ = σ₁₁ I with σ₁₁ ≤ 0, exactly: no
 /// deviator) and that the total momentum stays zero to round-off; and
 /// that no single pulse reaches the spall strength before they meet.
 fn spall_run(cells: usize, model: &str) -> Spall {
-    let path = format!(
-        "{}/cases/tensile_bar_spall.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(path).expect("case reads");
-    let anchor = "model = \"linear_elastic\"";
-    assert_eq!(text.matches(anchor).count(), 1);
-    let text = text.replace(anchor, &format!("model = \"{model}\""));
+    let to = format!("model = \"{model}\"");
+    let text = spall_case(&[("model = \"linear_elastic\"", &to)]);
     let mut scene = parse(&text).expect("case parses");
     scene.grid.cells = vec![cells];
     let mut run = build_solid_run::<1>(&scene).expect("run builds");
@@ -196,13 +223,11 @@ fn spall_run(cells: usize, model: &str) -> Spall {
         run.step().expect("step");
         let p = &run.particles;
         worst_p = worst_p.max(p.momentum()[0].abs() / scale);
+        let failed = failed_zone(p);
         if t_fail.is_none() {
-            if (0..p.len()).any(|i| p.failed(i)) {
+            if let Some(z) = failed {
                 t_fail = Some(run.t);
-                zone = (0..p.len())
-                    .filter(|&i| p.failed(i))
-                    .map(|i| (p.x0[i][0] - 0.5).abs())
-                    .fold(0.0, f64::max);
+                zone = z;
             } else if run.t < t_meet - 3.0 * h / c {
                 single_peak = single_peak.max(
                     p.stress
@@ -211,15 +236,6 @@ fn spall_run(cells: usize, model: &str) -> Spall {
                         .fold(f64::NEG_INFINITY, f64::max),
                 );
             }
-        }
-        for i in (0..p.len()).filter(|&i| p.failed(i)) {
-            let s = p.stress.get(i);
-            assert!(s[(0, 0)] <= 0.0, "failed point {i} in tension: {s}");
-            assert_eq!(
-                s,
-                nalgebra::Matrix3::identity() * s[(0, 0)],
-                "deviator of {i}"
-            );
         }
     }
     let t_fail = t_fail.expect("the bar spalls");
@@ -382,8 +398,9 @@ fn bad_failure_input_names_its_key() {
 }
 
 /// The spall bar of `cases/tensile_bar_spall.toml` in air, between closed
-/// ends (coupled MPM-ICE: air at 1 atm around and inside the bar's cells, the steel stress-free
-/// at that pressure, `coupling.reference_pressure`): the air's impedance
+/// ends (coupled MPM-ICE: air at 1 atm around and inside the bar's cells,
+/// the steel stress-free at that pressure, `coupling.reference_pressure`):
+/// the air's impedance
 /// (ρc ≈ 400 Pa s/m against the bar's 4.6e7) leaves the waves as they are,
 /// so the coupled step must spall the bar at the same moment and place as
 /// the solid-only run, within the same bounds of the exact meeting time;
@@ -391,27 +408,19 @@ fn bad_failure_input_names_its_key() {
 /// (particles and air) stays constant to round-off.
 #[test]
 fn coupled_bar_in_air_spalls_where_the_pulses_meet() {
-    let path = format!(
-        "{}/cases/tensile_bar_spall.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(path).expect("case reads");
     // Closed ends, so that the air's mass stays in the domain (the bar's
     // ends, 5 cm from them, move 1.2 mm by the end).
-    let walls = "boundary = { x_lower = \"free\", x_upper = \"free\" }";
-    assert_eq!(text.matches(walls).count(), 1);
-    let text = text.replace(
-        walls,
-        "boundary = { x_lower = \"symmetry\", x_upper = \"symmetry\" }",
-    );
-    let anchor = "[[materials]]";
-    assert_eq!(text.matches(anchor).count(), 1);
-    let text = text.replacen(
-        anchor,
-        "[coupling]\nreference_pressure = 101325.0\n\n[[materials]]\nname = \"air\"\n\
-         type = \"fluid\"\neos = \"ideal_gas\"\ngamma = 1.4\ncv = 717.5\n\n[[materials]]",
-        1,
-    ) + "\n[[regions]]\npressure = 101325.0\nstates = [{ material = \"air\", \
+    let text = spall_case(&[
+        (
+            "boundary = { x_lower = \"free\", x_upper = \"free\" }",
+            "boundary = { x_lower = \"symmetry\", x_upper = \"symmetry\" }",
+        ),
+        (
+            "[[materials]]",
+            "[coupling]\nreference_pressure = 101325.0\n\n[[materials]]\nname = \"air\"\n\
+             type = \"fluid\"\neos = \"ideal_gas\"\ngamma = 1.4\ncv = 717.5\n\n[[materials]]",
+        ),
+    ]) + "\n[[regions]]\npressure = 101325.0\nstates = [{ material = \"air\", \
          volume_fraction = 1.0, density = 1.1768 }]\n";
     let solid_only = spall_run(220, "linear_elastic");
     let scene = parse(&text).expect("coupled case parses");
@@ -429,18 +438,10 @@ fn coupled_bar_in_air_spalls_where_the_pulses_meet() {
     let mut zone = f64::NAN;
     while run.fluid.time < t_end * (1.0 - 1e-12) {
         run.step(t_end - run.fluid.time).expect("step");
-        let p = &run.fields[0].particles;
-        if t_fail.is_none() && (0..p.len()).any(|i| p.failed(i)) {
+        let failed = failed_zone(&run.fields[0].particles);
+        if let (None, Some(z)) = (t_fail, failed) {
             t_fail = Some(run.fluid.time);
-            zone = (0..p.len())
-                .filter(|&i| p.failed(i))
-                .map(|i| (p.x0[i][0] - 0.5).abs())
-                .fold(0.0, f64::max);
-        }
-        for i in (0..p.len()).filter(|&i| p.failed(i)) {
-            let s = p.stress.get(i);
-            assert!(s[(0, 0)] <= 0.0, "failed point {i} in tension: {s}");
-            assert_eq!(s, nalgebra::Matrix3::identity() * s[(0, 0)]);
+            zone = z;
         }
     }
     let t_fail = t_fail.expect("the bar spalls in air");

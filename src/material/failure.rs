@@ -31,9 +31,9 @@
 //! unchanged), clamped at σ_m ≤ 0, and its deviator is zero:
 //! σ = min(σ_m, 0) I. It resists compression as soon as it is compressed
 //! (voids close at once) and opens freely in tension. On the Hencky path
-//! ([`crate::material::solid::SolidMaterial::hencky_update`]) the same rule holds
-//! for the Kirchhoff mean stress, whose volumetric response is exactly
-//! `K ln J`: τ_m ← min(τ_m + K ln(J/Jⁿ), 0).
+//! ([`crate::material::solid::SolidMaterial::hencky_update`]) the same
+//! rule holds for the Kirchhoff mean stress, whose volumetric response is
+//! exactly `K ln J`: τ_m ← min(τ_m + K ln(J/Jⁿ), 0).
 
 use nalgebra::Matrix3;
 
@@ -518,9 +518,8 @@ mod tests {
         assert_eq!(s, Matrix3::identity() * (-p));
     }
 
-    /// A Hencky solid ([`SolidModel::HenckyFracturing`]) from the relative
-    /// and total deformation gradients `f_rel`, `f_new` of one explicit
-    /// step; returns the new stress and work.
+    /// One explicit step of the Hencky solid `m` from the total deformation
+    /// gradient `f_old` to `f_new`: updates `stress`, `work` and `st`.
     fn hencky_step(
         m: &SolidMaterial,
         f_old: &Matrix3<f64>,
