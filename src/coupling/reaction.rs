@@ -461,9 +461,12 @@ fn growth_limit<const D: usize>(
 
 /// Marks in `fed` the cells the burn feeds at the current state (rates at
 /// `pressure`, the reactant `particles` at `uniform_t` or their own
-/// temperatures) and the cells of the burning reactant, which become
-/// product cells as the front passes; `scratch` is overwritten. Leaves the
-/// other entries.
+/// temperatures) and the cells the reactant burns in (eligible, with an
+/// exposed face), which become product cells as the front passes;
+/// `scratch` is overwritten. Leaves the other entries. Eligible reactant
+/// deeper inside is not marked: its product traces are held isothermal like
+/// any other (marked, the traces at the centre of a confined PBX charge took
+/// the charge's volume noise as flow work, reached 2e9 K and cut Δt 100-fold).
 pub fn mark_fed<const D: usize>(
     layout: &CellLayout<D>,
     law: &BurnLaw,
@@ -475,7 +478,7 @@ pub fn mark_fed<const D: usize>(
 ) {
     tally(layout, law, 0.0, pressure, particles, uniform_t, scratch);
     for &c in &layout.interior {
-        if scratch.inflow[c] > 0.0 || scratch.eligible[c] > 0.0 {
+        if scratch.inflow[c] > 0.0 || (scratch.eligible[c] > 0.0 && scratch.area[c] > 0.0) {
             fed[c] = true;
         }
     }
