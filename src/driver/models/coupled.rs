@@ -7,9 +7,9 @@ use crate::driver::model::{
     Violation,
 };
 use crate::driver::models::arrays::{
-    cell_energies, cell_fields, cell_material_totals, cell_watchdog, load_cells, load_particles,
-    name_particle_material, particle_fields, particle_material_totals, particle_watchdog,
-    put_vectors, save_cells, save_particles, take_vectors,
+    cell_energies, cell_fields, cell_material_totals, cell_watchdog, failure_fields, load_cells,
+    load_particles, name_particle_material, particle_fields, particle_material_totals,
+    particle_watchdog, plastic_fields, put_vectors, save_cells, save_particles, take_vectors,
 };
 use crate::driver::models::fluid::{
     cell_momentum_scale, fluid_history_row, load_carried, save_carried, FLUID_HISTORY,
@@ -117,10 +117,21 @@ impl<const D: usize> Model for Coupled<D> {
         let run = &self.run;
         // One field: its particles (read as written); several: all of
         // them, field by field (a joined copy, so its values are stored).
+        // With the plastic strain, damage and failure flags of plastic and
+        // failing materials.
+        fn solid<'a, const D: usize>(
+            p: &'a crate::mpm::Particles<D>,
+            materials: &[crate::material::SolidMaterial],
+        ) -> FieldSet<'a> {
+            let mut set = particle_fields(p);
+            set.fields.extend(plastic_fields(p, materials));
+            set.fields.extend(failure_fields(p, materials));
+            set
+        }
         let particles = if run.fields.len() == 1 {
-            particle_fields(&run.fields[0].particles)
+            solid(&run.fields[0].particles, &run.materials)
         } else {
-            particle_fields(&run.all_particles()).into_owned()
+            solid(&run.all_particles(), &run.materials).into_owned()
         };
         vec![particles, cell_fields(&run.fluid)]
     }
