@@ -98,7 +98,7 @@ fn lagrangian_cells<const D: usize, const N: usize>(
             let stk_e = eulerian_theta_kappa(&inp, c, &cell);
             if cons {
                 conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
-                if (0..nm).any(|r| !inp.lagr[r] && !(cell.t[r] > 0.0)) {
+                if (0..nm).any(|r| !inp.lagr[r] && (cell.t[r] <= 0.0 || !cell.t[r].is_finite())) {
                     // Dual energy: where the internal energy the total-energy
                     // form leaves (total less kinetic) is not positive, the
                     // cell takes Guilkey Eq. 34 instead. In a jet expanding
