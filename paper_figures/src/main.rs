@@ -46,7 +46,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use clap::Parser;
-use verification::harness::{fit_line, plot_xy, PlotSeries, Style};
+use verification::harness::{fit_line, plot_field, plot_xy, CellField, PlotSeries, Style};
 
 #[derive(Parser)]
 #[command(about = "Regenerate paper figures")]
@@ -97,6 +97,11 @@ const FIGURES: &[(&str, &str, Figure)] = &[
         "guilkey_fig5",
         "Mach 3 wedge, MPM-ICE: pressure field with the exact and measured shock",
         guilkey_fig5,
+    ),
+    (
+        "guilkey_fig6",
+        "confined explosion, 2D (Guilkey Sec. 5): product volume fraction and steel points at 0, 40, 80, 120 us",
+        guilkey_fig6,
     ),
     (
         "york_fig9",
@@ -307,6 +312,125 @@ fn guilkey_fig4(quick: bool, out: &Path) -> anyhow::Result<()> {
 fn guilkey_fig5(quick: bool, out: &Path) -> anyhow::Result<()> {
     verification::coupled_studies::wedge_mach3(quick)?;
     copy_study_plot("wedge_mach3_fig5.png", quick, out)
+}
+
+/// Guilkey Fig. 6 in 2D plane strain: `cases/confined_explosion_2d.toml`
+/// (64² cells; `--quick`: 32²) at t = 0, 40, 80 and 120 µs, the product
+/// gas's volume fraction in the cells with the steel's points on top
+/// (intact and failed apart), one PNG per time (`guilkey_fig6_a.png` …
+/// `guilkey_fig6_d.png`), and `guilkey_fig6.csv`: at each time the reacted
+/// mass, the failed steel points, the total-mass drift and the energy
+/// balance (kinetic + internal + stored and plastic work, less the start
+/// and the chemical energy released, over the released).
+fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
+    use mpmice::coupling::CoupledRun;
+    use mpmice::material::eos::EquationOfState;
+    let case =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../cases/confined_explosion_2d.toml");
+    let mut text = std::fs::read_to_string(&case)?;
+    if quick {
+        text = text.replace("cells = [64, 64]", "cells = [32, 32]");
+    }
+    let mut run = mpmice::scene::build_coupled_run::<2>(&mpmice::scene::parse(&text)?)?;
+    let nf = run.num_fluids();
+    let Some(prod) = run
+        .fluid
+        .materials
+        .iter()
+        .position(|m| m.name == "products")
+    else {
+        bail!("{}: no material `products`", case.display());
+    };
+    let Some(steel) = run
+        .fields
+        .iter()
+        .position(|f| run.fluid.materials[f.ice_material].name == "steel")
+    else {
+        bail!("{}: no solid `steel`", case.display());
+    };
+    // Total mass and energy (fluids' c_v T + ½|u|², particles' kinetic and
+    // stored energy, the plastic work included).
+    let totals = |run: &CoupledRun<2>| {
+        let (mut m, mut e) = (0.0, 0.0);
+        for (mat, mc) in run.fluid.materials[..nf].iter().zip(&run.fluid.cells) {
+            let cv = mat.eos.specific_heat_cv();
+            for &c in &run.fluid.layout.interior {
+                m += mc.mass[c];
+                e += mc.mass[c] * (cv * mc.temperature[c] + 0.5 * mc.velocity[c].norm_squared());
+            }
+        }
+        for f in &run.fields {
+            m += f.particles.mass.iter().sum::<f64>();
+            e += f.particles.kinetic_energy() + f.particles.strain_energy(&run.materials);
+        }
+        (m, e)
+    };
+    let (m0, e0) = totals(&run);
+    let mut csv = String::from("t,reacted_mass,failed_points,mass_drift,energy_balance\n");
+    for (k, t) in [0.0, 4e-5, 8e-5, 1.2e-4].into_iter().enumerate() {
+        while run.fluid.time < t * (1.0 - 1e-12) {
+            run.step(t - run.fluid.time)?;
+        }
+        let lay = &run.fluid.layout;
+        let [nx, ny] = lay.cells;
+        let mut values = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                values.push(run.fluid.cells[prod].vol_frac[lay.index([i as isize, j as isize])]);
+            }
+        }
+        let field = CellField {
+            lower: (lay.lower[0], lay.lower[1]),
+            h: (lay.h[0], lay.h[1]),
+            cells: (nx, ny),
+            values,
+        };
+        let p = &run.fields[steel].particles;
+        let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len()).partition(|&i| p.failed(i));
+        let points = |ids: &[usize]| ids.iter().map(|&i| (p.x[i][0], p.x[i][1])).collect();
+        let series = [
+            PlotSeries {
+                label: "steel".into(),
+                points: points(&intact),
+                style: Style::Markers,
+            },
+            PlotSeries {
+                label: "steel, failed".into(),
+                points: points(&failed),
+                style: Style::Markers,
+            },
+        ];
+        let letter = char::from(b'a' + k as u8);
+        let path = out.join(format!("guilkey_fig6_{letter}.png"));
+        plot_field(
+            &path,
+            &format!(
+                "Guilkey Fig. 6{letter} (2D): product volume fraction, t = {:.0} us",
+                t * 1e6
+            ),
+            "x [m]",
+            "y [m]",
+            "product volume fraction [-]",
+            &field,
+            &series,
+        )?;
+        println!("wrote {}", path.display());
+        let (m, e) = totals(&run);
+        let released = run.reaction_totals();
+        let balance = if released.energy > 0.0 {
+            (e - e0 - released.energy) / released.energy
+        } else {
+            0.0
+        };
+        csv.push_str(&format!(
+            "{t},{},{},{},{balance}\n",
+            released.mass,
+            failed.len(),
+            (m - m0) / m0
+        ));
+    }
+    std::fs::write(out.join("guilkey_fig6.csv"), csv)?;
+    Ok(())
 }
 
 /// York Fig. 6: Sod with gas material points at t = 0.143 (200 cells of
