@@ -387,19 +387,14 @@ fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
         };
         let p = &run.fields[steel].particles;
         let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len()).partition(|&i| p.failed(i));
-        let points = |ids: &[usize]| ids.iter().map(|&i| (p.x[i][0], p.x[i][1])).collect();
-        let series = [
-            PlotSeries {
-                label: "steel".into(),
-                points: points(&intact),
+        let series: Vec<PlotSeries> = [("steel", &intact), ("steel, failed", &failed)]
+            .into_iter()
+            .map(|(label, ids)| PlotSeries {
+                label: label.into(),
+                points: ids.iter().map(|&i| (p.x[i][0], p.x[i][1])).collect(),
                 style: Style::Markers,
-            },
-            PlotSeries {
-                label: "steel, failed".into(),
-                points: points(&failed),
-                style: Style::Markers,
-            },
-        ];
+            })
+            .collect();
         let letter = char::from(b'a' + k as u8);
         let path = out.join(format!("guilkey_fig6_{letter}.png"));
         plot_field(

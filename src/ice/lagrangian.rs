@@ -93,23 +93,10 @@ fn lagrangian_cells<const D: usize, const N: usize>(
             // ([`burn_cell_open`]) keeps the total-energy form.
             let cons =
                 conservative && !(any_lagr && solid_near(&inp, c) && !burn_cell_open(&inp, c));
-            let mut cons = cons;
             let dke_src = cell_sources(&inp, c, cons, &mut cell);
             let stk_e = eulerian_theta_kappa(&inp, c, &cell);
             if cons {
                 conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
-                if (0..nm).any(|r| !inp.lagr[r] && (cell.t[r] <= 0.0 || !cell.t[r].is_finite())) {
-                    // Dual energy: where the internal energy the total-energy
-                    // form leaves (total less kinetic) is not positive, the
-                    // cell takes Guilkey Eq. 34 instead. In a jet expanding
-                    // at several times its sound speed the kinetic energy
-                    // is most of the total and its discretisation error
-                    // all of the internal energy's: the product jet of
-                    // `cases/confined_explosion_2d.toml` (K = 3e-3) left the
-                    // air of a cell at -1.2 K (from 6.8 K) at 0.14 ms.
-                    cons = false;
-                    cell_sources(&inp, c, cons, &mut cell);
-                }
             }
             if let Some(ex) = k_on {
                 momentum_exchange(&inp, &ex.momentum, cons, c, &mut cell);
