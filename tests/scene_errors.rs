@@ -122,6 +122,45 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
             "objects[0].geometry",
             "outside the grid",
         ),
+        (
+            edit(
+                r#"geometry = { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] }"#,
+                r#"geometry = { type = "intersection", parts = [] }"#,
+            ),
+            "objects[0].geometry.parts",
+            "at least one region",
+        ),
+        (
+            edit(
+                r#"geometry = { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] }"#,
+                r#"geometry = { type = "intersection", parts = [
+                    { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] },
+                    { type = "annulus", center = [0.0, 0.0], inner_radius = 0.5, outer_radius = 0.4 },
+                ] }"#,
+            ),
+            "objects[0].geometry.parts[1].outer_radius",
+            "must be > inner_radius",
+        ),
+        (
+            edit(
+                r#"geometry = { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] }"#,
+                r#"geometry = { type = "intersection", parts = [
+                    { type = "box", lower = [0.2, 0.2], upper = [0.1, 0.8] },
+                ] }"#,
+            ),
+            "objects[0].geometry.parts[0].upper[0]",
+            "must be > lower[0]",
+        ),
+        (
+            edit(
+                r#"geometry = { type = "box", lower = [0.2, 0.2], upper = [0.8, 0.8] }"#,
+                r#"geometry = { type = "intersection", parts = [
+                    { type = "half_space", point = [0.5, 0.5], normal = [0.0, 0.0] },
+                ] }"#,
+            ),
+            "objects[0].geometry.parts[0].normal",
+            "must not be zero",
+        ),
         (edit("cfl = 0.5", "cfl = 0.0"), "time.cfl", "0 < cfl ≤ 1"),
         (edit("cfl = 0.5", "cfl = 1.5"), "time.cfl", "0 < cfl ≤ 1"),
         (

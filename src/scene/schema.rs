@@ -969,6 +969,13 @@ pub enum Geometry {
         /// Outer radius.
         outer_radius: f64,
     },
+    /// The points inside every one of `parts` (e.g. a polygon's prism or an
+    /// annulus's shell cut to a length along z by a `box` or `half_space`).
+    Intersection {
+        /// The regions intersected (at least one; any geometry that
+        /// encloses a region, intersections included).
+        parts: Vec<Geometry>,
+    },
 }
 
 impl Geometry {
@@ -1019,6 +1026,7 @@ impl Geometry {
                     || (dx - a).powi(2) + dy * dy <= r * r
                     || (dx + a).powi(2) + dy * dy <= r * r
             }
+            Geometry::Intersection { parts } => parts.iter().all(|g| g.contains(x)),
             Geometry::Polygon { vertices } => {
                 if x.len() < 2 {
                     return false;
@@ -1041,6 +1049,18 @@ impl Geometry {
     /// Axis-aligned bounding box.
     pub fn bounds(&self, dim: usize) -> (Vec<f64>, Vec<f64>) {
         match self {
+            Geometry::Intersection { parts } => {
+                let mut lo = vec![f64::NEG_INFINITY; dim];
+                let mut hi = vec![f64::INFINITY; dim];
+                for part in parts {
+                    let (l, h) = part.bounds(dim);
+                    for d in 0..dim {
+                        lo[d] = lo[d].max(l[d]);
+                        hi[d] = hi[d].min(h[d]);
+                    }
+                }
+                (lo, hi)
+            }
             Geometry::HalfSpace { .. } => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
             Geometry::Polygon { vertices } | Geometry::Polyline { vertices, .. } => {
                 let mut lo = vec![f64::NEG_INFINITY; dim];
@@ -1994,11 +2014,60 @@ fn validate_region_shape(g: &Geometry, path: &str, dim: usize) -> Result<(), Sce
         Geometry::Annulus { center, .. } => vec_len(&format!("{path}.center"), center, dim)?,
         Geometry::HalfSpace { .. } | Geometry::Polygon { .. } => {}
         Geometry::Polyline { .. } | Geometry::Circle { .. } | Geometry::DogBone { .. } => {}
+        Geometry::Intersection { .. } => {}
     }
     Ok(())
 }
 
 fn validate_geometry(g: &Geometry, path: &str, dim: usize) -> Result<(), SceneError> {
+    if let Geometry::Intersection { parts } = g {
+        if parts.is_empty() {
+            return Err(err(
+                format!("{path}.parts"),
+                "needs at least one region (box, disk, sphere, half_space, polygon, annulus, \
+                 intersection, closed polyline, circle, dog_bone)",
+            ));
+        }
+        for (k, part) in parts.iter().enumerate() {
+            let path = format!("{path}.parts[{k}]");
+            validate_region_shape(part, &path, dim)?;
+            match part {
+                Geometry::Box { lower, upper } => {
+                    if let Some(d) = (0..dim).find(|&d| upper[d] <= lower[d]) {
+                        return Err(err(
+                            format!("{path}.upper[{d}]"),
+                            format!("must be > lower[{d}] = {}", lower[d]),
+                        ));
+                    }
+                }
+                Geometry::Annulus {
+                    inner_radius,
+                    outer_radius,
+                    ..
+                } => {
+                    if dim < 2 {
+                        return Err(err(format!("{path}.type"), "annulus needs dim 2 or 3"));
+                    }
+                    if !(inner_radius.is_finite() && *inner_radius >= 0.0) {
+                        return Err(err(format!("{path}.inner_radius"), "must be ≥ 0"));
+                    }
+                    if !(outer_radius.is_finite() && outer_radius > inner_radius) {
+                        return Err(err(
+                            format!("{path}.outer_radius"),
+                            format!("must be > inner_radius = {inner_radius}"),
+                        ));
+                    }
+                }
+                Geometry::Polyline { closed: false, .. } => {
+                    return Err(err(
+                        format!("{path}.closed"),
+                        "an intersection's polyline must be closed (it encloses a region)",
+                    ));
+                }
+                _ => {}
+            }
+        }
+    }
     if let Geometry::Polygon { vertices } = g {
         if dim < 2 {
             return Err(err(path, "a polygon needs dim = 2 or 3"));
@@ -2617,7 +2686,8 @@ impl Scene {
                     | Geometry::Polygon { .. }
                     | Geometry::Polyline { .. }
                     | Geometry::Circle { .. }
-                    | Geometry::DogBone { .. } => {}
+                    | Geometry::DogBone { .. }
+                    | Geometry::Intersection { .. } => {}
                 }
             }
         }
@@ -3634,7 +3704,10 @@ impl Scene {
                 Geometry::Polygon { .. }
                 | Geometry::Polyline { .. }
                 | Geometry::Circle { .. }
-                | Geometry::DogBone { .. } => validate_geometry(&o.geometry, &p("geometry"), dim)?,
+                | Geometry::DogBone { .. }
+                | Geometry::Intersection { .. } => {
+                    validate_geometry(&o.geometry, &p("geometry"), dim)?
+                }
                 Geometry::Box { lower, upper } => {
                     vec_len(&p("geometry.lower"), lower, dim)?;
                     vec_len(&p("geometry.upper"), upper, dim)?;
@@ -3788,4 +3861,54 @@ fn membrane_keys_absent(o: &ObjectSpec, i: usize) -> Result<(), SceneError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Geometry;
+
+    /// A quarter annulus's prism cut to 0 ≤ z ≤ 1 by a box: inside where
+    /// every part is, with the box's z bounds and the annulus's x–y bounds.
+    #[test]
+    fn an_intersection_is_inside_every_part_and_bounded_by_the_tightest() {
+        let g = Geometry::Intersection {
+            parts: vec![
+                Geometry::Annulus {
+                    center: vec![0.0, 0.0, 0.0],
+                    inner_radius: 1.0,
+                    outer_radius: 2.0,
+                },
+                Geometry::Box {
+                    lower: vec![0.0, 0.0, 0.0],
+                    upper: vec![5.0, 5.0, 1.0],
+                },
+            ],
+        };
+        assert!(g.contains(&[1.5, 0.1, 0.5]));
+        assert!(!g.contains(&[1.5, 0.1, 1.5])); // above the box
+        assert!(!g.contains(&[-1.5, 0.1, 0.5])); // outside the box in x
+        assert!(!g.contains(&[0.5, 0.1, 0.5])); // in the annulus's hole
+        let (lo, hi) = g.bounds(3);
+        assert_eq!(lo, vec![0.0, 0.0, 0.0]);
+        assert_eq!(hi, vec![2.0, 2.0, 1.0]);
+        // A polygon's prism cut by a half space keeps the prism's x–y
+        // bounds and the half space's open z.
+        let prism = Geometry::Intersection {
+            parts: vec![
+                Geometry::Polygon {
+                    vertices: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+                },
+                Geometry::HalfSpace {
+                    point: vec![0.0, 0.0, 2.0],
+                    normal: vec![0.0, 0.0, -1.0],
+                },
+            ],
+        };
+        assert!(prism.contains(&[0.2, 0.2, -7.0]));
+        assert!(!prism.contains(&[0.2, 0.2, 2.5]));
+        assert!(!prism.contains(&[0.8, 0.8, 0.0]));
+        let (lo, hi) = prism.bounds(3);
+        assert_eq!((lo[0], hi[1]), (0.0, 1.0));
+        assert_eq!((lo[2], hi[2]), (f64::NEG_INFINITY, f64::INFINITY));
+    }
 }
