@@ -28,23 +28,6 @@ fn masses<const D: usize>(run: &CoupledRun<D>) -> (f64, f64) {
     (fluid, solid)
 }
 
-/// Energy of the fluids and particles (kinetic, internal, strain).
-fn energy(run: &CoupledRun<1>) -> f64 {
-    let nf = run.num_fluids();
-    let mut e = 0.0;
-    for (mat, mc) in run.fluid.materials[..nf].iter().zip(&run.fluid.cells) {
-        use mpmice::material::eos::EquationOfState;
-        let cv = mat.eos.specific_heat_cv();
-        for &c in &run.fluid.layout.interior {
-            e += mc.mass[c] * (cv * mc.temperature[c] + 0.5 * mc.velocity[c].norm_squared());
-        }
-    }
-    for f in &run.fields {
-        e += f.particles.kinetic_energy() + f.particles.strain_energy(&run.materials);
-    }
-    e
-}
-
 /// With n = 0 the face regresses at a constant rate: by t = 1 ms exactly
 /// K A t = 1.8e-3 kg per m² has become product (A = 1: one face; the wall
 /// is a symmetry plane). The fluid gains exactly what the particles lose,
@@ -53,7 +36,7 @@ fn energy(run: &CoupledRun<1>) -> f64 {
 fn constant_rate_burn_converts_exactly_k_a_t() {
     let mut run = run_of(&[]);
     let (f0, s0) = masses(&run);
-    let e0 = energy(&run);
+    let e0 = run.mass_and_energy().1;
     run.advance_to(1e-3).unwrap();
     let (f1, s1) = masses(&run);
     let t = run.reaction_totals();
@@ -78,7 +61,7 @@ fn constant_rate_burn_converts_exactly_k_a_t() {
     // Energy: what the products received explains the change to 1 % of it
     // (measured −7.2e-6; −2.6e-3 while the product cell beside the face
     // booked its flow work by Guilkey Eq. 34, see `ice::lagrangian`).
-    let e1 = energy(&run);
+    let e1 = run.mass_and_energy().1;
     let balance = (e1 - e0 - t.energy) / t.energy;
     eprintln!("energy change − released = {balance:e} of the released energy");
     assert!(balance.abs() < 1e-2, "{balance:e}");
@@ -152,7 +135,7 @@ fn cold_reactant_does_not_burn() {
 fn very_fast_burn_stays_finite_and_conserves_mass() {
     let mut run = run_of(&[("rate_constant = 1.8", "rate_constant = 2e5")]);
     let (f0, s0) = masses(&run);
-    let e0 = energy(&run);
+    let e0 = run.mass_and_energy().1;
     let n0: usize = run.fields.iter().map(|f| f.particles.len()).sum();
     let mut p_max = 0.0f64;
     let mut t_100 = f64::NAN;
@@ -168,7 +151,7 @@ fn very_fast_burn_stays_finite_and_conserves_mass() {
     let (f1, s1) = masses(&run);
     let n1: usize = run.fields.iter().map(|f| f.particles.len()).sum();
     let t = run.reaction_totals();
-    let balance = (energy(&run) - e0 - t.energy) / t.energy;
+    let balance = (run.mass_and_energy().1 - e0 - t.energy) / t.energy;
     eprintln!(
         "p_max {p_max:e} (100 bar at t = {t_100:e}), particles {n0} → {n1}, burnt {:e}, \
          energy balance {balance:e}",
@@ -200,12 +183,12 @@ fn energy_balance_holds_across_burn_rates() {
     for k in [2e3, 2e4] {
         let mut run = run_of(&[("rate_constant = 1.8", &format!("rate_constant = {k:e}"))]);
         let (f0, s0) = masses(&run);
-        let e0 = energy(&run);
+        let e0 = run.mass_and_energy().1;
         run.advance_to(1e-4).unwrap();
         let (f1, s1) = masses(&run);
         let t = run.reaction_totals();
         let exact = k * 1e-4;
-        let balance = (energy(&run) - e0 - t.energy) / t.energy;
+        let balance = (run.mass_and_energy().1 - e0 - t.energy) / t.energy;
         eprintln!(
             "K = {k:e}: burnt {:e} (exact {exact:e}), energy balance {balance:e}",
             t.mass
@@ -358,6 +341,37 @@ fn confined_burn_drives_the_lid_as_the_lumped_model() {
     assert!(errors[1] < 0.7 * errors[0], "{errors:?}");
 }
 
+/// Runs a confined explosion scene to `end`; returns the time and the
+/// initial positions of the first steel points to fail, the total-mass
+/// drift of all materials (the domain is closed) and the reacted mass.
+fn first_failure<const D: usize>(text: &str, end: f64) -> (f64, Vec<[f64; 3]>, f64, f64) {
+    let mut run = build_coupled_run::<D>(&parse(text).unwrap()).unwrap();
+    let m0 = run.mass_and_energy().0;
+    let steel = run
+        .fields
+        .iter()
+        .position(|f| run.fluid.materials[f.ice_material].name == "steel")
+        .unwrap();
+    let mut first = None;
+    while run.fluid.time < end * (1.0 - 1e-12) {
+        run.step(end - run.fluid.time).unwrap();
+        if first.is_none() {
+            let p = &run.fields[steel].particles;
+            let at: Vec<[f64; 3]> = (0..p.len())
+                .filter(|&i| p.failed(i))
+                .map(|i| std::array::from_fn(|d| if d < D { p.x0[i][d] } else { 0.0 }))
+                .collect();
+            if !at.is_empty() {
+                first = Some((run.fluid.time, at));
+            }
+        }
+    }
+    let drift = (run.mass_and_energy().0 - m0) / m0;
+    let reacted = run.reaction_totals().mass;
+    let (t, at) = first.expect("the container fails");
+    (t, at, drift, reacted)
+}
+
 /// The 2D confined explosion (`cases/confined_explosion_2d.toml`, Guilkey
 /// Sec. 5) at 48 cells a side (the case has 64): the notched steel ring,
 /// pressurised by its burning PBX, fails first at the notch (45°; the
@@ -368,41 +382,128 @@ fn confined_burn_drives_the_lid_as_the_lumped_model() {
 fn confined_explosion_2d_ruptures_at_the_notch() {
     let text = include_str!("../cases/confined_explosion_2d.toml")
         .replace("cells = [64, 64]", "cells = [48, 48]");
-    let mut run = build_coupled_run::<2>(&parse(&text).unwrap()).unwrap();
-    let total = |run: &CoupledRun<2>| {
-        let (fluid, solid) = masses(run);
-        fluid + solid
-    };
-    let m0 = total(&run);
-    let steel = run
-        .fields
-        .iter()
-        .position(|f| run.fluid.materials[f.ice_material].name == "steel")
-        .unwrap();
-    let end = 1.2e-4;
-    let mut first: Option<(f64, Vec<f64>)> = None;
-    while run.fluid.time < end * (1.0 - 1e-12) {
-        run.step(end - run.fluid.time).unwrap();
-        if first.is_none() {
-            let p = &run.fields[steel].particles;
-            let angles: Vec<f64> = (0..p.len())
-                .filter(|&i| p.failed(i))
-                .map(|i| p.x0[i][1].atan2(p.x0[i][0]).to_degrees())
-                .collect();
-            if !angles.is_empty() {
-                first = Some((run.fluid.time, angles));
-            }
-        }
-    }
-    let drift = (total(&run) - m0) / m0;
+    let (t, at, drift, reacted) = first_failure::<2>(&text, 1.2e-4);
+    let angles: Vec<f64> = at.iter().map(|x| x[1].atan2(x[0]).to_degrees()).collect();
     eprintln!(
-        "mass drift {drift:e}, first failure {first:?}, reacted {:e}",
-        run.reaction_totals().mass
+        "mass drift {drift:e}, first failure at {t:e} s at {angles:?} deg, reacted {reacted:e}"
     );
-    let (_, angles) = first.expect("the ring fails");
     assert!(
         angles.iter().all(|a| (a - 45.0).abs() < 5.0),
         "first failed points at {angles:?} deg, the notch is at 45"
     );
     assert!(drift.abs() < 1e-12, "{drift:e}");
+}
+
+/// Guilkey's own failure (Sec. 5): with no failure model, the ring of the
+/// 2D confined explosion (the case, 64² cells, without its Johnson–Cook
+/// failure) still opens, by MPM's separation: initially adjacent steel
+/// points that end a whole cell further apart no longer share a node and
+/// stop interacting. By 0.12 ms such pairs exist and all lie at the notch
+/// (measured: 16 pairs at 43.5°–46.5°; in 10-µs snapshots the first at
+/// 110 µs; with the failure model the first pair is a cell apart at 90 µs,
+/// after the first failed points at 45 µs).
+#[test]
+fn confined_explosion_2d_separates_at_the_notch_without_a_failure_model() {
+    let case = include_str!("../cases/confined_explosion_2d.toml");
+    let failure = case
+        .lines()
+        .find(|l| l.starts_with("failure = "))
+        .expect("the case's steel has a failure model");
+    let text = case.replace(failure, "");
+    let mut run = build_coupled_run::<2>(&parse(&text).unwrap()).unwrap();
+    let end = 1.2e-4;
+    while run.fluid.time < end * (1.0 - 1e-12) {
+        run.step(end - run.fluid.time).unwrap();
+    }
+    let steel = run
+        .fields
+        .iter()
+        .find(|f| run.fluid.materials[f.ice_material].name == "steel")
+        .unwrap();
+    let p = &steel.particles;
+    let h = run.fluid.layout.h[0];
+    let spacing = h / 2.0; // 2 points per cell per direction
+    let mut apart = Vec::new();
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
+            let d0 = (p.x0[i] - p.x0[j]).norm();
+            if d0 <= 1.05 * spacing && (p.x[i] - p.x[j]).norm() - d0 >= h {
+                apart.push(p.x0[i][1].atan2(p.x0[i][0]).to_degrees());
+            }
+        }
+    }
+    eprintln!("{} pairs a cell apart, at {apart:?} deg", apart.len());
+    assert!(!apart.is_empty(), "the ring has not separated by {end} s");
+    assert!(
+        apart.iter().all(|a| (a - 45.0).abs() < 5.0),
+        "pairs a cell apart at {apart:?} deg, the notch is at 45"
+    );
+}
+
+/// The 3D one-eighth confined explosion (`cases/confined_explosion.toml`)
+/// at 20 × 20 × 25 cells (the case has 40 × 40 × 50): the intersections
+/// fill the notched wall with its hemispherical head and the charge with
+/// the volumes of the exact solids (the notched section's area, from its
+/// polygon, times the 40 mm half-length, plus an eighth of the spherical
+/// shell; the charge's quarter disk times 40 mm plus an eighth of the
+/// ball) to within the point lattice's resolution of the curved faces, and
+/// through 60 µs of burn the total mass of the four materials is conserved
+/// to round-off. (Measured: volumes −0.37 % and +1.31 %, mass drift
+/// 4.5e-15. The energy balance is printed, not asserted: the coupled
+/// scheme books 5.3 % less than the burn releases here, as at the end of
+/// the 2D and 3D cases, 5.4 %; an open defect, see the README.)
+/// (This grid is too coarse for the notch, 4 mm deep, to fail first: at
+/// 20 cells the head fails first, at 130 µs; at the case's 40 cells the
+/// wall fails at the notch first, at 72 µs; see the README.)
+#[test]
+fn confined_explosion_3d_fills_its_container_and_conserves_mass() {
+    use mpmice::scene::Geometry;
+    use std::f64::consts::PI;
+    let case = include_str!("../cases/confined_explosion.toml");
+    assert!(case.contains("cells = [40, 40, 50]"));
+    let scene = parse(&case.replace("cells = [40, 40, 50]", "cells = [20, 20, 25]")).unwrap();
+    let Geometry::Intersection { parts } = &scene.objects[0].geometry else {
+        panic!("the wall is an intersection")
+    };
+    let Geometry::Polygon { vertices: v } = &parts[1] else {
+        panic!("the wall's section is a polygon")
+    };
+    let n = v.len();
+    let area = 0.5
+        * (0..n)
+            .map(|i| v[i][0] * v[(i + 1) % n][1] - v[(i + 1) % n][0] * v[i][1])
+            .sum::<f64>()
+            .abs();
+    let (half_length, r_in, r_out): (f64, f64, f64) = (0.04, 0.03, 0.04);
+    let steel_exact = area * half_length + PI / 6.0 * (r_out.powi(3) - r_in.powi(3));
+    let pbx_exact = PI / 4.0 * r_in * r_in * half_length + PI / 6.0 * r_in.powi(3);
+    let mut run = build_coupled_run::<3>(&scene).unwrap();
+    let volume = |name: &str| {
+        let f = run
+            .fields
+            .iter()
+            .find(|f| run.fluid.materials[f.ice_material].name == name)
+            .unwrap();
+        f.particles.vol.iter().sum::<f64>()
+    };
+    let (steel, pbx) = (
+        volume("steel") / steel_exact - 1.0,
+        volume("pbx") / pbx_exact - 1.0,
+    );
+    let (m0, e0) = run.mass_and_energy();
+    let end = 6e-5;
+    while run.fluid.time < end * (1.0 - 1e-12) {
+        run.step(end - run.fluid.time).unwrap();
+    }
+    let (m, e) = run.mass_and_energy();
+    let released = run.reaction_totals();
+    let (drift, balance) = ((m - m0) / m0, (e - e0 - released.energy) / released.energy);
+    eprintln!(
+        "volume error steel {steel:+.4}, pbx {pbx:+.4}; mass drift {drift:e}, energy balance \
+         {balance:+.4} of {:e} J released, reacted {:e} kg",
+        released.energy, released.mass
+    );
+    assert!(steel.abs() < 0.02 && pbx.abs() < 0.02, "{steel} {pbx}");
+    assert!(drift.abs() < 1e-12, "{drift:e}");
+    assert!(released.mass > 0.0);
 }

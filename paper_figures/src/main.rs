@@ -104,6 +104,11 @@ const FIGURES: &[(&str, &str, Figure)] = &[
         guilkey_fig6,
     ),
     (
+        "guilkey_fig6_3d",
+        "confined explosion, 3D one-eighth (Guilkey Sec. 5): product volume fraction and steel points on two sections at 0, 40, 80, 120 us",
+        guilkey_fig6_3d,
+    ),
+    (
         "york_fig9",
         "piston-container (York 4.2): piston displacement vs time, m = 0.1 and 1.0, exact periods",
         york_fig9,
@@ -316,23 +321,87 @@ fn guilkey_fig5(quick: bool, out: &Path) -> anyhow::Result<()> {
 
 /// Guilkey Fig. 6 in 2D plane strain: `cases/confined_explosion_2d.toml`
 /// (64² cells; `--quick`: 32²) at t = 0, 40, 80 and 120 µs, the product
-/// gas's volume fraction in the cells with the steel's points on top
-/// (intact and failed apart), one PNG per time (`guilkey_fig6_a.png` …
+/// gas's volume fraction in the cells with the steel's points (intact and
+/// failed apart) and the PBX's on top, one PNG per time (`guilkey_fig6_a.png` …
 /// `guilkey_fig6_d.png`), and `guilkey_fig6.csv`: at each time the reacted
 /// mass, the failed steel points, the total-mass drift and the energy
 /// balance (kinetic + internal + stored and plastic work, less the start
 /// and the chemical energy released, over the released).
 fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
-    use mpmice::coupling::CoupledRun;
-    use mpmice::material::eos::EquationOfState;
-    let case =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../cases/confined_explosion_2d.toml");
+    confined_explosion_figure::<2>(
+        "confined_explosion_2d.toml",
+        ("cells = [64, 64]", "cells = [32, 32]"),
+        quick,
+        out,
+        "guilkey_fig6",
+        &[Section {
+            axes: [0, 1],
+            across: None,
+            name: "",
+        }],
+    )
+}
+
+/// Guilkey Fig. 6 in 3D, one-eighth symmetric: `cases/confined_explosion.toml`
+/// (40³ cells; `--quick`: 20³) at t = 0, 40, 80 and 120 µs, as
+/// [`guilkey_fig6`] does, on two sections: the mid-length symmetry plane
+/// z = 0 (`guilkey_fig6_3d_a_xy.png` …, the notch's cross-section) and the
+/// plane y = 0 through the axis (`…_xz.png`, the wall's length and the end
+/// cap), each the first cell layer with the steel points inside it; and
+/// `guilkey_fig6_3d.csv`.
+fn guilkey_fig6_3d(quick: bool, out: &Path) -> anyhow::Result<()> {
+    confined_explosion_figure::<3>(
+        "confined_explosion.toml",
+        ("cells = [40, 40, 50]", "cells = [20, 20, 25]"),
+        quick,
+        out,
+        "guilkey_fig6_3d",
+        &[
+            Section {
+                axes: [0, 1],
+                across: Some(2),
+                name: "_xy",
+            },
+            Section {
+                axes: [0, 2],
+                across: Some(1),
+                name: "_xz",
+            },
+        ],
+    )
+}
+
+/// A plane section of a confined-explosion run drawn by
+/// [`confined_explosion_figure`]: the two axes drawn and, in 3D, the axis
+/// across the plane (the first cell layer along it is drawn, with the
+/// points inside that layer); `name` ends the PNG's file name.
+struct Section {
+    axes: [usize; 2],
+    across: Option<usize>,
+    name: &'static str,
+}
+
+/// The confined explosion `case` (a file in `cases/`; `quick` replaces
+/// `cells.0` by `cells.1`) at t = 0, 40, 80 and 120 µs: per time and
+/// section a PNG `{stem}_{letter}{section}.png` of the product volume
+/// fraction with the steel points (intact, failed) and the PBX's, and `{stem}.csv` with
+/// the reacted mass, failed points, total-mass drift and energy balance.
+fn confined_explosion_figure<const D: usize>(
+    case: &str,
+    cells: (&str, &str),
+    quick: bool,
+    out: &Path,
+    stem: &str,
+    sections: &[Section],
+) -> anyhow::Result<()> {
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../cases")
+        .join(case);
     let mut text = std::fs::read_to_string(&case)?;
     if quick {
-        text = text.replace("cells = [64, 64]", "cells = [32, 32]");
+        text = text.replace(cells.0, cells.1);
     }
-    let mut run = mpmice::scene::build_coupled_run::<2>(&mpmice::scene::parse(&text)?)?;
-    let nf = run.num_fluids();
+    let mut run = mpmice::scene::build_coupled_run::<D>(&mpmice::scene::parse(&text)?)?;
     let Some(prod) = run
         .fluid
         .materials
@@ -341,76 +410,84 @@ fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
     else {
         bail!("{}: no material `products`", case.display());
     };
-    let Some(steel) = run
-        .fields
-        .iter()
-        .position(|f| run.fluid.materials[f.ice_material].name == "steel")
-    else {
-        bail!("{}: no solid `steel`", case.display());
+    let solid = |name: &str| {
+        run.fields
+            .iter()
+            .position(|f| run.fluid.materials[f.ice_material].name == name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no solid `{name}`", case.display()))
     };
+    let (steel, pbx) = (solid("steel")?, solid("pbx")?);
     // Total mass and energy (fluids' c_v T + ½|u|², particles' kinetic and
     // stored energy, the plastic work included).
-    let totals = |run: &CoupledRun<2>| {
-        let (mut m, mut e) = (0.0, 0.0);
-        for (mat, mc) in run.fluid.materials[..nf].iter().zip(&run.fluid.cells) {
-            let cv = mat.eos.specific_heat_cv();
-            for &c in &run.fluid.layout.interior {
-                m += mc.mass[c];
-                e += mc.mass[c] * (cv * mc.temperature[c] + 0.5 * mc.velocity[c].norm_squared());
-            }
-        }
-        for f in &run.fields {
-            m += f.particles.mass.iter().sum::<f64>();
-            e += f.particles.kinetic_energy() + f.particles.strain_energy(&run.materials);
-        }
-        (m, e)
-    };
-    let (m0, e0) = totals(&run);
+    let (m0, e0) = run.mass_and_energy();
     let mut csv = String::from("t,reacted_mass,failed_points,mass_drift,energy_balance\n");
     for (k, t) in [0.0, 4e-5, 8e-5, 1.2e-4].into_iter().enumerate() {
         while run.fluid.time < t * (1.0 - 1e-12) {
             run.step(t - run.fluid.time)?;
         }
         let lay = &run.fluid.layout;
-        let [nx, ny] = lay.cells;
-        let mut values = Vec::with_capacity(nx * ny);
-        for j in 0..ny {
-            for i in 0..nx {
-                values.push(run.fluid.cells[prod].vol_frac[lay.index([i as isize, j as isize])]);
-            }
-        }
-        let field = CellField {
-            lower: (lay.lower[0], lay.lower[1]),
-            h: (lay.h[0], lay.h[1]),
-            cells: (nx, ny),
-            values,
-        };
         let p = &run.fields[steel].particles;
-        let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len()).partition(|&i| p.failed(i));
-        let series: Vec<PlotSeries> = [("steel", &intact), ("steel, failed", &failed)]
+        let letter = char::from(b'a' + k as u8);
+        for sec in sections {
+            let [a, b] = sec.axes;
+            let (na, nb) = (lay.cells[a], lay.cells[b]);
+            let mut values = Vec::with_capacity(na * nb);
+            for j in 0..nb {
+                for i in 0..na {
+                    let mut idx = [0isize; D];
+                    idx[a] = i as isize;
+                    idx[b] = j as isize;
+                    values.push(run.fluid.cells[prod].vol_frac[lay.index(idx)]);
+                }
+            }
+            let field = CellField {
+                lower: (lay.lower[a], lay.lower[b]),
+                h: (lay.h[a], lay.h[b]),
+                cells: (na, nb),
+                values,
+            };
+            let in_layer = |x: &[f64]| sec.across.is_none_or(|c| x[c] < lay.lower[c] + lay.h[c]);
+            let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len())
+                .filter(|&i| in_layer(p.x[i].as_slice()))
+                .partition(|&i| p.failed(i));
+            let q = &run.fields[pbx].particles;
+            let charge: Vec<usize> = (0..q.len())
+                .filter(|&i| in_layer(q.x[i].as_slice()))
+                .collect();
+            let series: Vec<PlotSeries> = [
+                ("steel", p, &intact),
+                ("steel, failed", p, &failed),
+                ("PBX", q, &charge),
+            ]
             .into_iter()
-            .map(|(label, ids)| PlotSeries {
+            .map(|(label, p, ids)| PlotSeries {
                 label: label.into(),
-                points: ids.iter().map(|&i| (p.x[i][0], p.x[i][1])).collect(),
+                points: ids.iter().map(|&i| (p.x[i][a], p.x[i][b])).collect(),
                 style: Style::Markers,
             })
             .collect();
-        let letter = char::from(b'a' + k as u8);
-        let path = out.join(format!("guilkey_fig6_{letter}.png"));
-        plot_field(
-            &path,
-            &format!(
-                "Guilkey Fig. 6{letter} (2D): product volume fraction, t = {:.0} us",
-                t * 1e6
-            ),
-            "x [m]",
-            "y [m]",
-            "product volume fraction [-]",
-            &field,
-            &series,
-        )?;
-        println!("wrote {}", path.display());
-        let (m, e) = totals(&run);
+            let axis = ["x", "y", "z"];
+            let plane = match sec.across {
+                Some(c) => format!("{D}D, {} = 0 layer", axis[c]),
+                None => format!("{D}D"),
+            };
+            let path = out.join(format!("{stem}_{letter}{}.png", sec.name));
+            plot_field(
+                &path,
+                &format!(
+                    "Guilkey Fig. 6{letter} ({plane}): product volume fraction, t = {:.0} us",
+                    t * 1e6
+                ),
+                &format!("{} [m]", axis[a]),
+                &format!("{} [m]", axis[b]),
+                "product volume fraction [-]",
+                &field,
+                &series,
+            )?;
+            println!("wrote {}", path.display());
+        }
+        let failed = (0..p.len()).filter(|&i| p.failed(i)).count();
+        let (m, e) = run.mass_and_energy();
         let released = run.reaction_totals();
         let balance = if released.energy > 0.0 {
             (e - e0 - released.energy) / released.energy
@@ -418,13 +495,12 @@ fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
             0.0
         };
         csv.push_str(&format!(
-            "{t},{},{},{},{balance}\n",
+            "{t},{},{failed},{},{balance}\n",
             released.mass,
-            failed.len(),
             (m - m0) / m0
         ));
     }
-    std::fs::write(out.join("guilkey_fig6.csv"), csv)?;
+    std::fs::write(out.join(format!("{stem}.csv")), csv)?;
     Ok(())
 }
 

@@ -1364,6 +1364,27 @@ impl<const D: usize> CoupledRun<D> {
         t
     }
 
+    /// Total mass and energy (kinetic, internal, strain) of the fluids in
+    /// the cells and of the particles; the solid fields' cell copies are
+    /// not counted. With [`Self::reaction_totals`]'s energy (what the
+    /// reactions put into the products) the energy balance of a run.
+    pub fn mass_and_energy(&self) -> (f64, f64) {
+        let nf = self.num_fluids();
+        let (mut m, mut e) = (0.0, 0.0);
+        for (mat, mc) in self.fluid.materials[..nf].iter().zip(&self.fluid.cells) {
+            let cv = mat.eos.specific_heat_cv();
+            for &c in &self.fluid.layout.interior {
+                m += mc.mass[c];
+                e += mc.mass[c] * (cv * mc.temperature[c] + 0.5 * mc.velocity[c].norm_squared());
+            }
+        }
+        for f in &self.fields {
+            m += f.particles.total_mass();
+            e += f.particles.kinetic_energy() + f.particles.strain_energy(&self.materials);
+        }
+        (m, e)
+    }
+
     /// The reactants' temperature where the solids' is not tracked (no heat
     /// exchange: `[coupling] solid_temperature`), else `None` (their
     /// particles' own).
