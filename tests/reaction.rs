@@ -454,7 +454,7 @@ fn confined_explosion_2d_separates_at_the_notch_without_a_failure_model() {
 /// the 2D and 3D cases, 5.4 %; an open defect, see the README.)
 /// (This grid is too coarse for the notch, 4 mm deep, to fail first: at
 /// 20 cells the head fails first, at 130 µs; at the case's 40 cells the
-/// wall fails at the notch first, at 72 µs; see the README.)
+/// wall fails at the notch first, by 80 µs; see the README.)
 #[test]
 fn confined_explosion_3d_fills_its_container_and_conserves_mass() {
     use mpmice::scene::Geometry;
