@@ -12,7 +12,7 @@ use crate::driver::models::arrays::{
     particle_watchdog, plastic_fields, put_vectors, save_cells, save_particles, take_vectors,
 };
 use crate::driver::models::fluid::{
-    cell_momentum_scale, fluid_history_row, load_carried, save_carried, FLUID_HISTORY,
+    cell_momentum_scale, load_carried, save_carried, FLUID_HISTORY,
 };
 use crate::driver::models::solid_explicit::scene_name;
 use crate::driver::{CoupledIterations, FieldIterations};
@@ -146,7 +146,13 @@ impl<const D: usize> Model for Coupled<D> {
     }
 
     fn history_row(&self, row: &mut Vec<f64>) {
-        fluid_history_row(&self.run.fluid, row);
+        // The coupled account, as the summary's: the fluids in the cells and
+        // the particles, not the solid fields' cell copies (which count a
+        // solid's c_v T instead of its stored work, and its burnt mass
+        // twice, once in `reaction_energy`).
+        let e = self.energies();
+        let (mass, _) = self.run.mass_and_energy();
+        row.extend([mass, e.kinetic, e.strain, e.kinetic + e.strain]);
         if !self.run.reactions.is_empty() {
             let t = self.run.reaction_totals();
             row.extend([t.mass, t.energy, t.heat]);
