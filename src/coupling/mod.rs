@@ -1364,25 +1364,44 @@ impl<const D: usize> CoupledRun<D> {
         t
     }
 
-    /// Total mass and energy (kinetic, internal, strain) of the fluids in
-    /// the cells and of the particles; the solid fields' cell copies are
-    /// not counted. With [`Self::reaction_totals`]'s energy (what the
-    /// reactions put into the products) the energy balance of a run.
-    pub fn mass_and_energy(&self) -> (f64, f64) {
+    /// The run's account: the total mass and the energies of the fluids in
+    /// the cells and of the particles (the solid fields' cell copies are
+    /// not counted): kinetic, the fluids' internal plus the particles'
+    /// stored and plastic work (in `strain`), and in `potential` minus the
+    /// energy the reactions released into the products (the reactant's
+    /// internal and kinetic energy and the heat of reaction; the solid is
+    /// isothermal and its chemical energy is not otherwise counted), so
+    /// that the total is conserved by the exact dynamics.
+    pub fn account(&self) -> (f64, crate::stepper::Energies) {
         let nf = self.num_fluids();
-        let (mut m, mut e) = (0.0, 0.0);
+        let mut m = 0.0;
+        let mut e = crate::stepper::Energies {
+            kinetic: 0.0,
+            strain: 0.0,
+            potential: -self.reaction_totals().energy,
+        };
         for (mat, mc) in self.fluid.materials[..nf].iter().zip(&self.fluid.cells) {
             let cv = mat.eos.specific_heat_cv();
             for &c in &self.fluid.layout.interior {
                 m += mc.mass[c];
-                e += mc.mass[c] * (cv * mc.temperature[c] + 0.5 * mc.velocity[c].norm_squared());
+                e.kinetic += 0.5 * mc.mass[c] * mc.velocity[c].norm_squared();
+                e.strain += mc.mass[c] * cv * mc.temperature[c];
             }
         }
         for f in &self.fields {
             m += f.particles.total_mass();
-            e += f.particles.kinetic_energy() + f.particles.strain_energy(&self.materials);
+            e.kinetic += f.particles.kinetic_energy();
+            e.strain += f.particles.strain_energy(&self.materials);
         }
         (m, e)
+    }
+
+    /// Total mass and energy (kinetic + internal + stored and plastic work)
+    /// of [`Self::account`]; with [`Self::reaction_totals`]'s energy the
+    /// energy balance of a run.
+    pub fn mass_and_energy(&self) -> (f64, f64) {
+        let (m, e) = self.account();
+        (m, e.kinetic + e.strain)
     }
 
     /// The reactants' temperature where the solids' is not tracked (no heat

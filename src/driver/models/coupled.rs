@@ -7,9 +7,9 @@ use crate::driver::model::{
     Violation,
 };
 use crate::driver::models::arrays::{
-    cell_energies, cell_fields, cell_material_totals, cell_watchdog, failure_fields, load_cells,
-    load_particles, name_particle_material, particle_fields, particle_material_totals,
-    particle_watchdog, plastic_fields, put_vectors, save_cells, save_particles, take_vectors,
+    cell_fields, cell_material_totals, cell_watchdog, failure_fields, load_cells, load_particles,
+    name_particle_material, particle_fields, particle_material_totals, particle_watchdog,
+    plastic_fields, put_vectors, save_cells, save_particles, take_vectors,
 };
 use crate::driver::models::fluid::{
     cell_momentum_scale, load_carried, save_carried, FLUID_HISTORY,
@@ -17,9 +17,7 @@ use crate::driver::models::fluid::{
 use crate::driver::models::solid_explicit::scene_name;
 use crate::driver::{CoupledIterations, FieldIterations};
 use crate::error::Error;
-use crate::material::eos::EquationOfState;
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
-use crate::stepper::Energies;
 
 /// History columns of a run with reactions (sums over its reactions since
 /// the start): the reactant mass converted, the energy the products received
@@ -34,34 +32,6 @@ const REACTION_HISTORY: [(&str, &str); 3] = [
 pub struct Coupled<const D: usize> {
     /// The run.
     pub run: CoupledRun<D>,
-}
-
-impl<const D: usize> Coupled<D> {
-    /// Energies of the whole system: kinetic (fluid + particles), internal
-    /// of the fluids (in `strain`) plus the particles' strain energy, and in
-    /// `potential` minus the energy the reactions released into the fluids.
-    fn energies(&self) -> Energies {
-        let run = &self.run;
-        let mut e = cell_energies(&run.fluid);
-        // The solid fields' cells are a copy of the particles: count those.
-        for f in &run.fields {
-            let sc = &run.fluid.cells[f.ice_material];
-            let cv = f.eos.specific_heat_cv();
-            for &c in &run.fluid.layout.interior {
-                e.kinetic -= 0.5 * sc.mass[c] * sc.velocity[c].norm_squared();
-                e.strain -= sc.mass[c] * cv * sc.temperature[c];
-            }
-            e.kinetic += f.particles.kinetic_energy();
-            e.strain += f.particles.strain_energy(&run.materials);
-        }
-        // The reactions' input to the products (the reactant's internal
-        // and kinetic energy and the heat of reaction; the solid is
-        // isothermal and its chemical energy is not otherwise counted) is
-        // the balance term, so that the total is conserved by the exact
-        // dynamics (as the membrane elements put −W_ext there).
-        e.potential -= run.reaction_totals().energy;
-        e
-    }
 }
 
 impl<const D: usize> Model for Coupled<D> {
@@ -150,8 +120,7 @@ impl<const D: usize> Model for Coupled<D> {
         // the particles, not the solid fields' cell copies (which count a
         // solid's c_v T instead of its stored work, and its burnt mass
         // twice, once in `reaction_energy`).
-        let e = self.energies();
-        let (mass, _) = self.run.mass_and_energy();
+        let (mass, e) = self.run.account();
         row.extend([mass, e.kinetic, e.strain, e.kinetic + e.strain]);
         if !self.run.reactions.is_empty() {
             let t = self.run.reaction_totals();
@@ -182,7 +151,7 @@ impl<const D: usize> Model for Coupled<D> {
         }
         Conserved {
             materials,
-            energies: self.energies(),
+            energies: self.run.account().1,
             momentum_scale: cell_momentum_scale(&run.fluid, 0..run.num_fluids())
                 + run
                     .fields
