@@ -1495,6 +1495,7 @@ impl<const D: usize> CoupledRun<D> {
                 &self.fluid.layout,
                 &r.law,
                 r.reactant_cv,
+                &self.materials,
                 dt,
                 &self.fluid.pressure,
                 &mut self.fields[r.field].particles,

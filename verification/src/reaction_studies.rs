@@ -64,6 +64,7 @@ fn burning_area(n: usize, inside: impl Fn(Vector2<f64>) -> bool) -> f64 {
         &layout,
         &law,
         1000.0,
+        &[mpmice::diagnostics::coupled::steel()],
         dt,
         &pressure,
         &mut p,
