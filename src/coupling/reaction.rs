@@ -702,6 +702,34 @@ mod tests {
         p
     }
 
+    /// One [`burn`] step of the [`pbx`] reactant at its particles' own
+    /// temperatures: what it converted.
+    #[allow(clippy::too_many_arguments)]
+    fn burn_pbx(
+        layout: &CellLayout<2>,
+        law: &BurnLaw,
+        cv: f64,
+        dt: f64,
+        pressure: &[f64],
+        particles: &mut Particles<2>,
+        cells: &mut ProductCells<'_, 2>,
+        s: &mut BurnScratch<2>,
+    ) -> ReactionTotals {
+        burn(
+            layout,
+            law,
+            cv,
+            &pbx(),
+            dt,
+            pressure,
+            particles,
+            None,
+            cells,
+            s,
+        )
+        .0
+    }
+
     /// The reactant: PBX-like neo-Hookean (K = 10 GPa, G = 3 GPa).
     fn pbx() -> Vec<SolidMaterial> {
         vec![SolidMaterial {
@@ -796,19 +824,9 @@ mod tests {
                     fluid_share: &vec![0.0; layout.len()],
                     cv: cv_g,
                 };
-                burn(
-                    &layout,
-                    &law,
-                    cv_s,
-                    &pbx(),
-                    dt,
-                    &pressure,
-                    &mut p,
-                    None,
-                    &mut cells,
-                    &mut s,
+                burn_pbx(
+                    &layout, &law, cv_s, dt, &pressure, &mut p, &mut cells, &mut s,
                 )
-                .0
             };
             let after = totals(&layout, &p, &pr, cv_s, cv_g, law.heat_of_reaction);
             assert!(out.mass > 0.0);
@@ -854,19 +872,9 @@ mod tests {
             fluid_share: &vec![0.0; layout.len()],
             cv: 700.0,
         };
-        let out = burn(
-            &layout,
-            &law,
-            1500.0,
-            &pbx(),
-            dt,
-            &pressure,
-            &mut p,
-            None,
-            &mut cells,
-            &mut s,
-        )
-        .0;
+        let out = burn_pbx(
+            &layout, &law, 1500.0, dt, &pressure, &mut p, &mut cells, &mut s,
+        );
         // Two faces of area 1 (the grid is 1 high).
         let exact = dt * 2.0 * 1.0 * law.rate_constant;
         assert!(
@@ -877,19 +885,9 @@ mod tests {
         // Below the threshold nothing burns.
         let mut cold = block(0.5, 1.75, Vector2::zeros());
         cold.temperature.iter_mut().for_each(|t| *t = 400.0);
-        let out = burn(
-            &layout,
-            &law,
-            1500.0,
-            &pbx(),
-            dt,
-            &pressure,
-            &mut cold,
-            None,
-            &mut cells,
-            &mut s,
-        )
-        .0;
+        let out = burn_pbx(
+            &layout, &law, 1500.0, dt, &pressure, &mut cold, &mut cells, &mut s,
+        );
         assert_eq!(out.mass, 0.0);
     }
 
