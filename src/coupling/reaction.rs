@@ -569,19 +569,20 @@ pub fn burn<const D: usize>(
             continue;
         }
         let m = particles.mass[p];
+        let share = f.min(1.0);
         let dm = if f >= 1.0 { m } else { m * f };
         let v = particles.v[p];
+        let e_in = reactant_cv * temperature(particles, p, uniform_t) + law.heat_of_reaction;
         // The stored (and dissipated) work of the burnt part goes with it:
         // `vol0` shrinks with the mass, so the particle keeps only its
         // own part, and the rest is internal energy of the reactant like
-        // `c_v T` (module doc, "Exchange").
-        let stored = particles.vol0[p]
+        // `c_v T` (module doc, "Exchange"). By the burnt share, not per
+        // unit mass: a particle may have no mass left.
+        let stored = share
+            * particles.vol0[p]
             * materials[particles.material[p] as usize]
-                .strain_energy_density(&particles.f.get(p), particles.work[p])
-            / m;
-        let e_in =
-            reactant_cv * temperature(particles, p, uniform_t) + stored + law.heat_of_reaction;
-        let de = dm * (e_in + 0.5 * v.norm_squared());
+                .strain_energy_density(&particles.f.get(p), particles.work[p]);
+        let de = dm * (e_in + 0.5 * v.norm_squared()) + stored;
         let g = &mut s.given[c];
         g.mass += dm;
         g.momentum += v * dm;
