@@ -569,8 +569,9 @@ pub fn burn<const D: usize>(
             continue;
         }
         let m = particles.mass[p];
+        // The burnt share of the particle: all of it from `f = 1` on.
         let share = f.min(1.0);
-        let dm = if f >= 1.0 { m } else { m * f };
+        let dm = m * share;
         let v = particles.v[p];
         let e_in = reactant_cv * temperature(particles, p, uniform_t) + law.heat_of_reaction;
         // The stored (and dissipated) work of the burnt part goes with it:
@@ -589,11 +590,7 @@ pub fn burn<const D: usize>(
         g.energy += de;
         // The volume the burnt mass leaves, at the particle's current
         // specific volume.
-        g.volume += if f >= 1.0 {
-            particles.vol[p]
-        } else {
-            f * particles.vol[p]
-        };
+        g.volume += share * particles.vol[p];
         out.mass += dm;
         out.energy += de;
         out.heat += dm * law.heat_of_reaction;
