@@ -1,5 +1,5 @@
-//! Benchmark problems shared by `benches/` and `examples/`, so every speed
-//! figure is measured on the same scene.
+//! Benchmark problems shared by `benches/` and the probes (`probes/`), so
+//! every speed figure is measured on the same scene.
 
 use nalgebra::SVector;
 

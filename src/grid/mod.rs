@@ -352,7 +352,7 @@ impl<const D: usize> Grid<D> {
     /// face's boundary layer before the other face's ghosts reflected the
     /// lower face's ghost twice and the upper face's once, and a gas at rest
     /// on a one-cell strip with quadratic B-splines then drifted (ρ up to
-    /// 1.017 and |v| 0.79 by t = 0.1, `examples/york_sod_probe`, `CASE=rest
+    /// 1.017 and |v| 0.79 by t = 0.1, `probes/src/bin/york_sod_probe.rs`, `CASE=rest
     /// SHAPE=q`).
     fn for_each_mirror_pair(&self, axis: usize, mut f: impl FnMut(usize, usize, usize, Boundary)) {
         let strides = self.strides();

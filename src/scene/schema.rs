@@ -226,7 +226,7 @@ pub struct TimeSpec {
 
 /// Default `time.watchdog_interval`: a scan and the copy of the state it
 /// passes cost over a quarter of an explicit MPM step (66k particles: 0.25 ms
-/// scan + 1.16 ms copy against a 5.1 ms step; `examples/run_loop_cost.rs`),
+/// scan + 1.16 ms copy against a 5.1 ms step; `probes/src/bin/run_loop_cost.rs`),
 /// so every 50 steps they add about 0.5 % to a run.
 fn default_watchdog_interval() -> u64 {
     50

@@ -546,7 +546,7 @@ fn all_finite_vectors<const D: usize>(v: &[SVector<f64, D>]) -> bool {
 /// and has a finite pressure: the watchdog's fast pass, one branch-free
 /// sweep per field over each contiguous interior x-row (1D Sod, 6400
 /// cells: 8 µs, where the per-cell [`cell_violation`] test with its early
-/// exits took 67 µs; `examples/run_loop_cost.rs`). Only a failing state
+/// exits took 67 µs; `probes/src/bin/run_loop_cost.rs`). Only a failing state
 /// pays for the search of [`cell_watchdog`] that names the site.
 fn cells_pass<const D: usize>(s: &IceState<D>) -> bool {
     let n = s.layout.cells[0];

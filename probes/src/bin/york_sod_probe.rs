@@ -1,6 +1,6 @@
 //! Probe: York Sod with gas points, L1(ρ) split by region (Sod) and the
 //! density/energy range (all cases).
-//! `[CASE=123|ratio] [SHAPE=q|c|l] [DUMP=1] cargo run --release --example york_sod_probe -- G KAPPA C1 C2 CFL PPC CELLS...`
+//! `[CASE=123|ratio] [SHAPE=q|c|l] [DUMP=1] cargo run --release -p probes --bin york_sod_probe -- G KAPPA C1 C2 CFL PPC CELLS...`
 //! (G = g/Δx; York's defaults: 1.4142135623730951 0.75 1 1 0.4 3 200);
 //! `END=T` ends at T instead of the case's time.
 use mpmice::diagnostics::york::{riemann_exact, run_york_sod, YorkSod};

@@ -1,7 +1,7 @@
 //! Probe: the Mach 3 wedge (Guilkey Sec. 4.3) at a refinement factor, on
 //! the case's domain or a cropped one (the study's crop: `0.0 0.2`; the tip
 //! reaches x = 0.1 at the case's end, so X_LO must stay below about 0.05).
-//! `cargo run --release --example wedge_probe -- FACTOR [X_LO Y_HI]`
+//! `cargo run --release -p probes --bin wedge_probe -- FACTOR [X_LO Y_HI]`
 //! (`WEDGE_CASE=other.toml` runs a copy of the case, e.g. with another end).
 use mpmice::diagnostics::coupled::measure_wedge_mach3;
 
@@ -9,7 +9,10 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let f: usize = args.get(1).map_or(1, |s| s.parse().unwrap());
     let path = std::env::var("WEDGE_CASE").map_or_else(
-        |_| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3.toml"),
+        |_| {
+            std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+                .join("cases/wedge_mach3.toml")
+        },
         std::path::PathBuf::from,
     );
     let mut sc = mpmice::scene::load(&path).unwrap();

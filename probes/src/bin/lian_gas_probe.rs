@@ -4,7 +4,7 @@
 //! carried by its points and the part of it the grid sees, at every `EVERY`
 //! of time.
 //!
-//! `cargo run --release --example lian_gas_probe -- H END [stick|slip] [EVERY] [PIC]`
+//! `cargo run --release -p probes --bin lian_gas_probe -- H END [stick|slip] [EVERY] [PIC]`
 //!
 //! `H` is the element and cell size (4 particles per cell and direction),
 //! `END` the end time, `PIC` the PIC share of the gas points' velocity

@@ -2,7 +2,7 @@
 //! pre-tensioned square membrane of N × N Belytschko–Tsay quads (default
 //! 200 × 200), with a time split of the four step kernels, and a check
 //! that 1 and 2 threads give bit-identical states.
-//! `cargo run --release --example membrane_fe_throughput -- [N] [steps]`
+//! `cargo run --release -p probes --bin membrane_fe_throughput -- [N] [steps]`
 use std::time::Instant;
 
 use mpmice::diagnostics::membrane_fe::SquareVibration;

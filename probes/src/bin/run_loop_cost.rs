@@ -2,7 +2,7 @@
 //! configuration per process so that `/usr/bin/time -f %U` gives its CPU
 //! time:
 //!
-//! `cargo run --release --example run_loop_cost -- CASE CELLS MODE`
+//! `cargo run --release -p probes --bin run_loop_cost -- CASE CELLS MODE`
 //!
 //! `CASE` is `sod` (1D explicit ICE, `cases/sod.toml` to t = 0.2) or
 //! `two_disks` (2D explicit MPM, `cases/two_disks.toml` to t = 1),

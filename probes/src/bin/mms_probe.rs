@@ -1,5 +1,5 @@
 //! Prints the axis-aligned MMS error sequence for one shape function and
-//! amplitude: `cargo run --release --example mms_probe -- gimp 0.05 1`
+//! amplitude: `cargo run --release -p probes --bin mms_probe -- gimp 0.05 1`
 //! (shape, amplitude, dimension, optional Courant number, default 0.2).
 use mpmice::diagnostics::mms::{run_mms, AxisAlignedMms};
 use mpmice::mpm::UpdateScheme;

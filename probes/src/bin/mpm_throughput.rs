@@ -1,6 +1,6 @@
 //! Throughput probe on the benchmark block (`diagnostics::bench_cases`):
 //! particle-steps per second and the per-phase split of a step.
-//! `RAYON_NUM_THREADS=1 cargo run --release --example mpm_throughput -- [3d] [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile|hencky|hencky_jc|hencky_jcf]`
+//! `RAYON_NUM_THREADS=1 cargo run --release -p probes --bin mpm_throughput -- [3d] [linear|gimp|bspline2|bspline3] [steps] [solid|gas|jc|hypo|jcf|tensile|hencky|hencky_jc|hencky_jcf]`
 //! (`gas`: the same block as gas points, York Sec. 3.3; `jc`: hypo-elastic
 //! with Johnson–Cook plasticity; `hypo`: hypo-elastic, no plasticity;
 //! `jcf`: `jc` with Johnson–Cook failure; `tensile`: hypo-elastic with a

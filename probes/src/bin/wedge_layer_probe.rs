@@ -4,7 +4,7 @@
 //! (`measure_wedge_mach3`), and the mean thickness in cells of the gas
 //! layer above the face (0.05–0.15 m behind the tip) that moves within
 //! 10 % of the wedge's velocity.
-//! `cargo run --release --example wedge_layer_probe -- FACTOR [END]`
+//! `cargo run --release -p probes --bin wedge_layer_probe -- FACTOR [END]`
 //! (`WEDGE_K=1e6` overrides `coupling.momentum_exchange`).
 use mpmice::diagnostics::coupled::measure_wedge_mach3;
 
@@ -12,7 +12,8 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let f: usize = args.get(1).map_or(1, |s| s.parse().unwrap());
     let end: f64 = args.get(2).map_or(1.2e-3, |s| s.parse().unwrap());
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3.toml");
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("cases/wedge_mach3.toml");
     let text = std::fs::read_to_string(path)
         .unwrap()
         .replace("lower = [0.0, 0.0]", "lower = [-0.8, 0.0]");

@@ -2,7 +2,7 @@
 //! implicit at one cell size: Eq. 43 error, measured inner pressure,
 //! steps and wall time of each.
 //!
-//! `cargo run --release --example cylinder_implicit_probe -- DX [DT]`
+//! `cargo run --release -p probes --bin cylinder_implicit_probe -- DX [DT]`
 //! (DT: the implicit step, default the case's `time.dt`). `PASSES=N` sets
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
 //! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
@@ -16,7 +16,7 @@ fn main() -> anyhow::Result<()> {
     let dx: f64 = args.get(1).map_or(Ok(0.05), |s| s.parse())?;
     let dt: Option<f64> = args.get(2).map(|s| s.parse()).transpose()?;
     let explicit = std::env::var("SKIP_EXPLICIT").is_err();
-    let root = env!("CARGO_MANIFEST_DIR");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     let implicit_case =
         std::env::var("CASE").unwrap_or("cases/pressurized_cylinder_implicit.toml".into());
     let mut cases = vec![("implicit", implicit_case.as_str())];

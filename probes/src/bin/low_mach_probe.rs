@@ -1,6 +1,6 @@
 //! Median wall and CPU time and RMS velocity error of the `ice_low_mach`
 //! vortex (A = 0.5, γ = 1.4, c = 100, t = 1) for one mode:
-//! `cargo run --release --example low_mach_probe -- MODE CFL REPS N...`
+//! `cargo run --release -p probes --bin low_mach_probe -- MODE CFL REPS N...`
 //! with MODE `explicit` | `direct` | `pcg_multigrid` | `pcg_jacobi`
 //! (semi-implicit modes use the convective predictor β = 1 unless
 //! `BETA=0`; `T_END` overrides the end time). Prints one line per N:

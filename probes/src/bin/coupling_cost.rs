@@ -1,6 +1,6 @@
 //! Cost of the coupled MPM-ICE step against the bare MPM and ICE steps on
 //! the same particles and cells (the pressurised cylinder, Guilkey 4.1):
-//! `cargo run --release --example coupling_cost -- [CELLS] [STEPS] [REPEATS]`.
+//! `cargo run --release -p probes --bin coupling_cost -- [CELLS] [STEPS] [REPEATS]`.
 //! Prints the median wall time per step of each and the ratio
 //! coupled / (MPM-only + ICE-only). `HEAT=H` turns on the solid–fluid heat
 //! exchange with coefficient `H` (the steel's `c_v` 450 J/(kg K)), to
@@ -20,8 +20,8 @@ fn main() -> anyhow::Result<()> {
     let n: usize = args.get(1).map_or(48, |s| s.parse().unwrap());
     let steps: usize = args.get(2).map_or(200, |s| s.parse().unwrap());
     let repeats: usize = args.get(3).map_or(5, |s| s.parse().unwrap());
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("cases/pressurized_cylinder.toml");
     let mut sc = scene::load(&path)?;
     sc.grid.cells = vec![n, n];
     if let Ok(h) = std::env::var("HEAT") {

@@ -1,5 +1,5 @@
 //! Probe: the adiabatic piston (Guilkey Sec. 4.2) against P1 (V1/V2)^γ.
-//! `cargo run --release --example piston_probe -- N SPEED RAMP [sharp]`
+//! `cargo run --release -p probes --bin piston_probe -- N SPEED RAMP [sharp]`
 //! (`sharp`: `coupling.rigid_interface = "sharp"`).
 use mpmice::coupling::RigidInterface;
 use mpmice::diagnostics::coupled::piston_history;

@@ -1,5 +1,5 @@
 //! Probe of York Sec. 4.3's dog-bone (`diagnostics::york_membrane::DogBone`):
-//! `cargo run --release --example york_dogbone_probe -- H END MARGIN SHAPE PIC`
+//! `cargo run --release -p probes --bin york_dogbone_probe -- H END MARGIN SHAPE PIC`
 //! (defaults 0.2, 0.3, 0, the case's `quadratic_bspline`, 0) prints the final measures (radii, hoop
 //! stress against p r / t, gas points out, energy, kinetic energy of the
 //! points and of the grid; `HIST=1` adds the history CSV). With `TRACE=1`

@@ -5,7 +5,7 @@
 //! Also the hoop force across the cut y = 0 against P r_i, and σ_r and σ_θ
 //! of the first particle rows at the inner surface against Lamé (mean per
 //! row of reference radius).
-//! `cargo run --release --example cylinder_probe -- SHAPE DX [DX ...]`,
+//! `cargo run --release -p probes --bin cylinder_probe -- SHAPE DX [DX ...]`,
 //! SHAPE a scene shape name (`ShapeKind::NAMES`); `PPC=K`
 //! sets K × K particles per cell (the case has 2), `END=T` the end time
 //! (the case: 8 ms), `DAMPING=A` the solid's damping (the case: 3000 1/s).
@@ -20,8 +20,8 @@ fn main() -> anyhow::Result<()> {
     let Some(shape) = ShapeKind::ALL.into_iter().find(|k| k.name() == name) else {
         anyhow::bail!("unknown shape {name}; one of {}", ShapeKind::NAMES);
     };
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/pressurized_cylinder.toml");
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("cases/pressurized_cylinder.toml");
     for dx in args.iter().skip(2).map(|s| s.parse::<f64>()) {
         let dx = dx?;
         let mut sc = scene::load(&path)?;

@@ -3,7 +3,7 @@
 //! fractions, fill Σ M v / V, air state), the air mass ahead of, inside and
 //! behind the piston, and the closed-end pressure and temperature against
 //! the adiabat.
-//! `cargo run --release --example piston_interface_probe -- N RATIO [off|sharp]`
+//! `cargo run --release -p probes --bin piston_interface_probe -- N RATIO [off|sharp]`
 //! (`off`: equilibrate on the cell volume, `ice.normalise_volume = false`;
 //! `sharp`: `coupling.rigid_interface = "sharp"`).
 use mpmice::coupling::{CoupledRun, RigidInterface};

@@ -4,14 +4,15 @@
 //! 0.36, 0.48, 0.6, 0.72, 0.96 and 1.2 ms (exact: 37.76°, 3.771), with the
 //! smeared (default) or the sharp rigid interface
 //! (`coupling.rigid_interface`).
-//! `cargo run --release --example wedge_drift_probe -- FACTOR [sharp]`
+//! `cargo run --release -p probes --bin wedge_drift_probe -- FACTOR [sharp]`
 use mpmice::coupling::RigidInterface;
 use mpmice::diagnostics::coupled::measure_wedge_mach3;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let f: usize = args.get(1).map_or(1, |s| s.parse().unwrap());
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3.toml");
+    let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("cases/wedge_mach3.toml");
     let mut sc = mpmice::scene::load(&path).unwrap();
     if args.get(2).map(String::as_str) == Some("sharp") {
         sc.coupling.rigid_interface = RigidInterface::Sharp;

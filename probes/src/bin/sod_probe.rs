@@ -1,5 +1,5 @@
 //! Sod L1(ρ) error and median wall time for one ICE variant:
-//! `cargo run --release --example sod_probe -- high_resolution 0.4 5 400 800 1600`
+//! `cargo run --release -p probes --bin sod_probe -- high_resolution 0.4 5 400 800 1600`
 //! (variant `literal` | `high_resolution` | `hancock` | `hancock_acoustic`,
 //! cfl, repetitions,
 //! N...). With `REGIONS` set, the L1 error is also split by the nearest
