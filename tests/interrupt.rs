@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 const BIN: &str = env!("CARGO_BIN_EXE_mpmice");
 
-/// The shock–helium-bubble case at 160 × 80 cells (a few seconds).
+/// The shock–helium-bubble case at 100 × 50 cells (about 2 s a run).
 fn scene(dir: &Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -20,7 +20,7 @@ fn scene(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("bubble.toml");
     std::fs::write(
         &path,
-        text.replace("cells = [200, 100]", "cells = [160, 80]"),
+        text.replace("cells = [200, 100]", "cells = [100, 50]"),
     )
     .expect("write");
     path

@@ -32,13 +32,14 @@ fn block_scene(dim: usize, n: usize, constraint: &'static str, u: [f64; 3], end:
 
 #[test]
 fn weak_constraint_keeps_a_disk_moving_diagonally_with_the_air_unchanged() {
-    // 20 × 20 cells of 0.05: 10 cell crossings along each axis.
+    // 20 × 20 cells of 0.05: 3 cell crossings along each axis (every
+    // point crosses a cell face; the changes allowed are round-off's).
     let u = [10.0, 10.0, 0.0];
-    let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.05));
+    let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.015));
     assert!(dp < 1e-10 && dv < 1e-10, "dp = {dp:e}, dv = {dv:e}");
     // Along a grid axis too.
     let u = [10.0, 0.0, 0.0];
-    let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.05));
+    let (dp, dv) = run_block::<2>(&case(2, 20, "weak", u, 0.015));
     assert!(dp < 1e-10 && dv < 1e-10, "axis: dp = {dp:e}, dv = {dv:e}");
 }
 

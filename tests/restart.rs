@@ -154,9 +154,11 @@ fn coupled_restarts_bit_identically() {
     s.time.end = 0.02;
     s.output.interval = Some(0.005);
     assert_restart_is_bit_identical("coupled piston (explicit)", &s);
-    let s = case("pressurized_cylinder.toml");
-    assert_restart_is_bit_identical("coupled cylinder (explicit, heat source)", &s);
+    // The first 2 of the case's 8 ms, inside the heat source's 3 ms.
     let mut s = case("pressurized_cylinder.toml");
+    s.time.end = 0.002;
+    s.output.interval = Some(0.0005);
+    assert_restart_is_bit_identical("coupled cylinder (explicit, heat source)", &s);
     s.time.mode = mpmice::scene::Mode::SemiImplicit;
     assert_restart_is_bit_identical("coupled cylinder (semi-implicit)", &s);
     let s = case("pressurized_cylinder_implicit.toml");
