@@ -100,12 +100,12 @@ const FIGURES: &[(&str, &str, Figure)] = &[
     ),
     (
         "guilkey_fig6",
-        "confined explosion, 2D (Guilkey Sec. 5): product volume fraction and steel points at 0, 40, 80, 120 us",
+        "confined explosion, 2D (Guilkey Sec. 5): product volume fraction and steel points at 0, 80, 160, 300 us; history every 10 us",
         guilkey_fig6,
     ),
     (
         "guilkey_fig6_3d",
-        "confined explosion, 3D one-eighth (Guilkey Sec. 5): product volume fraction and steel points on two sections at 0, 40, 80, 120 us",
+        "confined explosion, 3D one-eighth (Guilkey Sec. 5): product volume fraction and steel points on two sections at 0, 100, 160, 300 us; history every 10 us",
         guilkey_fig6_3d,
     ),
     (
@@ -320,54 +320,73 @@ fn guilkey_fig5(quick: bool, out: &Path) -> anyhow::Result<()> {
 }
 
 /// Guilkey Fig. 6 in 2D plane strain: `cases/confined_explosion_2d.toml`
-/// (64² cells; `--quick`: 32²) at t = 0, 40, 80 and 120 µs, the product
-/// gas's volume fraction in the cells with the steel's points (intact and
-/// failed apart) and the PBX's on top, one PNG per time (`guilkey_fig6_a.png` …
-/// `guilkey_fig6_d.png`), and `guilkey_fig6.csv`: at each time the reacted
-/// mass, the failed steel points, the total-mass drift and the energy
-/// balance (kinetic + internal + stored and plastic work, less the start
-/// and the chemical energy released, over the released).
+/// (64² cells; `--quick`: 32²) to 0.3 ms: the product gas's volume fraction
+/// in the cells with the steel's points (intact and failed apart) and the
+/// PBX's on top at t = 0, 100, 160 and 300 µs, one PNG per time
+/// (`guilkey_fig6_a.png` … `guilkey_fig6_d.png`: b, the ring open at the
+/// notch and the product venting; c, the product at the domain's walls; d,
+/// the ring's halves at the walls too, as in the paper's Fig. 6d), and
+/// `guilkey_fig6.csv` with `guilkey_fig6_history.png`, the history every
+/// 10 µs (see [`confined_explosion_figure`]).
 fn guilkey_fig6(quick: bool, out: &Path) -> anyhow::Result<()> {
     confined_explosion_figure::<2>(
-        "confined_explosion_2d.toml",
-        ("cells = [64, 64]", "cells = [32, 32]"),
+        &ExplosionFigure {
+            case: "confined_explosion_2d.toml",
+            cells: ("cells = [64, 64]", "cells = [32, 32]"),
+            stem: "guilkey_fig6",
+            sections: &[Section {
+                axes: [0, 1],
+                across: None,
+                name: "",
+            }],
+            panels: &[0.0, 1e-4, 1.6e-4, 3e-4],
+            every: 1e-5,
+            // Beyond the ring's outer radius.
+            outside: |x| x[0].hypot(x[1]) > 0.04,
+        },
         quick,
         out,
-        "guilkey_fig6",
-        &[Section {
-            axes: [0, 1],
-            across: None,
-            name: "",
-        }],
     )
 }
 
 /// Guilkey Fig. 6 in 3D, one-eighth symmetric: `cases/confined_explosion.toml`
-/// (40³ cells; `--quick`: 20³) at t = 0, 40, 80 and 120 µs, as
-/// [`guilkey_fig6`] does, on two sections: the mid-length symmetry plane
-/// z = 0 (`guilkey_fig6_3d_a_xy.png` …, the notch's cross-section) and the
-/// plane y = 0 through the axis (`…_xz.png`, the wall's length and the end
-/// cap), each the first cell layer with the steel points inside it; and
-/// `guilkey_fig6_3d.csv`.
+/// (40 × 40 × 50 cells; `--quick`: 20 × 20 × 25) at t = 0, 100, 160 and
+/// 300 µs, as [`guilkey_fig6`] does, on two sections: the mid-length
+/// symmetry plane z = 0 (`guilkey_fig6_3d_a_xy.png` …, the notch's
+/// cross-section) and the plane y = 0 through the axis (`…_xz.png`, the
+/// wall's length and the end cap), each the first cell layer with the steel
+/// points inside it; and `guilkey_fig6_3d.csv` with
+/// `guilkey_fig6_3d_history.png`, the history every 10 µs.
 fn guilkey_fig6_3d(quick: bool, out: &Path) -> anyhow::Result<()> {
     confined_explosion_figure::<3>(
-        "confined_explosion.toml",
-        ("cells = [40, 40, 50]", "cells = [20, 20, 25]"),
+        &ExplosionFigure {
+            case: "confined_explosion.toml",
+            cells: ("cells = [40, 40, 50]", "cells = [20, 20, 25]"),
+            stem: "guilkey_fig6_3d",
+            sections: &[
+                Section {
+                    axes: [0, 1],
+                    across: Some(2),
+                    name: "_xy",
+                },
+                Section {
+                    axes: [0, 2],
+                    across: Some(1),
+                    name: "_xz",
+                },
+            ],
+            panels: &[0.0, 1e-4, 1.6e-4, 3e-4],
+            every: 1e-5,
+            // Beyond the container's outer surface: 40 mm from its axis
+            // along the 40 mm half-length, 40 mm from the head's centre
+            // (0, 0, 40 mm) past it.
+            outside: |x| {
+                let z = x[2] - x[2].clamp(0.0, 0.04);
+                (x[0] * x[0] + x[1] * x[1] + z * z).sqrt() > 0.04
+            },
+        },
         quick,
         out,
-        "guilkey_fig6_3d",
-        &[
-            Section {
-                axes: [0, 1],
-                across: Some(2),
-                name: "_xy",
-            },
-            Section {
-                axes: [0, 2],
-                across: Some(1),
-                name: "_xz",
-            },
-        ],
     )
 }
 
@@ -381,35 +400,59 @@ struct Section {
     name: &'static str,
 }
 
-/// The confined explosion `case` (a file in `cases/`; `quick` replaces
-/// `cells.0` by `cells.1`) at t = 0, 40, 80 and 120 µs: per time and
-/// section a PNG `{stem}_{letter}{section}.png` of the product volume
-/// fraction with the steel points (intact, failed) and the PBX's, and `{stem}.csv` with
-/// the reacted mass, failed points, total-mass drift and energy balance.
+/// One confined-explosion figure: the case, what it draws and when.
+struct ExplosionFigure {
+    /// The case's file in `cases/`.
+    case: &'static str,
+    /// `--quick` replaces `cells.0` in the case by `cells.1`.
+    cells: (&'static str, &'static str),
+    /// Start of the output files' names.
+    stem: &'static str,
+    /// The sections drawn at each panel time.
+    sections: &'static [Section],
+    /// The panels' times (a, b, …) \[s\], increasing.
+    panels: &'static [f64],
+    /// The interval of the CSV's history rows \[s\].
+    every: f64,
+    /// Whether a point lies outside the container (the product there has
+    /// vented).
+    outside: fn(&[f64]) -> bool,
+}
+
+/// Runs the confined explosion `fig.case` to its last panel time. At each
+/// panel time and section a PNG `{stem}_{letter}{section}.png` of the
+/// product volume fraction with the steel points (intact, failed) and the
+/// PBX's; and `{stem}.csv`, a row every `fig.every` and at each panel: the
+/// steps taken, the reacted mass, the failed steel points, the share of the
+/// product mass outside the container, the cells holding both gases at more
+/// than 10 % each, the largest product volume fraction in the cells along
+/// the domain's upper faces (the walls the gas reaches, Fig. 6d), the
+/// intact steel points' least distance to those faces, the total-mass drift and the
+/// energy balance (kinetic + internal + stored and plastic work, less the
+/// start and the chemical energy released, over the released); and
+/// `{stem}_history.png`, the product's share outside, the failed share of
+/// the steel points and the energy missing from the account against time.
 fn confined_explosion_figure<const D: usize>(
-    case: &str,
-    cells: (&str, &str),
+    fig: &ExplosionFigure,
     quick: bool,
     out: &Path,
-    stem: &str,
-    sections: &[Section],
 ) -> anyhow::Result<()> {
     let case = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../cases")
-        .join(case);
+        .join(fig.case);
     let mut text = std::fs::read_to_string(&case)?;
     if quick {
-        text = text.replace(cells.0, cells.1);
+        text = text.replace(fig.cells.0, fig.cells.1);
     }
     let mut run = mpmice::scene::build_coupled_run::<D>(&mpmice::scene::parse(&text)?)?;
-    let Some(prod) = run
-        .fluid
-        .materials
-        .iter()
-        .position(|m| m.name == "products")
-    else {
-        bail!("{}: no material `products`", case.display());
+    let fluid = |name: &str| {
+        run.fluid
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no material `{name}`", case.display()))
     };
+    let (prod, air) = (fluid("products")?, fluid("air")?);
     let solid = |name: &str| {
         run.fields
             .iter()
@@ -417,76 +460,115 @@ fn confined_explosion_figure<const D: usize>(
             .ok_or_else(|| anyhow::anyhow!("{}: no solid `{name}`", case.display()))
     };
     let (steel, pbx) = (solid("steel")?, solid("pbx")?);
+    // The history's times: every `every` up to the last panel, and the panels.
+    let end = fig.panels.last().copied().unwrap_or(0.0);
+    let mut times: Vec<f64> = (0..)
+        .map(|k| k as f64 * fig.every)
+        .take_while(|&t| t < end * (1.0 - 1e-9))
+        .chain(fig.panels.iter().copied())
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * end);
     // Total mass and energy (fluids' c_v T + ½|u|², particles' kinetic and
     // stored energy, the plastic work included).
     let (m0, e0) = run.mass_and_energy();
-    let mut csv = String::from("t,reacted_mass,failed_points,mass_drift,energy_balance\n");
-    for (k, t) in [0.0, 4e-5, 8e-5, 1.2e-4].into_iter().enumerate() {
+    let mut csv = String::from(
+        "t,steps,reacted_mass,failed_points,product_outside,mixed_cells,\
+         product_at_walls,steel_to_walls,mass_drift,energy_balance\n",
+    );
+    let mut panel = 0;
+    let mut history: [Vec<(f64, f64)>; 3] = Default::default();
+    for t in times {
         while run.fluid.time < t * (1.0 - 1e-12) {
             run.step(t - run.fluid.time)?;
         }
         let lay = &run.fluid.layout;
         let p = &run.fields[steel].particles;
-        let letter = char::from(b'a' + k as u8);
-        for sec in sections {
-            let [a, b] = sec.axes;
-            let (na, nb) = (lay.cells[a], lay.cells[b]);
-            let mut values = Vec::with_capacity(na * nb);
-            for j in 0..nb {
-                for i in 0..na {
-                    let mut idx = [0isize; D];
-                    idx[a] = i as isize;
-                    idx[b] = j as isize;
-                    values.push(run.fluid.cells[prod].vol_frac[lay.index(idx)]);
+        if panel < fig.panels.len() && (fig.panels[panel] - t).abs() <= 1e-9 * end {
+            let letter = char::from(b'a' + panel as u8);
+            panel += 1;
+            for sec in fig.sections {
+                let [a, b] = sec.axes;
+                let (na, nb) = (lay.cells[a], lay.cells[b]);
+                let mut values = Vec::with_capacity(na * nb);
+                for j in 0..nb {
+                    for i in 0..na {
+                        let mut idx = [0isize; D];
+                        idx[a] = i as isize;
+                        idx[b] = j as isize;
+                        values.push(run.fluid.cells[prod].vol_frac[lay.index(idx)]);
+                    }
                 }
-            }
-            let field = CellField {
-                lower: (lay.lower[a], lay.lower[b]),
-                h: (lay.h[a], lay.h[b]),
-                cells: (na, nb),
-                values,
-            };
-            let in_layer = |x: &[f64]| sec.across.is_none_or(|c| x[c] < lay.lower[c] + lay.h[c]);
-            let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len())
-                .filter(|&i| in_layer(p.x[i].as_slice()))
-                .partition(|&i| p.failed(i));
-            let q = &run.fields[pbx].particles;
-            let charge: Vec<usize> = (0..q.len())
-                .filter(|&i| in_layer(q.x[i].as_slice()))
+                let field = CellField {
+                    lower: (lay.lower[a], lay.lower[b]),
+                    h: (lay.h[a], lay.h[b]),
+                    cells: (na, nb),
+                    values,
+                };
+                let in_layer =
+                    |x: &[f64]| sec.across.is_none_or(|c| x[c] < lay.lower[c] + lay.h[c]);
+                let (failed, intact): (Vec<usize>, Vec<usize>) = (0..p.len())
+                    .filter(|&i| in_layer(p.x[i].as_slice()))
+                    .partition(|&i| p.failed(i));
+                let q = &run.fields[pbx].particles;
+                let charge: Vec<usize> = (0..q.len())
+                    .filter(|&i| in_layer(q.x[i].as_slice()))
+                    .collect();
+                let series: Vec<PlotSeries> = [
+                    ("steel", p, &intact),
+                    ("steel, failed", p, &failed),
+                    ("PBX", q, &charge),
+                ]
+                .into_iter()
+                .map(|(label, p, ids)| PlotSeries {
+                    label: label.into(),
+                    points: ids.iter().map(|&i| (p.x[i][a], p.x[i][b])).collect(),
+                    style: Style::Markers,
+                })
                 .collect();
-            let series: Vec<PlotSeries> = [
-                ("steel", p, &intact),
-                ("steel, failed", p, &failed),
-                ("PBX", q, &charge),
-            ]
-            .into_iter()
-            .map(|(label, p, ids)| PlotSeries {
-                label: label.into(),
-                points: ids.iter().map(|&i| (p.x[i][a], p.x[i][b])).collect(),
-                style: Style::Markers,
-            })
-            .collect();
-            let axis = ["x", "y", "z"];
-            let plane = match sec.across {
-                Some(c) => format!("{D}D, {} = 0 layer", axis[c]),
-                None => format!("{D}D"),
-            };
-            let path = out.join(format!("{stem}_{letter}{}.png", sec.name));
-            plot_field(
-                &path,
-                &format!(
-                    "Guilkey Fig. 6{letter} ({plane}): product volume fraction, t = {:.0} us",
-                    t * 1e6
-                ),
-                &format!("{} [m]", axis[a]),
-                &format!("{} [m]", axis[b]),
-                "product volume fraction [-]",
-                &field,
-                &series,
-            )?;
-            println!("wrote {}", path.display());
+                let axis = ["x", "y", "z"];
+                let plane = match sec.across {
+                    Some(c) => format!("{D}D, {} = 0 layer", axis[c]),
+                    None => format!("{D}D"),
+                };
+                let path = out.join(format!("{}_{letter}{}.png", fig.stem, sec.name));
+                plot_field(
+                    &path,
+                    &format!(
+                        "Guilkey Fig. 6{letter} ({plane}): product volume fraction, t = {:.0} us",
+                        t * 1e6
+                    ),
+                    &format!("{} [m]", axis[a]),
+                    &format!("{} [m]", axis[b]),
+                    "product volume fraction [-]",
+                    &field,
+                    &series,
+                )?;
+                println!("wrote {}", path.display());
+            }
         }
         let failed = (0..p.len()).filter(|&i| p.failed(i)).count();
+        let upper: [f64; D] =
+            std::array::from_fn(|a| lay.lower[a] + lay.h[a] * lay.cells[a] as f64);
+        let (gas, products) = (&run.fluid.cells[air], &run.fluid.cells[prod]);
+        let (mut total, mut outside, mut mixed, mut at_walls) = (0.0, 0.0, 0, 0.0f64);
+        for &c in &lay.interior {
+            let x = lay.centre(c);
+            total += products.mass[c];
+            if (fig.outside)(x.as_slice()) {
+                outside += products.mass[c];
+            }
+            if gas.vol_frac[c] > 0.1 && products.vol_frac[c] > 0.1 {
+                mixed += 1;
+            }
+            if (0..D).any(|a| x[a] > upper[a] - lay.h[a]) {
+                at_walls = at_walls.max(products.vol_frac[c]);
+            }
+        }
+        let to_walls = (0..p.len())
+            .filter(|&i| !p.failed(i))
+            .flat_map(|i| (0..D).map(move |a| upper[a] - p.x[i][a]))
+            .fold(f64::INFINITY, f64::min);
         let (m, e) = run.mass_and_energy();
         let released = run.reaction_totals();
         let balance = if released.energy > 0.0 {
@@ -494,13 +576,45 @@ fn confined_explosion_figure<const D: usize>(
         } else {
             0.0
         };
-        csv.push_str(&format!(
-            "{t},{},{failed},{},{balance}\n",
+        let outside = if total > 0.0 { outside / total } else { 0.0 };
+        let row = format!(
+            "{t:.4e},{},{},{failed},{outside},{mixed},{at_walls},{to_walls},{},{balance}\n",
+            run.steps,
             released.mass,
             (m - m0) / m0
-        ));
+        );
+        history[0].push((t * 1e6, outside));
+        history[1].push((t * 1e6, failed as f64 / p.len().max(1) as f64));
+        history[2].push((t * 1e6, -balance));
+        print!("{}: {row}", fig.stem);
+        csv.push_str(&row);
     }
-    std::fs::write(out.join(format!("{stem}.csv")), csv)?;
+    std::fs::write(out.join(format!("{}.csv", fig.stem)), csv)?;
+    let labels = [
+        "product outside the container (share of its mass)",
+        "steel points failed (share)",
+        "energy missing from the account (share of the release)",
+    ];
+    let series: Vec<PlotSeries> = labels
+        .into_iter()
+        .zip(history)
+        .map(|(label, points)| PlotSeries {
+            label: label.into(),
+            points,
+            style: Style::LineMarkers,
+        })
+        .collect();
+    let path = out.join(format!("{}_history.png", fig.stem));
+    plot_xy(
+        &path,
+        &format!("Guilkey Fig. 6 ({D}D): history"),
+        "t [us]",
+        "share [-]",
+        false,
+        false,
+        &series,
+    )?;
+    println!("wrote {}", path.display());
     Ok(())
 }
 
