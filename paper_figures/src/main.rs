@@ -100,7 +100,7 @@ const FIGURES: &[(&str, &str, Figure)] = &[
     ),
     (
         "guilkey_fig6",
-        "confined explosion, 2D (Guilkey Sec. 5): product volume fraction and steel points at 0, 80, 160, 300 us; history every 10 us",
+        "confined explosion, 2D (Guilkey Sec. 5): product volume fraction and steel points at 0, 100, 160, 300 us; history every 10 us",
         guilkey_fig6,
     ),
     (
