@@ -171,6 +171,7 @@ fn block_material(material: BlockMaterial, h: f64) -> (SolidMaterial, f64, f64) 
                     rate0: 1.0,
                     t_room: 300.0,
                     t_melt: 1800.0,
+                    nonlocal_radius: 0.0,
                 }),
             };
             let model = match material {

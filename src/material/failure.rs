@@ -58,6 +58,10 @@ pub struct JohnsonCookFailure {
     pub t_room: f64,
     /// Melting temperature \[K\] of T* (> `t_room`).
     pub t_melt: f64,
+    /// Interaction radius R \[m\] of the nonlocal damage average
+    /// ([`crate::mpm::nonlocal_damage`]); 0: local damage (each point
+    /// accumulates its own Δε̄/ε_f).
+    pub nonlocal_radius: f64,
 }
 
 impl JohnsonCookFailure {
@@ -86,13 +90,26 @@ pub enum Failure {
 }
 
 impl Failure {
+    /// The interaction radius of a nonlocal damage average (0: local; the
+    /// tensile model is always local).
+    pub fn nonlocal_radius(&self) -> f64 {
+        match *self {
+            Failure::JohnsonCook(jc) => jc.nonlocal_radius,
+            Failure::Tensile { .. } => 0.0,
+        }
+    }
+
     /// Accumulates the damage of one step in `state.damage` (set to
     /// exactly 1 at failure): `stress` is the Cauchy stress at the end of
     /// the step (after any return) and `dplastic` its plastic increment
     /// Δε̄ over `dt`. Johnson–Cook adds Δε̄/ε_f (Johnson & Cook 1985 Eq. 1)
     /// at the stress triaxiality, rate and temperature at the end of the
-    /// step; the tensile model fails the point where its largest principal
-    /// stress reaches the spall strength.
+    /// step (where ε_f ≤ 0 the increment is 1, a full damage); the tensile
+    /// model fails the point where its largest principal stress reaches
+    /// the spall strength. A nonlocal Johnson–Cook model leaves
+    /// `state.damage` as it is and writes the local increment to
+    /// `state.damage_increment`: the step averages it over the point's
+    /// neighbours and adds the average ([`crate::mpm::nonlocal_damage`]).
     pub fn accumulate(
         &self,
         stress: &Matrix3<f64>,
@@ -112,11 +129,14 @@ impl Failure {
                     let rate = if dt > 0.0 { dplastic / dt } else { 0.0 };
                     let ef = jc.failure_strain(triaxiality, rate, state.temperature);
                     // Johnson & Cook 1985 Eq. 1: D = Σ Δε̄/ε_f.
-                    state.damage = if ef > 0.0 {
-                        state.damage + dplastic / ef
+                    let increment = if ef > 0.0 { dplastic / ef } else { 1.0 };
+                    if jc.nonlocal_radius > 0.0 {
+                        state.damage_increment = increment;
                     } else {
-                        1.0
-                    };
+                        state.damage += increment;
+                    }
+                } else {
+                    state.damage_increment = 0.0;
                 }
             }
             Failure::Tensile { spall_strength } => {
@@ -163,6 +183,11 @@ impl Failure {
                     fin(f.t_melt) && f.t_melt > f.t_room,
                     "melt_temperature",
                     "finite and > room_temperature [K]",
+                )?;
+                check(
+                    fin(f.nonlocal_radius) && f.nonlocal_radius >= 0.0,
+                    "nonlocal_radius",
+                    "finite and ≥ 0 [m] (0: local damage)",
                 )
             }
             Failure::Tensile { spall_strength } => check(
@@ -324,6 +349,7 @@ mod tests {
                 rate0: 1.0,
                 t_room: 294.0,
                 t_melt: 1356.0,
+                nonlocal_radius: 0.0,
             }),
         }
     }
@@ -353,6 +379,7 @@ mod tests {
             plastic_strain: 0.0,
             temperature: 294.0,
             damage: 0.0,
+            damage_increment: 0.0,
         };
         let mut lateral = -nu * rate;
         let mut history = vec![(0.0, 0.0, 294.0, 0.0)]; // (ε̄, ε̄̇, T, σ*)
@@ -452,6 +479,7 @@ mod tests {
             plastic_strain: 0.0,
             temperature: 294.0,
             damage: 0.0,
+            damage_increment: 0.0,
         };
         let n = 3000;
         let dt = 1.0 / n as f64;
@@ -657,6 +685,7 @@ mod tests {
                 rate0: 1.0,
                 t_room: 300.0,
                 t_melt: 1800.0,
+                nonlocal_radius: 0.0,
             }),
         });
         let mu = m.elastic.mu;

@@ -242,6 +242,7 @@ mod tests {
             plastic_strain: 0.0,
             temperature: 293.0,
             damage: 0.0,
+            damage_increment: 0.0,
         }
     }
 

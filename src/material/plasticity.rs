@@ -211,6 +211,10 @@ pub struct PlasticState {
     /// Damage D ∈ [0, 1] of a failing material (1: failed; see
     /// [`crate::material::failure`]); 0 elsewhere.
     pub damage: f64,
+    /// Output of a nonlocal failure model: the step's local damage
+    /// increment ΔD, which the step averages before adding it to `damage`
+    /// ([`crate::mpm::nonlocal_damage`]); 0 otherwise.
+    pub damage_increment: f64,
 }
 
 impl Default for PlasticState {
@@ -219,6 +223,7 @@ impl Default for PlasticState {
             plastic_strain: 0.0,
             temperature: 300.0,
             damage: 0.0,
+            damage_increment: 0.0,
         }
     }
 }
@@ -539,6 +544,7 @@ mod tests {
             plastic_strain: 0.0,
             temperature: 293.0,
             damage: 0.0,
+            damage_increment: 0.0,
         };
         let mut strain = 0.0;
         for &(rate, steps) in legs {
@@ -673,6 +679,7 @@ mod tests {
             plastic_strain: 0.0,
             temperature: 293.0,
             damage: 0.0,
+            damage_increment: 0.0,
         };
         let steps = 1000;
         let dt = 1.0 / steps as f64;
@@ -719,6 +726,7 @@ mod tests {
                 plastic_strain: 0.0,
                 temperature: 293.0,
                 damage: 0.0,
+                damage_increment: 0.0,
             };
             // γ to 0.2 in 4000 steps; the plastic rate is then ≈ γ̇/√3.
             let steps = 4000;

@@ -20,11 +20,13 @@ use std::time::Instant;
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 
+use super::nonlocal_damage::NonlocalDamage;
 use super::particles::Particles;
 use super::scatter::{Bins, SharedMut};
 use super::wall_reaction::WallRecord;
 use crate::error::{Error, FailureSite, Result};
 use crate::grid::Grid;
+use crate::material::failure::failed_stress;
 use crate::material::plasticity::PlasticState;
 use crate::material::{GasInput, PointState, SolidMaterial};
 use crate::shape::{
@@ -169,6 +171,8 @@ pub struct StepScratch<const D: usize> {
     /// GIMP half-widths (cell units) of the step, frozen at its start so
     /// every transfer of the step uses the same particle domains.
     lp: Vec<SVector<f64, D>>,
+    /// The nonlocal damage average's buffers.
+    nonlocal: NonlocalDamage<D>,
     /// Accumulated phase timings.
     pub times: PhaseTimes,
 }
@@ -385,6 +389,7 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
     lap(&mut t.bin_s);
     let bins = &scratch.bins;
     let dx = &mut scratch.dx;
+    let nl = &mut scratch.nonlocal;
     let lp = &scratch.lp;
     match ctx.params.scheme {
         UpdateScheme::Usl => {
@@ -394,7 +399,9 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, AXI>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, AXI>(
+                ctx, kernel, lp, particles, gs, dx, nl,
+            )?;
             lap(&mut t.g2p_s);
         }
         UpdateScheme::Musl => {
@@ -404,7 +411,9 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, AXI>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, AXI>(
+                ctx, kernel, lp, particles, gs, dx, nl,
+            )?;
             lap(&mut t.g2p_s);
             // Map the updated momenta back (Sulsky's modified USL).
             gs.momentum
@@ -416,7 +425,7 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
             g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(
-                ctx, kernel, lp, particles, gs, dx,
+                ctx, kernel, lp, particles, gs, dx, nl,
             )?;
             lap(&mut t.g2p_s);
         }
@@ -427,13 +436,15 @@ fn step_with<const D: usize, const S: usize, K: Stencil<S>, const AXI: bool>(
             lap(&mut t.p2g_s);
             grid_velocity(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, false, POS_NONE, GRAD_VEL, AXI>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, false, POS_NONE, GRAD_VEL, AXI>(ctx, kernel, lp, particles, gs, dx, nl)?;
             lap(&mut t.g2p_s);
             p2g::<D, S, K, false, false, true, AXI>(ctx, kernel, bins, lp, particles, gs);
             lap(&mut t.p2g_s);
             grid_solve(ctx, gs);
             lap(&mut t.grid_s);
-            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, AXI>(ctx, kernel, lp, particles, gs, dx)?;
+            g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, AXI>(
+                ctx, kernel, lp, particles, gs, dx, nl,
+            )?;
             lap(&mut t.g2p_s);
         }
     }
@@ -688,6 +699,7 @@ impl<const D: usize> CoupledMpm<'_, D> {
                     particles,
                     gs,
                     &mut scratch.dx,
+                    &mut scratch.nonlocal,
                 )?;
             }
             let mid = Instant::now();
@@ -748,14 +760,14 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch: &mut StepScratch<D>,
         ) -> Result<()> {
             let start = Instant::now();
-            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
+            let (lp, dx, nl) = (&scratch.lp, &mut scratch.dx, &mut scratch.nonlocal);
             if ctx.params.scheme == UpdateScheme::Usf {
                 g2p::<D, S, K, true, POS_APPLY, GRAD_NONE, AXI>(
-                    ctx, kernel, lp, particles, gs, dx,
+                    ctx, kernel, lp, particles, gs, dx, nl,
                 )?;
             } else {
                 g2p::<D, S, K, true, POS_APPLY, GRAD_VEL_NEW, AXI>(
-                    ctx, kernel, lp, particles, gs, dx,
+                    ctx, kernel, lp, particles, gs, dx, nl,
                 )?;
             }
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
@@ -1165,6 +1177,7 @@ fn g2p<
     particles: &mut Particles<D>,
     gs: &GridState<D>,
     dx_store: &mut Vec<SVector<f64, D>>,
+    nonlocal: &mut NonlocalDamage<D>,
 ) -> Result<()> {
     let grid = ctx.grid;
     let strides = grid.strides();
@@ -1196,6 +1209,17 @@ fn g2p<
         // Sized once, at the first step of a run with failure.
         particles.track_damage();
     }
+    // A nonlocal failure model: the update writes each point's local
+    // damage increment, averaged after the loop.
+    let averaging = failing && {
+        nonlocal.prepare(
+            np,
+            ctx.materials
+                .iter()
+                .map(|m| m.failure().map_or(0.0, |f| f.nonlocal_radius())),
+        );
+        nonlocal.any()
+    };
     if plastic {
         // Sized once, at the first step of a run with plasticity (plastic
         // work heats the particles).
@@ -1214,6 +1238,8 @@ fn g2p<
         let work = SharedMut::new(&mut particles.work);
         let vol = SharedMut::new(&mut particles.vol);
         let dxs = SharedMut::new(dx_store);
+        let increment = SharedMut::new(&mut nonlocal.increment);
+        let radius = &nonlocal.radius;
         let (vol0, mat) = (&particles.vol0, &particles.material);
         (0..np).into_par_iter().with_min_len(512).for_each(|p| {
             // SAFETY: each task touches only particle p's entries.
@@ -1357,6 +1383,7 @@ fn g2p<
                             plastic_strain: *eps_p.get(p),
                             temperature: *temp.get(p),
                             damage: 0.0,
+                            damage_increment: 0.0,
                         }
                     }
                 } else {
@@ -1383,8 +1410,30 @@ fn g2p<
                     // SAFETY: as above.
                     unsafe { *damage.get(p) = state.damage };
                 }
+                if averaging && radius[mat[p] as usize] > 0.0 && state.damage < 1.0 {
+                    // SAFETY: as above. (A point failed before the step is
+                    // left out of the average: its entry stays −1.)
+                    unsafe { *increment.get(p) = state.damage_increment };
+                }
             }
         });
+    }
+    if averaging {
+        nonlocal.average_increments(grid, &particles.x, &particles.vol, &particles.material);
+        for (p, &avg) in nonlocal.average.iter().enumerate() {
+            if avg.is_nan() {
+                continue;
+            }
+            let d = &mut particles.damage[p];
+            *d += avg;
+            if *d >= 1.0 {
+                // The failed point's stress (module `material::failure`),
+                // which the next step's forces and stress power use.
+                *d = 1.0;
+                let s = particles.stress.get(p);
+                particles.stress.set(p, &failed_stress(&s));
+            }
+        }
     }
     let p = failed.load(Ordering::Relaxed);
     if p != usize::MAX {
@@ -1551,8 +1600,10 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch: &mut StepScratch<D>,
         ) -> Result<()> {
             let start = Instant::now();
-            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
-            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, false>(ctx, kernel, lp, particles, gs, dx)?;
+            let (lp, dx, nl) = (&scratch.lp, &mut scratch.dx, &mut scratch.nonlocal);
+            g2p::<D, S, K, true, POS_STORE, GRAD_NONE, false>(
+                ctx, kernel, lp, particles, gs, dx, nl,
+            )?;
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
             Ok(())
         }
@@ -1626,9 +1677,9 @@ impl<const D: usize> CoupledMpm<'_, D> {
             scratch: &mut StepScratch<D>,
         ) -> Result<()> {
             let start = Instant::now();
-            let (lp, dx) = (&scratch.lp, &mut scratch.dx);
+            let (lp, dx, nl) = (&scratch.lp, &mut scratch.dx, &mut scratch.nonlocal);
             g2p::<D, S, K, false, POS_APPLY_STORED, GRAD_VEL, AXI>(
-                ctx, kernel, lp, particles, gs, dx,
+                ctx, kernel, lp, particles, gs, dx, nl,
             )?;
             scratch.times.g2p_s += start.elapsed().as_secs_f64();
             Ok(())

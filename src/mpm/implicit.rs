@@ -1554,6 +1554,7 @@ impl<const D: usize> ImplicitRun<D> {
                     plastic_strain: parts.plastic_strain_of(p),
                     temperature: parts.temperature_of(p),
                     damage: 0.0,
+                    damage_increment: 0.0,
                 };
                 let mut w = parts.work[p];
                 let mut a = assembling.then(|| [[Matrix3::zeros(); 3]; 3]);

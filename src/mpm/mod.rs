@@ -4,6 +4,7 @@
 
 pub mod explicit;
 pub mod implicit;
+pub mod nonlocal_damage;
 pub mod particles;
 mod scatter;
 pub mod tensors;

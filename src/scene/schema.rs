@@ -529,8 +529,9 @@ pub enum FailureKind {
 /// [`crate::material::failure`]). `johnson_cook` needs `d1`, `d2`, `d3`
 /// (`d4`, `d5` default 0; `reference_rate`, `room_temperature` and
 /// `melt_temperature` default to the Johnson–Cook flow stress's, else 1 /s,
-/// 300 K and, when `d5 ≠ 0`, required) and a `plasticity` table; `tensile`
-/// needs `spall_strength`.
+/// 300 K and, when `d5 ≠ 0`, required; `nonlocal_radius` defaults to 0,
+/// local damage) and a `plasticity` table; `tensile` needs
+/// `spall_strength`.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FailureSpec {
@@ -554,6 +555,9 @@ pub struct FailureSpec {
     pub melt_temperature: Option<f64>,
     /// Spall strength σ_s > 0 \[Pa\] (tensile).
     pub spall_strength: Option<f64>,
+    /// Johnson–Cook: interaction radius R ≥ 0 \[m\] of the nonlocal damage
+    /// average (default 0: local damage; [`crate::mpm::nonlocal_damage`]).
+    pub nonlocal_radius: Option<f64>,
 }
 
 impl FailureSpec {
@@ -585,6 +589,7 @@ impl FailureSpec {
             (self.d4.is_some(), "d4"),
             (self.d5.is_some(), "d5"),
             (self.reference_rate.is_some(), "reference_rate"),
+            (self.nonlocal_radius.is_some(), "nonlocal_radius"),
             (self.room_temperature.is_some(), "room_temperature"),
             (self.melt_temperature.is_some(), "melt_temperature"),
         ];
@@ -644,6 +649,7 @@ impl FailureSpec {
                         .unwrap_or(1.0),
                     t_room,
                     t_melt,
+                    nonlocal_radius: self.nonlocal_radius.unwrap_or(0.0),
                 })
             }
         };
