@@ -4,6 +4,7 @@
 //! reactant against a wall in a closed tube of its product.
 
 use mpmice::coupling::CoupledRun;
+use mpmice::diagnostics::explosion::{failed_angles, vent};
 use mpmice::driver::models::arrays::cell_material_totals;
 use mpmice::scene::{build_coupled_run, parse};
 
@@ -363,61 +364,39 @@ fn confined_explosion_2d_ruptures_at_the_notch_then_vents_and_mixes() {
         .replace("cells = [64, 64]", "cells = [48, 48]");
     let mut run = build_coupled_run::<2>(&parse(&text).unwrap()).unwrap();
     let m0 = run.mass_and_energy().0;
-    let steel = run
-        .fields
-        .iter()
-        .position(|f| run.fluid.materials[f.ice_material].name == "steel")
-        .unwrap();
+    let steel = run.field_index("steel").unwrap();
     let mut first = None;
     let end = 2e-4;
     while run.fluid.time < end * (1.0 - 1e-12) {
         run.step(end - run.fluid.time).unwrap();
         if first.is_none() {
-            let p = &run.fields[steel].particles;
-            let angles: Vec<f64> = (0..p.len())
-                .filter(|&i| p.failed(i))
-                .map(|i| p.x0[i][1].atan2(p.x0[i][0]).to_degrees())
-                .collect();
+            let angles = failed_angles(&run.fields[steel].particles);
             if !angles.is_empty() {
                 first = Some((run.fluid.time, angles));
             }
         }
     }
     let (t_fail, angles) = first.expect("the container fails");
-    let index = |name: &str| {
-        run.fluid
-            .materials
-            .iter()
-            .position(|m| m.name == name)
-            .unwrap()
-    };
     let (air, products) = (
-        &run.fluid.cells[index("air")],
-        &run.fluid.cells[index("products")],
+        run.fluid_index("air").unwrap(),
+        run.fluid_index("products").unwrap(),
     );
-    let (mut total, mut outside, mut mixed) = (0.0, 0.0, 0);
-    for &c in &run.fluid.layout.interior {
-        total += products.mass[c];
-        if run.fluid.layout.centre(c).norm() > 0.04 {
-            outside += products.mass[c];
-        }
-        if air.vol_frac[c] > 0.1 && products.vol_frac[c] > 0.1 {
-            mixed += 1;
-        }
-    }
+    // Beyond the ring's outer radius, r = 40 mm.
+    let vented = vent(&run, products, air, |x| x[0].hypot(x[1]) > 0.04);
+    let mixed = vented.mixed_cells;
     let drift = (run.mass_and_energy().0 - m0) / m0;
     eprintln!(
         "first failure at {t_fail:e} s at {angles:?} deg; {} steps: product beyond r = 40 mm \
          {:.4}, mixed cells {mixed}, mass drift {drift:e}, reacted {:e} kg",
         run.steps,
-        outside / total,
+        vented.outside_share,
         run.reaction_totals().mass
     );
     assert!(
         angles.iter().all(|a| (a - 45.0).abs() < 5.0),
         "first failed points at {angles:?} deg, the notch is at 45"
     );
-    assert!(outside > 0.5 * total, "{outside} of {total}");
+    assert!(vented.outside_share > 0.5, "{vented:?}");
     assert!(mixed >= 20, "{mixed} mixed cells");
     assert!(drift.abs() < 1e-12, "{drift:e}");
 }
@@ -446,12 +425,7 @@ fn confined_explosion_2d_separates_at_the_notch_without_a_failure_model() {
     // Initially adjacent steel points now a whole cell further apart, by
     // the angle of the first point of each pair.
     let apart_pairs = |run: &CoupledRun<2>| {
-        let steel = run
-            .fields
-            .iter()
-            .find(|f| run.fluid.materials[f.ice_material].name == "steel")
-            .unwrap();
-        let p = &steel.particles;
+        let p = &run.fields[run.field_index("steel").unwrap()].particles;
         let h = run.fluid.layout.h[0];
         let spacing = h / 2.0; // 2 points per cell per direction
         let mut apart = Vec::new();

@@ -46,6 +46,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::bail;
 use clap::Parser;
+use mpmice::diagnostics::explosion::{vent, Vent};
 use verification::harness::{fit_line, plot_field, plot_xy, CellField, PlotSeries, Style};
 
 #[derive(Parser)]
@@ -446,17 +447,12 @@ fn confined_explosion_figure<const D: usize>(
     }
     let mut run = mpmice::scene::build_coupled_run::<D>(&mpmice::scene::parse(&text)?)?;
     let fluid = |name: &str| {
-        run.fluid
-            .materials
-            .iter()
-            .position(|m| m.name == name)
-            .ok_or_else(|| anyhow::anyhow!("{}: no material `{name}`", case.display()))
+        run.fluid_index(name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no fluid `{name}`", case.display()))
     };
     let (prod, air) = (fluid("products")?, fluid("air")?);
     let solid = |name: &str| {
-        run.fields
-            .iter()
-            .position(|f| run.fluid.materials[f.ice_material].name == name)
+        run.field_index(name)
             .ok_or_else(|| anyhow::anyhow!("{}: no solid `{name}`", case.display()))
     };
     let (steel, pbx) = (solid("steel")?, solid("pbx")?);
@@ -550,21 +546,12 @@ fn confined_explosion_figure<const D: usize>(
         let failed = (0..p.len()).filter(|&i| p.failed(i)).count();
         let upper: [f64; D] =
             std::array::from_fn(|a| lay.lower[a] + lay.h[a] * lay.cells[a] as f64);
-        let (gas, products) = (&run.fluid.cells[air], &run.fluid.cells[prod]);
-        let (mut total, mut outside, mut mixed, mut at_walls) = (0.0, 0.0, 0, 0.0f64);
-        for &c in &lay.interior {
-            let x = lay.centre(c);
-            total += products.mass[c];
-            if (fig.outside)(x.as_slice()) {
-                outside += products.mass[c];
-            }
-            if gas.vol_frac[c] > 0.1 && products.vol_frac[c] > 0.1 {
-                mixed += 1;
-            }
-            if (0..D).any(|a| x[a] > upper[a] - lay.h[a]) {
-                at_walls = at_walls.max(products.vol_frac[c]);
-            }
-        }
+        let Vent {
+            outside_share: outside,
+            mixed_cells: mixed,
+            at_upper_walls: at_walls,
+            ..
+        } = vent(&run, prod, air, fig.outside);
         let to_walls = (0..p.len())
             .filter(|&i| !p.failed(i))
             .flat_map(|i| (0..D).map(move |a| upper[a] - p.x[i][a]))
@@ -576,7 +563,6 @@ fn confined_explosion_figure<const D: usize>(
         } else {
             0.0
         };
-        let outside = if total > 0.0 { outside / total } else { 0.0 };
         let row = format!(
             "{t:.4e},{},{},{failed},{outside},{mixed},{at_walls},{to_walls},{},{balance}\n",
             run.steps,

@@ -1353,6 +1353,22 @@ impl<const D: usize> CoupledRun<D> {
         Ok(())
     }
 
+    /// The index of the fluid material `name` (in `fluid.materials` and
+    /// `fluid.cells`), if the run has one.
+    pub fn fluid_index(&self, name: &str) -> Option<usize> {
+        self.fluid.materials[..self.num_fluids()]
+            .iter()
+            .position(|m| m.name == name)
+    }
+
+    /// The index in `fields` of the solid field of material `name`, if the
+    /// run has one.
+    pub fn field_index(&self, name: &str) -> Option<usize> {
+        self.fields
+            .iter()
+            .position(|f| self.fluid.materials[f.ice_material].name == name)
+    }
+
     /// What the reactions have done since the start, summed.
     pub fn reaction_totals(&self) -> reaction::ReactionTotals {
         let mut t = reaction::ReactionTotals::default();

@@ -3,6 +3,7 @@
 pub mod axisymmetric;
 pub mod bench_cases;
 pub mod coupled;
+pub mod explosion;
 pub mod finite_plasticity;
 pub mod formulations;
 pub mod impm;
