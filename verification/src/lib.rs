@@ -82,6 +82,11 @@ pub const STUDIES: &[Study] = &[
         reaction_studies::reaction_burn,
     ),
     (
+        "confined_explosion_onset",
+        "Guilkey 5 confined explosion 2D: first failed steel point vs h, local and nonlocal (R = 2 mm) Johnson-Cook damage",
+        reaction_studies::confined_explosion_onset,
+    ),
+    (
         "cylinder_order",
         "Guilkey 4.1 pressurised cylinder, MPM-ICE, Eq. 43 vs dx and Fig. 3a",
         coupled_studies::cylinder_order,
