@@ -1211,15 +1211,13 @@ fn g2p<
     }
     // A nonlocal failure model: the update writes each point's local
     // damage increment, averaged after the loop.
-    let averaging = failing && {
-        nonlocal.prepare(
+    let averaging = failing
+        && nonlocal.prepare(
             np,
             ctx.materials
                 .iter()
                 .map(|m| m.failure().map_or(0.0, |f| f.nonlocal_radius())),
         );
-        nonlocal.any()
-    };
     if plastic {
         // Sized once, at the first step of a run with plasticity (plastic
         // work heats the particles).

@@ -79,13 +79,20 @@ fn bin_of<const D: usize>(x: &SVector<f64, D>, size: f64) -> [i64; D] {
 }
 
 impl<const D: usize> NonlocalDamage<D> {
-    /// Sizes the per-particle buffers to `np` particles and the radii to
-    /// the materials' (no allocation once those counts have been seen).
-    pub fn prepare(&mut self, np: usize, radii: impl Iterator<Item = f64>) {
-        self.increment.clear();
-        self.increment.resize(np, -1.0);
+    /// Takes the materials' radii and, when some material averages, sizes
+    /// the increments to `np` particles (each −1, not averaged, until the
+    /// update writes it); returns whether any material averages. A run
+    /// whose failure is local keeps no per-particle buffer. No allocation
+    /// once these counts have been seen.
+    pub fn prepare(&mut self, np: usize, radii: impl Iterator<Item = f64>) -> bool {
         self.radius.clear();
         self.radius.extend(radii);
+        let any = self.any();
+        if any {
+            self.increment.clear();
+            self.increment.resize(np, -1.0);
+        }
+        any
     }
 
     /// Whether any material averages its damage.
@@ -309,7 +316,7 @@ mod tests {
             let (x, v) = lattice(20);
             let mat = vec![0u16; x.len()];
             let mut nl = NonlocalDamage::<2>::default();
-            nl.prepare(x.len(), [0.13].into_iter());
+            assert!(nl.prepare(x.len(), [0.13].into_iter()));
             nl.increment.iter_mut().for_each(|d| *d = 0.037);
             nl.average_increments(&g, &x, &v, &mat);
             for &a in &nl.average {
@@ -328,7 +335,7 @@ mod tests {
             let (x, v) = lattice(24);
             let mat: Vec<u16> = (0..x.len()).map(|p| u16::from(x[p][0] > 0.6)).collect();
             let mut nl = NonlocalDamage::<2>::default();
-            nl.prepare(x.len(), [0.11, 0.07].into_iter());
+            assert!(nl.prepare(x.len(), [0.11, 0.07].into_iter()));
             for p in 0..x.len() {
                 nl.increment[p] = if p % 17 == 3 {
                     -1.0
@@ -388,7 +395,7 @@ mod tests {
             .collect();
         let run = |g: &Grid<2>, x: &[Vector2<f64>]| {
             let mut nl = NonlocalDamage::<2>::default();
-            nl.prepare(x.len(), [0.3].into_iter());
+            assert!(nl.prepare(x.len(), [0.3].into_iter()));
             for (d, p) in nl.increment.iter_mut().zip(x) {
                 *d = f(p);
             }
