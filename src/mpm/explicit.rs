@@ -1416,6 +1416,15 @@ fn g2p<
             }
         });
     }
+    let p = failed.load(Ordering::Relaxed);
+    if p != usize::MAX {
+        return Err(ctx.fail(
+            Some(p),
+            None,
+            "deformation gradient inverted or not finite (J ≤ 0; a membrane point: stretch not \
+             positive, or in r–z its ring reached the axis, r ≤ 0); try a smaller CFL",
+        ));
+    }
     if averaging {
         nonlocal.average_increments(grid, &particles.x, &particles.vol, &particles.material);
         for (p, &avg) in nonlocal.average.iter().enumerate() {
@@ -1432,15 +1441,6 @@ fn g2p<
                 particles.stress.set(p, &failed_stress(&s));
             }
         }
-    }
-    let p = failed.load(Ordering::Relaxed);
-    if p != usize::MAX {
-        return Err(ctx.fail(
-            Some(p),
-            None,
-            "deformation gradient inverted or not finite (J ≤ 0; a membrane point: stretch not \
-             positive, or in r–z its ring reached the axis, r ≤ 0); try a smaller CFL",
-        ));
     }
     Ok(())
 }

@@ -200,10 +200,12 @@ struct Onset {
 /// (checked every step) or `end`.
 fn onset_run(n: usize, radius: f64, end: f64) -> Result<Onset> {
     let case = include_str!("../../cases/confined_explosion_2d.toml");
-    let jc = "d5 = 0.61 }";
-    anyhow::ensure!(case.matches(jc).count() == 1, "anchor `{jc}`");
+    let (jc, cells) = ("d5 = 0.61 }", "cells = [64, 64]");
+    for anchor in [jc, cells] {
+        anyhow::ensure!(case.matches(anchor).count() == 1, "anchor `{anchor}`");
+    }
     let text = case
-        .replace("cells = [64, 64]", &format!("cells = [{n}, {n}]"))
+        .replace(cells, &format!("cells = [{n}, {n}]"))
         .replace(jc, &format!("d5 = 0.61, nonlocal_radius = {radius:e} }}"));
     let mut run = mpmice::scene::build_coupled_run::<2>(&mpmice::scene::parse(&text)?)?;
     let steel = run
