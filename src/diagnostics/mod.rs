@@ -14,6 +14,7 @@ pub mod mms;
 pub mod riemann;
 pub mod shock;
 pub mod taylor;
+pub mod wedge;
 pub mod york;
 pub mod york_airbag;
 pub mod york_membrane;
