@@ -276,6 +276,45 @@ fn wedge_mach3_case_gives_the_oblique_shock() {
     );
 }
 
+/// The wedge of Guilkey Sec. 4.3 seen from itself
+/// (`cases/wedge_mach3_steady.toml`, h = 5 mm): at rest in the Mach 3
+/// stream the flow settles, and its shock angle stays within 3° of the
+/// θ–β–M value (37.76°) from 1.8 to 2.4 ms, moving less than 0.05° between
+/// them (measured 40.58° and 40.60°; the `wedge_steady` study refines it to
+/// 0.93° at h = 1.25 mm and adds a 15° wedge at Mach 2 and a 25° wedge at
+/// Mach 4).
+#[test]
+fn the_wedge_at_rest_in_a_mach_3_stream_reaches_a_steady_oblique_shock() {
+    use mpmice::diagnostics::wedge::{run_steady_wedge, steady_wedge_scene};
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3_steady.toml");
+    let base = mpmice::scene::load(&path).unwrap();
+    let (sc, stream) = steady_wedge_scene(&base, 3.0, 20.0, 1).unwrap();
+    // The scene rebuilt at 20° and Mach 3 is the case itself.
+    let u = sc.regions[0].states[0].velocity.as_ref().unwrap()[0];
+    let b = &base.regions[0].states[0].velocity.as_ref().unwrap()[0];
+    assert!((u - b).abs() < 0.5, "{u} against {b}");
+    let r = run_steady_wedge(&sc, &stream, 20.0, 0.75 * sc.time.end).unwrap();
+    eprintln!(
+        "angle {:.3} at {:.2} ms, {:.3} at {:.2} ms (exact {:.3}), p2/p1 {:.3} (exact {:.3})",
+        r.angle_check_deg,
+        0.75 * sc.time.end * 1e3,
+        r.angle_deg,
+        sc.time.end * 1e3,
+        r.exact.beta_deg,
+        r.pressure_ratio,
+        r.exact.pressure_ratio
+    );
+    assert!((r.exact.beta_deg - 37.76).abs() < 0.01);
+    assert!(
+        (r.angle_deg - r.exact.beta_deg).abs() < 3.0,
+        "{}",
+        r.angle_deg
+    );
+    assert!((r.angle_check_deg - r.exact.beta_deg).abs() < 3.0);
+    assert!((r.angle_deg - r.angle_check_deg).abs() < 0.05);
+}
+
 /// Steel at half its density filling a closed 8 × 8 box (θ_s = 1/2 in
 /// every cell) with air at 300 K; the steel at 400 K and exchanging heat
 /// with the air at the coefficient `h`.

@@ -117,6 +117,11 @@ pub const STUDIES: &[Study] = &[
         coupled_studies::wedge_mach3,
     ),
     (
+        "wedge_steady",
+        "Guilkey 4.3 seen from the wedge: steady shock angle vs theta-beta-M for 20 deg at Mach 3, 15 deg at Mach 2, 25 deg at Mach 4",
+        coupled_studies::wedge_steady,
+    ),
+    (
         "mpm_bar_1d",
         "1D elastic bar, fixed-free, mode 1 vs exact; energy drift",
         mpm_studies::mpm_bar_1d,
