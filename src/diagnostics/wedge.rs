@@ -28,14 +28,15 @@ pub struct ObliqueShock {
     pub pressure_ratio: f64,
 }
 
-/// The flow deflection `θ(β)` of an oblique shock of angle `β` (radians)
-/// at upstream Mach number `m` (the θ–β–M relation; Anderson, *Modern
-/// Compressible Flow*, Eq. 4.17):
+/// The flow deflection `θ(β)` (radians) of an oblique shock of angle `β`
+/// (radians) at upstream Mach number `m` and ratio of specific heats
+/// `gamma` (the θ–β–M relation; Anderson, *Modern Compressible Flow*,
+/// Eq. 4.17):
 ///
 /// ```text
 /// tan θ = 2 cot β (M² sin²β − 1) / (M² (γ + cos 2β) + 2)
 /// ```
-fn deflection(m: f64, beta: f64, gamma: f64) -> f64 {
+pub fn deflection(m: f64, beta: f64, gamma: f64) -> f64 {
     let m2 = m * m;
     let s2 = beta.sin().powi(2);
     (2.0 / beta.tan() * (m2 * s2 - 1.0) / (m2 * (gamma + (2.0 * beta).cos()) + 2.0)).atan()
