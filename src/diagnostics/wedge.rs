@@ -1,8 +1,8 @@
 //! The steady oblique shock of a rigid wedge at rest in a supersonic stream
 //! (Guilkey Sec. 4.3 seen from the wedge, `cases/wedge_mach3_steady.toml`):
 //! the exact θ–β–M relation, the scene of any half-angle and Mach number,
-//! and the shock angle measured at two times, so that a steady state is
-//! shown rather than assumed.
+//! and a run continued until its shock angle stops changing, so that a
+//! steady state is shown rather than assumed.
 //!
 //! Why the wedge's frame: `cases/wedge_mach3.toml` moves the wedge through
 //! still air, and its angle was still rising when the wedge reached the
@@ -102,6 +102,8 @@ pub struct WedgeStream {
     pub p1: f64,
     /// The tip's `x` (the polygon's first vertex).
     pub tip_x: f64,
+    /// The wedge's length, tip to shoulder along `x`.
+    pub length: f64,
 }
 
 /// `base` (`cases/wedge_mach3_steady.toml` or a scene laid out as it is)
@@ -132,7 +134,8 @@ pub fn steady_wedge_scene(
         return Err(SceneError::new("objects[0].geometry.vertices", "four vertices").into());
     }
     let tip_x = vertices[0][0];
-    let height = (vertices[1][0] - tip_x) * half_angle_deg.to_radians().tan();
+    let length = vertices[1][0] - tip_x;
+    let height = length * half_angle_deg.to_radians().tan();
     vertices[1][1] = height;
     vertices[2][1] = height;
     let region = sc
@@ -164,6 +167,7 @@ pub fn steady_wedge_scene(
             gamma,
             p1,
             tip_x,
+            length,
         },
     ))
 }
@@ -175,29 +179,39 @@ pub struct SteadyWedge {
     pub exact: ObliqueShock,
     /// Cell size.
     pub h: f64,
-    /// The shock angle at `check_time` (degrees).
-    pub angle_check_deg: f64,
-    /// The shock angle at the scene's end (degrees).
+    /// The shock angle at the sample before the last (degrees; NaN when
+    /// `max_end` left room for one sample only).
+    pub angle_before_deg: f64,
+    /// The shock angle at the last sample (degrees).
     pub angle_deg: f64,
-    /// `p2/p1` at the end.
+    /// `p2/p1` at the last sample.
     pub pressure_ratio: f64,
+    /// Time of the last sample.
+    pub time: f64,
+    /// Whether the last two samples agreed within the tolerance (`false`:
+    /// the run reached its time limit first).
+    pub settled: bool,
     /// Steps taken.
     pub steps: u64,
     /// Wall time of the run (s).
     pub wall_s: f64,
 }
 
-/// Runs a steady wedge scene ([`steady_wedge_scene`]) to `check_time` and
-/// to its end, measuring the shock 0.25–0.75 wedge lengths behind the tip
-/// at both ([`measure_wedge`]).
+/// Runs a steady wedge scene ([`steady_wedge_scene`]) until its shock
+/// angle is steady: measured at the scene's end and then every `interval`
+/// until two samples agree within `tolerance` degrees or the time passes
+/// `max_end`; the shock is measured 0.25–0.75 wedge lengths behind the tip
+/// ([`measure_wedge`]).
 ///
 /// # Errors
-/// A scene error, or the run's failure.
+/// A scene error (including a detached shock), or the run's failure.
 pub fn run_steady_wedge(
     sc: &Scene,
     stream: &WedgeStream,
     half_angle_deg: f64,
-    check_time: f64,
+    interval: f64,
+    tolerance: f64,
+    max_end: f64,
 ) -> Result<SteadyWedge> {
     let exact = oblique_shock(stream.mach, half_angle_deg, stream.gamma).ok_or_else(|| {
         SceneError::new(
@@ -208,9 +222,16 @@ pub fn run_steady_wedge(
             ),
         )
     })?;
+    if !(interval > 0.0 && tolerance > 0.0) {
+        return Err(SceneError::new(
+            "interval, tolerance",
+            format!("must be > 0 (got {interval}, {tolerance})"),
+        )
+        .into());
+    }
     let start = Instant::now();
     let mut run = crate::scene::build_coupled_run::<2>(sc)?;
-    let length = 0.2;
+    let length = stream.length;
     let measure = |run: &crate::coupling::CoupledRun<2>| {
         measure_wedge(
             &run.fluid,
@@ -221,16 +242,29 @@ pub fn run_steady_wedge(
             (0.25 * length, 0.75 * length),
         )
     };
-    run.advance_to(check_time)?;
-    let at_check = measure(&run);
-    run.advance_to(sc.time.end)?;
-    let at_end = measure(&run);
+    let mut t = sc.time.end;
+    run.advance_to(t)?;
+    let mut last = measure(&run);
+    let mut before = f64::NAN;
+    let mut settled = false;
+    while t + interval <= max_end * (1.0 + 1e-12) {
+        t += interval;
+        run.advance_to(t)?;
+        before = last.angle_deg;
+        last = measure(&run);
+        if (last.angle_deg - before).abs() < tolerance {
+            settled = true;
+            break;
+        }
+    }
     Ok(SteadyWedge {
         exact,
         h: run.fluid.layout.h[0],
-        angle_check_deg: at_check.angle_deg,
-        angle_deg: at_end.angle_deg,
-        pressure_ratio: at_end.pressure_ratio,
+        angle_before_deg: before,
+        angle_deg: last.angle_deg,
+        pressure_ratio: last.pressure_ratio,
+        time: t,
+        settled,
         steps: run.steps,
         wall_s: start.elapsed().as_secs_f64(),
     })
@@ -239,6 +273,42 @@ pub fn run_steady_wedge(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn case() -> Scene {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_mach3_steady.toml");
+        crate::scene::load(&path).unwrap()
+    }
+
+    #[test]
+    fn a_wedge_scene_of_another_angle_and_mach_number_and_its_bad_input() {
+        let (sc, stream) = steady_wedge_scene(&case(), 2.0, 15.0, 2).unwrap();
+        let Geometry::Polygon { vertices } = &sc.objects[0].geometry else {
+            panic!("polygon")
+        };
+        assert!((vertices[1][1] - 0.2 * 15f64.to_radians().tan()).abs() < 1e-12);
+        assert_eq!(vertices[1][1], vertices[2][1]);
+        assert_eq!(sc.grid.cells, vec![320, 80]);
+        let u = sc.regions[0].states[0].velocity.as_ref().unwrap()[0];
+        assert!((u - 2.0 * (1.4f64 * 101_325.0 / 1.1768).sqrt()).abs() < 1e-9);
+        assert_eq!(stream.tip_x, 0.6);
+        assert!((stream.length - 0.2).abs() < 1e-12);
+        // A 30° wedge at Mach 2 detaches its shock: refused, naming the
+        // wedge, before anything runs.
+        let (sc, stream) = steady_wedge_scene(&case(), 2.0, 30.0, 1).unwrap();
+        let e = run_steady_wedge(&sc, &stream, 30.0, 1e-4, 0.02, 1e-3).unwrap_err();
+        assert!(e.to_string().contains("objects[0].geometry"), "{e}");
+        let e = run_steady_wedge(&sc, &stream, 20.0, 0.0, 0.02, 1e-3).unwrap_err();
+        assert!(e.to_string().contains("interval"), "{e}");
+        // A scene not laid out as the case.
+        let mut other = case();
+        other.objects[0].geometry = Geometry::Box {
+            lower: vec![0.6, 0.0],
+            upper: vec![0.8, 0.05],
+        };
+        let e = steady_wedge_scene(&other, 3.0, 20.0, 1).unwrap_err();
+        assert!(e.to_string().contains("objects[0].geometry"), "{e}");
+    }
 
     #[test]
     fn the_oblique_shock_matches_the_tables() {
