@@ -18,7 +18,7 @@
 //! `cargo run --release -p probes --bin wedge_drift_probe -- FACTOR [sharp] [wedge_frame[=M,θ]] [KEY=VALUE…]`
 use mpmice::coupling::CoupledRun;
 use mpmice::coupling::RigidInterface;
-use mpmice::diagnostics::coupled::measure_wedge;
+use mpmice::diagnostics::coupled::{measure_wedge, WedgeMeasured};
 use mpmice::diagnostics::wedge::{oblique_shock, steady_wedge_scene, ObliqueShock};
 
 /// The wedge being run: half-angle (degrees), the exact shock, the
@@ -30,6 +30,14 @@ struct Wedge {
     tip0: f64,
 }
 
+impl Wedge {
+    /// The shock over `d_range` behind the tip at `tip` ([`measure_wedge`]).
+    fn measure(&self, run: &CoupledRun<2>, tip: f64, d_range: (f64, f64)) -> WedgeMeasured {
+        let p2 = self.exact.pressure_ratio * self.p1;
+        measure_wedge(&run.fluid, tip, self.theta, self.p1, p2, d_range)
+    }
+}
+
 /// The shock's shape along the whole face and the slow layer on it: the
 /// shock's height above the exact attached shock at the tip (its stand-off),
 /// the local angle of the least-squares line over four stretches of the
@@ -37,14 +45,7 @@ struct Wedge {
 /// (normal to it) at which the air's velocity along the face, relative to
 /// the wedge, first reaches half its value at the shock.
 fn shock_shape(run: &CoupledRun<2>, w: &Wedge, tip: f64) {
-    let m = measure_wedge(
-        &run.fluid,
-        tip,
-        w.theta,
-        w.p1,
-        w.exact.pressure_ratio * w.p1,
-        (0.0, 0.2),
-    );
+    let m = w.measure(run, tip, (0.0, 0.2));
     let tb = w.exact.beta_deg.to_radians().tan();
     let standoff = m.columns.first().map_or(f64::NAN, |&(d, y, _)| y - d * tb);
     let mut local = String::new();
@@ -182,14 +183,7 @@ fn main() {
         }
         run.advance_to(t).unwrap();
         let tip = w.tip0 + run.rigid_displacement(0, t).map_or(0.0, |d| d[0]);
-        let m = measure_wedge(
-            &run.fluid,
-            tip,
-            w.theta,
-            w.p1,
-            w.exact.pressure_ratio * w.p1,
-            (0.05, 0.15),
-        );
+        let m = w.measure(&run, tip, (0.05, 0.15));
         println!(
             "t {:.2} ms: angle {:.3} deg, p2/p1 {:.3}",
             t * 1e3,
