@@ -8,7 +8,7 @@
 //! still air, and its angle was still rising when the wedge reached the
 //! end of the domain (36.0° at 0.48 ms, 40.0° at 1.2 ms at h = 5 mm). At
 //! rest, with the body running on as a plate through the outflow face (no
-//! base, no wake), the same flow settles: 40.608° from 2.4 to 4.8 ms to the
+//! base, no wake), the same flow settles: 40.606° from 3.0 to 4.8 ms to the
 //! last printed digit at h = 5 mm
 //! (`cargo run --release -p probes --bin wedge_drift_probe`, notes of
 //! issue 21).
