@@ -51,20 +51,8 @@ fn shock_shape(run: &CoupledRun<2>, w: &Wedge, tip: f64) {
     let mut local = String::new();
     for k in 0..4 {
         let (lo, hi) = (0.04 * k as f64, 0.04 * (k + 1) as f64);
-        let pts: Vec<(f64, f64)> = m
-            .columns
-            .iter()
-            .filter(|c| c.0 >= lo && c.0 < hi)
-            .map(|c| (c.0, c.1))
-            .collect();
-        let n = pts.len() as f64;
-        let (mx, my) = (
-            pts.iter().map(|p| p.0).sum::<f64>() / n,
-            pts.iter().map(|p| p.1).sum::<f64>() / n,
-        );
-        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-        local += &format!(" [{lo:.2},{hi:.2}] {:.2}", (sxy / sxx).atan().to_degrees());
+        let a = w.measure(run, tip, (lo, hi)).angle_deg;
+        local += &format!(" [{lo:.2},{hi:.2}] {a:.2}");
     }
     // The slow layer at d = 0.1.
     let l = &run.fluid.layout;
