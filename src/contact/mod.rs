@@ -120,6 +120,14 @@ pub struct ContactStats {
     /// `Δt Σ_I |f_I − (f_I·n_I) n_I|`: the tangential (friction) impulse's
     /// magnitude.
     pub tangential_impulse: f64,
+    /// Kinetic energy the contact took from both bodies, measured on the
+    /// particles (their velocity with and without the contact's share of
+    /// the nodal change) and on the points (before and after the
+    /// correction), by [`MembraneContactStep`] (0 from
+    /// [`GridContact::resolve`] alone). Stick and slip both bring the
+    /// bodies' normal velocities together at a node, an inelastic
+    /// collision.
+    pub dissipated: f64,
 }
 
 impl ContactStats {
@@ -130,6 +138,7 @@ impl ContactStats {
         self.slipping_nodes += o.slipping_nodes;
         self.normal_impulse += o.normal_impulse;
         self.tangential_impulse += o.tangential_impulse;
+        self.dissipated += o.dissipated;
         for d in 0..3 {
             self.impulse[d] += o.impulse[d];
         }

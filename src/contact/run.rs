@@ -37,6 +37,11 @@ pub struct MembraneContactStep {
     held: Vec<Vec<bool>>,
     /// The MPM body's nodal mass gradient.
     grad: Vec<SVector<f64, 3>>,
+    /// The contact's change of the MPM body's nodal velocity, `−Δt Σ f/m`
+    /// over the membranes (zero off the contact nodes).
+    kick: Vec<SVector<f64, 3>>,
+    /// Its share of each particle's velocity change, `Σ_i S_ip` kick.
+    particle_kick: Vec<SVector<f64, 3>>,
     /// What the contact did over the run, all membranes together.
     pub totals: ContactStats,
     /// The last step's.
@@ -73,6 +78,8 @@ impl MembraneContactStep {
                 .map(|m| m.fixed.iter().map(|f| f.iter().all(|&b| b)).collect())
                 .collect(),
             grad: vec![SVector::zeros(); n],
+            kick: vec![SVector::zeros(); n],
+            particle_kick: Vec::new(),
             totals: ContactStats::default(),
             last: ContactStats::default(),
         }
@@ -148,15 +155,51 @@ impl MembraneContactStep {
                 self.law,
                 dt,
             );
+            let before = mesh.kinetic_energy();
+            for &i in &self.contact[k].touched {
+                let f = self.contact[k].force[i];
+                if f != V3::zeros() {
+                    self.kick[i] -= f * (dt / s.grid_state.mass[i]);
+                }
+            }
             self.contact[k].correct_points(dt, &mut mesh.v);
             // The wall holds a fixed direction; it takes the reaction.
             mesh.apply_fixed();
+            let mut st = st;
+            st.dissipated += before - mesh.kinetic_energy();
             step_stats.add(&st);
         }
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
         s.grid.mirror_ghosts(&mut s.grid_state.accel);
+        // The contact's share of each particle's velocity change (FLIP and
+        // PIC alike take the nodes' change), at the positions G2P uses.
+        let touched = step_stats.contact_nodes > 0;
+        if touched {
+            s.grid.mirror_ghosts(&mut self.kick);
+            self.particle_kick.clear();
+            self.particle_kick
+                .resize(s.particles.len(), SVector::zeros());
+            mpm.g2p_add(
+                &s.particles,
+                &self.kick,
+                &s.scratch,
+                &mut self.particle_kick,
+            );
+        }
         // Step 5: G2P.
         mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch, &[])?;
+        if touched {
+            // The MPM body's kinetic energy lost to the contact: its
+            // particles' energy against what it would be without the kick.
+            let p = &s.particles;
+            step_stats.dissipated += (0..p.len())
+                .map(|q| {
+                    let (v, dv) = (p.v[q], self.particle_kick[q]);
+                    0.5 * p.mass[q] * ((v - dv).norm_squared() - v.norm_squared())
+                })
+                .sum::<f64>();
+            self.kick.iter_mut().for_each(|k| *k = SVector::zeros());
+        }
         // Step 6: the membranes move and update their stresses.
         for (mesh, name) in meshes.iter_mut().zip(names) {
             mesh.update_positions(dt);

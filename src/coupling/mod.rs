@@ -1047,7 +1047,7 @@ impl<const D: usize> CoupledRun<D> {
                 cells_to_nodes(&self.grid, layout, &self.cell_scalar, &mut self.node_scalar);
                 self.grid.mirror_ghosts(&mut self.node_scalar);
                 let mut temperature = std::mem::take(&mut f.particles.temperature);
-                phases.g2p_scalar_add(
+                phases.g2p_add(
                     &f.particles,
                     &self.node_scalar,
                     &f.scratch,

@@ -195,17 +195,12 @@ impl WithModel for CheckIt {
 /// Builds the scene's model and hands it to `w`.
 fn with_model<W: WithModel>(scene: &Scene, w: W) -> Result<W::Out> {
     if !scene.membrane_elements.is_empty() {
-        let fe = models::MembraneFe::from_scene(scene)?;
         if scene.grid.dim == 0 {
-            let mut m = fe;
+            let mut m = models::MembraneFe::from_scene(scene)?;
             return w.with(&mut m, scene);
         }
         // Lian Sec. 5–6: MPM bodies and membranes in grid contact.
-        let solid = models::ExplicitSolid {
-            run: crate::scene::build_solid_run::<3>(scene)?,
-        };
-        let law = scene.contact.clone().unwrap_or_default().law();
-        let mut m = models::MembraneContact::new(solid, fe, law);
+        let mut m = models::MembraneContact::from_scene(scene)?;
         return w.with(&mut m, scene);
     }
     match scene.grid.dim {

@@ -476,6 +476,19 @@ pub struct CoupledMpm<'a, const D: usize> {
 }
 
 macro_rules! with_kernel {
+    // `$f::<D, S, K, $g…>`: a pass with more generic parameters after the
+    // kernel's.
+    ($shape:expr, $f:ident::<$($g:ty),+>, $($arg:expr),*) => {
+        match $shape {
+            ShapeKind::Linear => $f::<D, 2, _, $($g),+>(LinearHat, $($arg),*),
+            ShapeKind::Gimp => $f::<D, 3, _, $($g),+>(Gimp, $($arg),*),
+            ShapeKind::QuadraticBspline => $f::<D, 3, _, $($g),+>(QuadraticBspline, $($arg),*),
+            ShapeKind::CubicBspline => $f::<D, 4, _, $($g),+>(CubicBspline, $($arg),*),
+            ShapeKind::QuadraticBsplineGimp => {
+                $f::<D, 4, _, $($g),+>(QuadraticBsplineGimp, $($arg),*)
+            }
+        }
+    };
     ($shape:expr, $f:ident, $($arg:expr),*) => {
         match $shape {
             ShapeKind::Linear => $f::<D, 2, _>(LinearHat, $($arg),*),
@@ -802,24 +815,26 @@ impl<const D: usize> CoupledMpm<'_, D> {
             .for_each(|(q, &m)| *q = if m > floor { *q / m } else { 0.0 });
     }
 
-    /// Adds a nodal increment to a particle scalar: `q_p += Σ_i S_ip Δq_i`
-    /// (Guilkey Sec. 3.3 step 10's exchange change, nodes → particles), at
-    /// the positions and domains of this step's [`Self::p2g`] (call it before
-    /// the particles move). `node` must have its ghosts mirrored.
-    pub fn g2p_scalar_add(
+    /// Adds a nodal increment to a particle quantity (a scalar or a
+    /// vector): `q_p += Σ_i S_ip Δq_i` (Guilkey Sec. 3.3 step 10's exchange
+    /// change, nodes → particles; the velocity change a grid contact made,
+    /// [`crate::contact::MembraneContactStep`]), at the positions and
+    /// domains of this step's [`Self::p2g`] (call it before the particles
+    /// move). `node` must have its ghosts mirrored.
+    pub fn g2p_add<T: NodalValue>(
         &self,
         particles: &Particles<D>,
-        node: &[f64],
+        node: &[T],
         scratch: &StepScratch<D>,
-        values: &mut [f64],
+        values: &mut [T],
     ) {
-        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+        fn run<const D: usize, const S: usize, K: Stencil<S>, T: NodalValue>(
             kernel: K,
             ctx: &Ctx<'_, D>,
             particles: &Particles<D>,
-            node: &[f64],
+            node: &[T],
             scratch: &StepScratch<D>,
-            values: &mut [f64],
+            values: &mut [T],
         ) {
             let grid = ctx.grid;
             let strides = grid.strides();
@@ -829,21 +844,42 @@ impl<const D: usize> CoupledMpm<'_, D> {
                 .with_min_len(512)
                 .for_each(|(p, q)| {
                     let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
-                    let mut dq = 0.0;
-                    pw.for_each(|m, w, _| dq += w * node[base + offset(m, &strides)]);
+                    let mut dq = T::zero();
+                    pw.for_each(|m, w, _| dq += node[base + offset(m, &strides)] * w);
                     *q += dq;
                 });
         }
         let ctx = self.ctx(None);
         with_kernel!(
             self.params.shape,
-            run,
+            run::<T>,
             &ctx,
             particles,
             node,
             scratch,
             values
         )
+    }
+}
+
+/// A nodal quantity [`CoupledMpm::g2p_add`] interpolates: a scalar or a
+/// vector.
+pub trait NodalValue:
+    Copy + Send + Sync + std::ops::AddAssign + std::ops::Mul<f64, Output = Self>
+{
+    /// The additive zero.
+    fn zero() -> Self;
+}
+
+impl NodalValue for f64 {
+    fn zero() -> Self {
+        0.0
+    }
+}
+
+impl<const N: usize> NodalValue for SVector<f64, N> {
+    fn zero() -> Self {
+        SVector::zeros()
     }
 }
 
