@@ -332,3 +332,47 @@ fn a_pic_share_brings_the_expanded_gas_to_rest_round_and_keeps_its_energy_as_hea
         "tension / (p r) = {laplace:.4}"
     );
 }
+
+#[test]
+fn lians_sphere_falls_on_the_clamped_membrane_and_is_thrown_back() {
+    // Lian Sec. 7.1, second example, quarter model at h = 2 mm to 0.6 ms
+    // (`cargo run --release -p verification -- lian_impact` refines it).
+    // Nothing does work on the system (no gravity, the clamped edges are
+    // at rest): its energy can only fall. No sphere particle may pass the
+    // membrane, and the membrane throws the sphere back.
+    use mpmice::diagnostics::lian_impact::{impact_scene, run_impact};
+    let base = mpmice::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/lian_sphere_on_membrane.toml"
+    )))
+    .expect("case");
+    let mut sc = impact_scene(&base, 2e-3).expect("refined");
+    sc.time.end = 6e-4;
+    let r = run_impact(&sc, 1e-5).expect("run");
+    let (v0, v1) = (r.sphere_vz[0], *r.sphere_vz.last().expect("samples"));
+    let lowest = r.membrane_centre_z.iter().copied().fold(0.0, f64::min);
+    eprintln!(
+        "sphere on membrane, h = 2 mm: largest energy rise {:.2e}, smallest clearance {:.3} mm, \
+         v_z {v0:.3} -> {v1:.3} m/s, membrane centre down to {:.3} mm, contact loss {:.3e} of \
+         {:.3e} J",
+        r.largest_gain(),
+        r.min_clearance * 1e3,
+        lowest * 1e3,
+        r.contact.last().copied().unwrap_or(0.0),
+        r.total[0]
+    );
+    assert!(
+        r.largest_gain() < 1e-6,
+        "energy rose by {:e}",
+        r.largest_gain()
+    );
+    assert!(
+        r.min_clearance > 0.0,
+        "a particle passed the membrane: {}",
+        r.min_clearance
+    );
+    assert!((v0 + 10.0).abs() < 1e-12, "initial v_z {v0}");
+    // Thrown back: moving up at the end, the membrane pushed down first.
+    assert!(v1 > 0.0, "v_z at the end {v1}");
+    assert!(lowest < -1e-3, "membrane centre only reached {lowest}");
+}

@@ -9,6 +9,7 @@ pub mod formulations;
 pub mod impm;
 pub mod interface_tube;
 pub mod lian_gas;
+pub mod lian_impact;
 pub mod membrane_fe;
 pub mod mms;
 pub mod riemann;

@@ -197,6 +197,11 @@ pub const STUDIES: &[Study] = &[
         lian_studies::lian_gas_expansion,
     ),
     (
+        "lian_impact",
+        "Lian 7.1 membrane-sphere impacts (quarter models): membrane centre/corner and sphere top z(t) vs h, contact onset, energy account with contact and hourglass losses",
+        lian_studies::lian_impact,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,
