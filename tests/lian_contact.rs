@@ -7,18 +7,14 @@
 //! it; bad contact settings name their key.
 
 use mpmice::driver::model::{DtRequest, Model};
-use mpmice::driver::models::{ExplicitSolid, MembraneContact, MembraneFe};
-use mpmice::scene::{build_solid_run, parse};
+use mpmice::driver::models::MembraneContact;
+use mpmice::scene::parse;
 
 /// The model of a scene text (membrane elements with MPM bodies).
 fn model(text: &str) -> MembraneContact {
     let scene = parse(text).expect("scene");
-    let fe = MembraneFe::from_scene(&scene).expect("membranes");
-    let solid = ExplicitSolid {
-        run: build_solid_run::<3>(&scene).expect("solid"),
-    };
-    let law = scene.contact.as_ref().expect("contact").law();
-    MembraneContact::new(solid, fe, law)
+    assert!(scene.contact.is_some(), "the scene names its contact law");
+    MembraneContact::from_scene(&scene).expect("model")
 }
 
 /// Steps `m` to `end`, calling `each` after every step.

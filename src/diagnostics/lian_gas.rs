@@ -10,9 +10,9 @@ use std::time::Instant;
 
 use crate::contact::ContactLaw;
 use crate::driver::model::{DtRequest, Model};
-use crate::driver::models::{ExplicitSolid, MembraneContact, MembraneFe};
+use crate::driver::models::MembraneContact;
 use crate::error::Error;
-use crate::scene::{build_solid_run, parse};
+use crate::scene::parse;
 
 /// The case's sizes (the paper: element and cell 0.1, spacing 0.025).
 #[derive(Debug, Clone, Copy)]
@@ -178,11 +178,8 @@ law = "{law}"
         std::fs::write(&mesh, quarter_mesh(self.element, self.cell))
             .map_err(|e| Error::io(&mesh, e))?;
         let scene = parse(&self.scene(&mesh))?;
-        let fe = MembraneFe::from_scene(&scene)?;
-        let solid = ExplicitSolid {
-            run: build_solid_run::<3>(&scene)?,
-        };
-        let mut m = MembraneContact::new(solid, fe, self.law);
+        // The scene text carries `self.law`.
+        let mut m = MembraneContact::from_scene(&scene)?;
         let start = Instant::now();
         let mut out = GasExpansionRun::default();
         let mut row = Vec::new();
