@@ -120,13 +120,14 @@ pub struct ContactStats {
     /// `Δt Σ_I |f_I − (f_I·n_I) n_I|`: the tangential (friction) impulse's
     /// magnitude.
     pub tangential_impulse: f64,
-    /// Kinetic energy the contact took from both bodies, measured on the
-    /// particles (their velocity with and without the contact's share of
-    /// the nodal change) and on the points (before and after the
-    /// correction), by [`MembraneContactStep`] (0 from
-    /// [`GridContact::resolve`] alone). Stick and slip both bring the
-    /// bodies' normal velocities together at a node, an inelastic
-    /// collision.
+    /// Energy the contact took from both bodies: minus its work on the
+    /// particles, `Σ_p m_p δv_p·(v_p^n + v_p^{n+1})/2` (δv_p the contact's
+    /// share of the nodal velocity change), and on the points, `Σ_k m_k
+    /// δv_k·(v_k^{n−½} + v_k^{n+½})/2` — each with the mid-step velocity,
+    /// which splits a body's kinetic-energy change exactly between the
+    /// forces. Filled by [`MembraneContactStep`] (0 from
+    /// [`GridContact::resolve`] alone). Stick and slip bring the bodies'
+    /// normal velocities together at a node, an inelastic collision.
     pub dissipated: f64,
 }
 

@@ -40,6 +40,8 @@ pub struct MembraneContactStep {
     /// The contact's change of the MPM body's nodal velocity, `−Δt Σ f/m`
     /// over the membranes (zero off the contact nodes).
     kick: Vec<SVector<f64, 3>>,
+    /// Each membrane's trial nodal velocities, before the contact.
+    trial: Vec<Vec<V3>>,
     /// Its share of each particle's velocity change, `Σ_i S_ip` kick.
     particle_kick: Vec<SVector<f64, 3>>,
     /// What the contact did over the run, all membranes together.
@@ -79,6 +81,10 @@ impl MembraneContactStep {
                 .collect(),
             grad: vec![SVector::zeros(); n],
             kick: vec![SVector::zeros(); n],
+            trial: meshes
+                .iter()
+                .map(|m| vec![V3::zeros(); m.num_nodes()])
+                .collect(),
             particle_kick: Vec::new(),
             totals: ContactStats::default(),
             last: ContactStats::default(),
@@ -155,7 +161,7 @@ impl MembraneContactStep {
                 self.law,
                 dt,
             );
-            let before = mesh.kinetic_energy();
+            self.trial[k].copy_from_slice(&mesh.v);
             for &i in &self.contact[k].touched {
                 let f = self.contact[k].force[i];
                 if f != V3::zeros() {
@@ -166,7 +172,7 @@ impl MembraneContactStep {
             // The wall holds a fixed direction; it takes the reaction.
             mesh.apply_fixed();
             let mut st = st;
-            st.dissipated += before - mesh.kinetic_energy();
+            st.dissipated -= mesh.correction_work(&self.trial[k]);
             step_stats.add(&st);
         }
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
@@ -174,6 +180,16 @@ impl MembraneContactStep {
         // The contact's share of each particle's velocity change (FLIP and
         // PIC alike take the nodes' change), at the positions G2P uses.
         let touched = step_stats.contact_nodes > 0;
+        // The contact's work on the particles, `Σ m_p δv_p·(v_p^n + v_p^{n+1})/2`
+        // with δv_p its share of the velocity change: the mid-step velocity
+        // splits a particle's kinetic-energy change exactly between the
+        // forces, as for the membranes ([`MembraneMesh::correction_work`]).
+        let work = |p: &crate::mpm::Particles<3>, kick: &[SVector<f64, 3>]| -> f64 {
+            (0..p.len())
+                .map(|q| p.mass[q] * kick[q].dot(&p.v[q]))
+                .sum::<f64>()
+        };
+        let mut particle_work = 0.0;
         if touched {
             s.grid.mirror_ghosts(&mut self.kick);
             self.particle_kick.clear();
@@ -185,19 +201,13 @@ impl MembraneContactStep {
                 &s.scratch,
                 &mut self.particle_kick,
             );
+            particle_work += 0.5 * work(&s.particles, &self.particle_kick);
         }
         // Step 5: G2P.
         mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch, &[])?;
         if touched {
-            // The MPM body's kinetic energy lost to the contact: its
-            // particles' energy against what it would be without the kick.
-            let p = &s.particles;
-            step_stats.dissipated += (0..p.len())
-                .map(|q| {
-                    let (v, dv) = (p.v[q], self.particle_kick[q]);
-                    0.5 * p.mass[q] * ((v - dv).norm_squared() - v.norm_squared())
-                })
-                .sum::<f64>();
+            particle_work += 0.5 * work(&s.particles, &self.particle_kick);
+            step_stats.dissipated -= particle_work;
             self.kick.iter_mut().for_each(|k| *k = SVector::zeros());
         }
         // Step 6: the membranes move and update their stresses.

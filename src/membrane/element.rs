@@ -657,6 +657,17 @@ impl MembraneMesh {
         crate::mpm::particles::kinetic_energy(&self.mass, &self.v)
     }
 
+    /// The work a correction of this step's velocities did on the nodes,
+    /// from the trial velocities `trial` (Lian Eq. 46) to the present ones:
+    /// `Σ m (v − v̄)·(v^{n−½} + v)/2`, with the mid-step velocity the
+    /// external work and the positions use ([`Self::update_positions`]),
+    /// so that it closes the membrane's own energy account.
+    pub fn correction_work(&self, trial: &[V3]) -> f64 {
+        (0..self.v.len())
+            .map(|n| self.mass[n] * (self.v[n] - trial[n]).dot(&(self.v_old[n] + self.v[n])) * 0.5)
+            .sum()
+    }
+
     /// Stored (strain) energy Σ_e U_e, measured from the initial state.
     pub fn strain_energy_total(&self) -> f64 {
         self.strain_energy.iter().sum()
