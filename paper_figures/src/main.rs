@@ -70,6 +70,11 @@ type Figure = fn(bool, &Path) -> anyhow::Result<()>;
 /// Every figure: name, description and the function that makes it.
 const FIGURES: &[(&str, &str, Figure)] = &[
     (
+        "lian_fig6_9_11",
+        "membrane-sphere impacts (Lian 7.1): membrane centre and corner z(t) (Fig. 6), membrane centre and sphere top z(t) (Figs. 9, 11) at every cell size of the lian_impact study",
+        lian_impacts,
+    ),
+    (
         "lian_vibration",
         "pre-tensioned square membrane (Lian 4 elements): centre deflection vs time against exact mode (1,1)",
         lian_vibration,
@@ -785,6 +790,73 @@ fn lian_vibration(quick: bool, out: &Path) -> anyhow::Result<()> {
         &series,
     )?;
     println!("wrote {}", out.join("lian_vibration.png").display());
+    Ok(())
+}
+
+/// Lian Sec. 7.1's impacts from the `lian_impact` study's curves (run
+/// `verification lian_impact [--quick]` first): the membrane on the held
+/// sphere, its centre and corner z(t) (Fig. 6); the sphere on the clamped
+/// membrane, the membrane centre and the sphere's top z(t) (Figs. 9, 11),
+/// one line per cell size. One PNG per case.
+fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
+    let dir = study_results_dir(quick);
+    let cases = [
+        (
+            "membrane_on_sphere",
+            "Lian 7.1, membrane on a held sphere (Fig. 6)",
+            [
+                ("centre", "membrane_centre_z [m]"),
+                ("corner", "membrane_corner_z [m]"),
+            ],
+        ),
+        (
+            "sphere_on_membrane",
+            "Lian 7.1, sphere on a clamped membrane (Figs. 9, 11)",
+            [
+                ("membrane centre", "membrane_centre_z [m]"),
+                ("sphere top", "sphere_top_z [m]"),
+            ],
+        ),
+    ];
+    for (case, title, curves) in cases {
+        let mut series = Vec::new();
+        for h in ["2", "1", "0.5"] {
+            let path = dir.join(format!("lian_impact_{case}_h{h}.csv"));
+            let Ok(text) = std::fs::read_to_string(&path) else {
+                continue;
+            };
+            let mut lines = text.lines();
+            let head: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+            let rows: Vec<Vec<f64>> = lines
+                .map(|l| {
+                    l.split(',')
+                        .map(|x| x.parse().unwrap_or(f64::NAN))
+                        .collect()
+                })
+                .collect();
+            for (name, column) in curves {
+                let c = head
+                    .iter()
+                    .position(|x| *x == column)
+                    .ok_or_else(|| anyhow::anyhow!("{}: no column {column}", path.display()))?;
+                series.push(PlotSeries {
+                    label: format!("{name}, h = {h} mm"),
+                    points: rows.iter().map(|r| (r[0] * 1e3, r[c] * 1e3)).collect(),
+                    style: Style::Line,
+                });
+            }
+        }
+        if series.is_empty() {
+            bail!(
+                "no lian_impact_{case}_h*.csv in {}; run `verification lian_impact{}` first",
+                dir.display(),
+                if quick { " --quick" } else { "" }
+            );
+        }
+        let png = out.join(format!("lian_impact_{case}.png"));
+        plot_xy(&png, title, "t [ms]", "z [mm]", false, false, &series)?;
+        println!("wrote {}", png.display());
+    }
     Ok(())
 }
 

@@ -57,8 +57,11 @@ pub struct GasExpansionRun {
     /// 6.31 ± 0.1 and that layer reaches 13.9).
     pub gas_pressure: Vec<f64>,
     /// Total energy (gas kinetic and internal, membrane kinetic and
-    /// strain, less hourglass losses).
+    /// strain, with the hourglass losses; the contact's loss left out).
     pub energy: Vec<f64>,
+    /// Energy the contact dissipated so far (the history's
+    /// `contact_dissipated`): `energy + contact_loss` is the account.
+    pub contact_loss: Vec<f64>,
     /// Gas kinetic energy Σ_p ½ m_p |v_p|² (of its points).
     pub gas_kinetic: Vec<f64>,
     /// The part of it the grid sees: Σ_i ½ m_i |v_i|² over the nodes after
@@ -253,11 +256,13 @@ fn sample(m: &MembraneContact, out: &mut GasExpansionRun, row: &mut Vec<f64>) {
     row.clear();
     m.history_row(row);
     // Columns: particle kinetic, strain, potential, membrane kinetic,
-    // strain, external work, hourglass, damping, total, ...
+    // strain, external work, hourglass, damping, total (with the contact's
+    // loss), contact nodes, normal impulse, contact dissipated.
     out.gas_kinetic.push(row[0]);
     out.grid_kinetic
         .push(m.solid.run.grid_state().kinetic_energy());
-    out.energy.push(row[8]);
+    out.energy.push(row[8] - row[11]);
+    out.contact_loss.push(row[11]);
 }
 
 /// Gas points outside the membrane's outline (closed through the origin),
