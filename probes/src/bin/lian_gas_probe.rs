@@ -1,8 +1,8 @@
 //! The Lian Sec. 7.3 gas expansion over time (issue 17): the membrane's
 //! radii at 0° and 90°, its roundness (the spread of its nodes' radii), its
-//! tension over Laplace's p r, the total energy, the gas's kinetic energy
-//! carried by its points and the part of it the grid sees, at every `EVERY`
-//! of time.
+//! tension over Laplace's p r, the total energy, the contact's loss and the account
+//! with it, the gas's kinetic energy carried by its points and the part of it the grid sees,
+//! at every `EVERY` of time.
 //!
 //! `cargo run --release -p probes --bin lian_gas_probe -- H END [stick|slip] [EVERY] [PIC]`
 //!
@@ -36,11 +36,11 @@ fn main() -> anyhow::Result<()> {
     };
     let r = case.run(&dir)?;
     println!(
-        "t r0 r90 r_mean (r0-r90)/r_mean (r_max-r_min)/r_mean T/(p r_mean) E/E0-1 gas_KE_points gas_KE_grid"
+        "t r0 r90 r_mean (r0-r90)/r_mean (r_max-r_min)/r_mean T/(p r_mean) E/E0-1 contact_loss/E0 account/E0-1 gas_KE_points gas_KE_grid"
     );
     for i in 0..r.t.len() {
         println!(
-            "{:.3} {:.5} {:.5} {:.5} {:+.3e} {:.3e} {:.4} {:+.4e} {:.4e} {:.4e}",
+            "{:.3} {:.5} {:.5} {:.5} {:+.3e} {:.3e} {:.4} {:+.4e} {:.4e} {:+.3e} {:.4e} {:.4e}",
             r.t[i],
             r.r0[i],
             r.r90[i],
@@ -49,6 +49,8 @@ fn main() -> anyhow::Result<()> {
             (r.r_range[i].1 - r.r_range[i].0) / r.r_mean[i],
             r.tension[i] / (r.gas_pressure[i] * r.r_mean[i]),
             r.energy[i] / r.energy[0] - 1.0,
+            r.contact_loss[i] / r.energy[0],
+            (r.energy[i] + r.contact_loss[i]) / r.energy[0] - 1.0,
             r.gas_kinetic[i],
             r.grid_kinetic[i]
         );
