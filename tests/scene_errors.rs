@@ -98,6 +98,14 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
         ),
         (edit("end = 0.1\n", ""), "time", "missing field `end`"),
         (
+            edit(
+                "poisson_ratio = 0.3",
+                "poisson_ratio = 0.3\nmin_pressure = 0.0",
+            ),
+            "materials[0].min_pressure",
+            "only for fluid materials",
+        ),
+        (
             edit("end = 0.1", "end = \"soon\""),
             "time.end",
             "invalid type",

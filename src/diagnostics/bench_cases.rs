@@ -211,6 +211,7 @@ fn block_material(material: BlockMaterial, h: f64) -> (SolidMaterial, f64, f64) 
                         c1: ArtificialViscosity::DEFAULT_C1,
                         c2: ArtificialViscosity::DEFAULT_C2,
                     },
+                    min_pressure: f64::NEG_INFINITY,
                 }),
                 elastic: ElasticConstants {
                     lambda: 0.0,

@@ -116,6 +116,10 @@ pub struct GasPoint {
     pub viscosity: f64,
     /// Artificial viscosity (York Eqs. 24–25).
     pub q: ArtificialViscosity,
+    /// Pressure floor \[Pa\]: the EOS's pressure is taken as at least this
+    /// (Lian Eq. 66 sets a liquid's pressure to 0 in tension, so that it can
+    /// break up); `f64::NEG_INFINITY` for none.
+    pub min_pressure: f64,
 }
 
 /// The per-point inputs of a gas-point update beyond its velocity gradient.
@@ -136,7 +140,9 @@ impl GasPoint {
     /// `e` (York Eq. 22 for the ideal gas).
     #[inline]
     pub fn pressure(&self, rho: f64, e: f64) -> f64 {
-        self.eos.pressure(rho, self.eos.temperature(e))
+        self.eos
+            .pressure(rho, self.eos.temperature(e))
+            .max(self.min_pressure)
     }
 
     /// Sound speed at `rho`, `e` (0 where the state has none).
@@ -178,13 +184,21 @@ impl GasPoint {
         // pⁿ⁺¹ = p* + a (eⁿ⁺¹ − eⁿ), p* = p(ρⁿ⁺¹, eⁿ).
         let dv = 1.0 / s.rho_new - 1.0 / s.rho_old;
         let p_old = self.pressure(s.rho_old, e_old);
-        let p_star = self.pressure(s.rho_new, e_old);
+        // The EOS's own p* (not floored): the linear step stays on the EOS,
+        // and only its result is held at the floor.
         let t_old = self.eos.temperature(e_old);
+        let p_star = self.eos.pressure(s.rho_new, t_old);
         let a = self.eos.dp_dt(s.rho_new, t_old) / self.eos.specific_heat_cv();
         let heat = 2.0 * self.viscosity * dev.component_mul(&dev).sum() * s.dt / s.rho_new;
-        let de = (-(0.5 * (p_old + p_star) + q) * dv + heat) / (1.0 + 0.5 * a * dv);
+        let mut de = (-(0.5 * (p_old + p_star) + q) * dv + heat) / (1.0 + 0.5 * a * dv);
+        let mut p_new = p_star + a * de;
+        if p_new < self.min_pressure {
+            // On the floor the pressure no longer follows e: the work is
+            // done at the floor's pressure.
+            p_new = self.min_pressure;
+            de = -(0.5 * (p_old + p_new) + q) * dv + heat;
+        }
         let e_new = e_old + de;
-        let p_new = p_star + a * de;
         // York Eq. 21 (Stokes condition: the spherical part is −(p + q)).
         let sigma = dev * (2.0 * self.viscosity) - Matrix3::identity() * (p_new + q);
         (sigma, e_new, q)
@@ -241,6 +255,7 @@ mod tests {
                 c1: 1.0,
                 c2: 1.0,
             },
+            min_pressure: f64::NEG_INFINITY,
         }
     }
 
@@ -249,6 +264,37 @@ mod tests {
         let g = air();
         let e = g.energy_of(1.2, 1.0e5);
         assert!((g.pressure(1.2, e) / 1.0e5 - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn a_pressure_floor_holds_a_stretched_liquid_at_it_and_does_its_work() {
+        // Lian Eq. 66: water stretched below ρ₀ has p = 0. On the floor
+        // the energy changes by −(p̄ + q) Δv with p̄ = ½ (pⁿ + 0); q is 0 in
+        // expansion.
+        use crate::material::mie_gruneisen::MieGruneisen;
+        let mut g = air();
+        g.eos = MieGruneisen::new(1000.0, 1647.0, 1.921, 0.1, 4180.0, 300.0, 0.0)
+            .unwrap()
+            .into();
+        let e0 = g.energy_of(1000.0, 0.0);
+        let free = g.eos.pressure(999.0, g.eos.temperature(e0));
+        assert!(free < -1e6, "the EOS's own tension {free}");
+        g.min_pressure = 0.0;
+        assert_eq!(g.pressure(999.0, e0), 0.0);
+        // A point at 2 kPa stretched to 999 kg/m³ in one step.
+        let e1 = g.energy_of(1000.0, 2.0e3);
+        let step = GasStep {
+            rho_old: 1000.0,
+            rho_new: 999.0,
+            dt: 1e-6,
+            c_max: 1647.0,
+        };
+        let l = Matrix3::from_diagonal_element(1.0e-3 / 3.0 / 1e-6);
+        let (sigma, e2, q) = g.update(&l, e1, &step);
+        assert_eq!(q, 0.0);
+        assert_eq!(sigma.trace(), 0.0);
+        let dv = 1.0 / 999.0 - 1.0 / 1000.0;
+        assert!((e2 - (e1 - 0.5 * 2.0e3 * dv)).abs() < 1e-12 * e1);
     }
 
     #[test]

@@ -86,6 +86,7 @@ fn gas_point_material(m: &MaterialSpec, i: usize, h: f64) -> Result<SolidMateria
                 c1: av.c1,
                 c2: av.c2,
             },
+            min_pressure: m.min_pressure.unwrap_or(f64::NEG_INFINITY),
         }),
         elastic: ElasticConstants {
             lambda: 0.0,

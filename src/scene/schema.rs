@@ -762,6 +762,10 @@ pub struct MaterialSpec {
     pub frame: Option<Frame>,
     /// Gas points: York's artificial viscosity (defaults: the paper's).
     pub artificial_viscosity: Option<ArtificialViscositySpec>,
+    /// Gas points: pressure floor \[Pa\] (default none). Lian Eq. 66 takes a
+    /// liquid's pressure as 0 in tension so that it can break up:
+    /// `min_pressure = 0.0`.
+    pub min_pressure: Option<f64>,
     /// A rigid solid (coupled scenes): its particles move with their
     /// objects' `velocity` (one for all objects of the material),
     /// prescribed; the elastic constants give its bulk EOS in the cells.
@@ -1671,6 +1675,7 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.viscosity.is_some(), "viscosity"),
         (m.frame.is_some(), "frame"),
         (m.artificial_viscosity.is_some(), "artificial_viscosity"),
+        (m.min_pressure.is_some(), "min_pressure"),
     ] {
         if v {
             return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
@@ -1868,6 +1873,17 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
     if let Some(mu) = m.viscosity {
         if !(mu.is_finite() && mu >= 0.0) {
             return Err(err(p("viscosity"), format!("must be ≥ 0 (got {mu})")));
+        }
+    }
+    if let Some(pm) = m.min_pressure {
+        if !m.on_particles() {
+            return Err(err(
+                p("min_pressure"),
+                "only for gas points (frame = \"particles\")",
+            ));
+        }
+        if !pm.is_finite() {
+            return Err(err(p("min_pressure"), format!("must be finite (got {pm})")));
         }
     }
     if let Some(av) = &m.artificial_viscosity {
@@ -2194,6 +2210,7 @@ fn validate_membrane(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(),
         (m.viscosity.is_some(), "viscosity"),
         (m.frame.is_some(), "frame"),
         (m.artificial_viscosity.is_some(), "artificial_viscosity"),
+        (m.min_pressure.is_some(), "min_pressure"),
         (m.rigid, "rigid"),
     ] {
         if v {
