@@ -95,6 +95,8 @@ pub struct ImpactRun {
     pub membrane_corner_z: Vec<f64>,
     /// z of the sphere's particle that starts nearest its top on the axis.
     pub sphere_top_z: Vec<f64>,
+    /// The sphere's mass (its particles').
+    pub sphere_mass: Vec<f64>,
     /// The sphere's mass-weighted mean z velocity.
     pub sphere_vz: Vec<f64>,
     /// Kinetic energy of both bodies.
@@ -242,6 +244,7 @@ fn sample(m: &MembraneContact, out: &mut ImpactRun, row: &mut Vec<f64>, at: [usi
     out.membrane_corner_z.push(sheet.x[at[1]][2]);
     out.sphere_top_z.push(p.x[at[2]][2]);
     let mass: f64 = p.mass.iter().sum();
+    out.sphere_mass.push(mass);
     let pz: f64 = (0..p.len()).map(|q| p.mass[q] * p.v[q][2]).sum();
     out.sphere_vz.push(pz / mass.max(f64::MIN_POSITIVE));
     row.clear();
