@@ -544,3 +544,19 @@ fn a_fluid_torn_to_vacuum_names_the_cell_and_material_and_keeps_the_last_good_st
     // The checkpoint is the last state the watchdog passed (every 5 steps).
     assert_eq!(step % 5, 0);
 }
+
+#[test]
+fn membrane_contact_restarts_bit_identically() {
+    // Lian's sphere on a clamped membrane, coarse: the history's contact
+    // totals (impulse, dissipated energy) resume from the checkpoint.
+    let mut s = case("lian_sphere_on_membrane.toml");
+    s.grid.cells = vec![13, 13, 15];
+    if let Some(mpmice::scene::MeshSpec::Rectangle { cells, .. }) =
+        s.membrane_elements.first_mut().map(|m| &mut m.mesh)
+    {
+        *cells = [13, 13];
+    }
+    s.time.end = 2e-4;
+    s.output.interval = Some(1e-4);
+    assert_restart_is_bit_identical("membrane contact", &s);
+}

@@ -177,13 +177,13 @@ impl MembraneContactStep {
         }
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
         s.grid.mirror_ghosts(&mut s.grid_state.accel);
-        // The contact's share of each particle's velocity change (FLIP and
-        // PIC alike take the nodes' change), at the positions G2P uses.
+        // The contact's work on the particles, `Σ m_p δv_p·(v_p^n + v_p^{n+1})/2`,
+        // with δv_p its share of the velocity change (FLIP and PIC alike take
+        // the nodes' change), interpolated at the positions G2P uses: the
+        // mid-step velocity splits a particle's kinetic-energy change exactly
+        // between the forces, as for the membranes
+        // ([`MembraneMesh::correction_work`]).
         let touched = step_stats.contact_nodes > 0;
-        // The contact's work on the particles, `Σ m_p δv_p·(v_p^n + v_p^{n+1})/2`
-        // with δv_p its share of the velocity change: the mid-step velocity
-        // splits a particle's kinetic-energy change exactly between the
-        // forces, as for the membranes ([`MembraneMesh::correction_work`]).
         let work = |p: &crate::mpm::Particles<3>, kick: &[SVector<f64, 3>]| -> f64 {
             (0..p.len())
                 .map(|q| p.mass[q] * kick[q].dot(&p.v[q]))

@@ -158,28 +158,25 @@ impl Model for MembraneContact {
         self.membranes.save_meshes(ck);
         // The contact's running totals enter the history and the energy
         // account, so a restart resumes them.
-        let t = &self.contact.totals;
-        let [ix, iy, iz] = t.impulse;
-        let v = vec![
-            t.normal_impulse,
-            t.tangential_impulse,
-            t.dissipated,
-            ix,
-            iy,
-            iz,
-        ];
-        ck.put_f64("contact.totals", vec![6], v);
+        let t = self.contact.totals;
+        ck.put_f64_with("contact.totals", vec![6], |buf| {
+            buf.extend([t.normal_impulse, t.tangential_impulse, t.dissipated]);
+            buf.extend(t.impulse);
+        });
     }
 
     fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
         self.solid.load(ck)?;
         self.membranes.load_meshes(ck)?;
-        let v = ck.take_f64("contact.totals", Some(&[6]))?;
-        let t = &mut self.contact.totals;
-        t.normal_impulse = v[0];
-        t.tangential_impulse = v[1];
-        t.dissipated = v[2];
-        t.impulse = [v[3], v[4], v[5]];
+        // A checkpoint written before the totals were saved starts them at 0.
+        if ck.shape("contact.totals").is_some() {
+            let v = ck.take_f64("contact.totals", Some(&[6]))?;
+            let t = &mut self.contact.totals;
+            t.normal_impulse = v[0];
+            t.tangential_impulse = v[1];
+            t.dissipated = v[2];
+            t.impulse = [v[3], v[4], v[5]];
+        }
         self.membranes.t = self.solid.run.t;
         self.membranes.steps = self.solid.run.steps;
         Ok(())
