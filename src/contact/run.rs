@@ -161,18 +161,24 @@ impl MembraneContactStep {
                 self.law,
                 dt,
             );
-            self.trial[k].copy_from_slice(&mesh.v);
-            for &i in &self.contact[k].touched {
-                let f = self.contact[k].force[i];
-                if f != V3::zeros() {
-                    self.kick[i] -= f * (dt / s.grid_state.mass[i]);
+            // Without a contact force the correction changes nothing.
+            let acted = st.contact_nodes > 0;
+            if acted {
+                self.trial[k].copy_from_slice(&mesh.v);
+                for &i in &self.contact[k].touched {
+                    let f = self.contact[k].force[i];
+                    if f != V3::zeros() {
+                        self.kick[i] -= f * (dt / s.grid_state.mass[i]);
+                    }
                 }
             }
             self.contact[k].correct_points(dt, &mut mesh.v);
             // The wall holds a fixed direction; it takes the reaction.
             mesh.apply_fixed();
             let mut st = st;
-            st.dissipated -= mesh.correction_work(&self.trial[k]);
+            if acted {
+                st.dissipated -= mesh.correction_work(&self.trial[k]);
+            }
             step_stats.add(&st);
         }
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);

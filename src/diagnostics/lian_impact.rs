@@ -4,17 +4,17 @@
 //! `cases/lian_sphere_on_membrane.toml` (a sphere falls on a clamped
 //! membrane; a quarter model); also Sec. 7.2's water drop
 //! (`cases/lian_water_sphere.toml`, gas points with Lian's Mie–Grüneisen
-//! EOS on the same membrane layout). [`impact_scene`] refines a case (cell size `h`, element size
-//! the nearest that divides the membrane, particles per cell and direction
-//! fixed); [`run_impact`] records the
-//! paper's curves — the z of the membrane's centre and corner (Figs. 6, 11)
-//! and of the sphere's top point (Fig. 9) — with the energy account, the
-//! first contact and the smallest clearance between the bodies.
+//! EOS on the same membrane layout). [`impact_scene`] refines a case (cell
+//! size `h`, element size the nearest that divides the membrane, particles
+//! per cell and direction fixed); [`run_impact`] records the paper's curves
+//! — the z of the membrane's centre and corner (Figs. 6, 11) and of the
+//! sphere's top point (Fig. 9) — with the energy account, the first contact
+//! and the smallest clearance between the bodies.
 //!
 //! No reference solution exists for these impacts (the paper compares with
-//! LS-DYNA, not available here); the measures are convergence of the curves
-//! under refinement, the contact's onset against the exact free-flight
-//! time, and the energy account.
+//! LS-DYNA, not available here); the measures are convergence under
+//! refinement, the contact's onset against the exact free-flight time, and
+//! the energy account.
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -104,9 +104,10 @@ pub struct ImpactRun {
     /// Kinetic and stored energy of both bodies (less the membranes'
     /// external work).
     pub mechanical: Vec<f64>,
-    /// Energy the membrane's hourglass control dissipated.
+    /// Energy the membrane's hourglass control and damping dissipated.
     pub hourglass: Vec<f64>,
-    /// Kinetic energy the contact dissipated (both bodies).
+    /// Energy the contact took from both bodies (minus its work,
+    /// [`crate::contact::ContactStats`]).
     pub contact: Vec<f64>,
     /// The account, `mechanical + hourglass + contact` (the history's
     /// total): the initial energy up to the scheme's own error.
@@ -141,12 +142,7 @@ impl ImpactRun {
     /// `e = c_v T`, which would make the departure look small): what the
     /// losses it books do not explain.
     pub fn energy_residual(&self) -> f64 {
-        let e0 = self.total.first().copied().unwrap_or(0.0);
-        let k0 = self.kinetic.first().copied().unwrap_or(0.0);
-        self.total
-            .iter()
-            .map(|e| (e - e0).abs() / k0.max(f64::MIN_POSITIVE))
-            .fold(0.0, f64::max)
+        self.largest_change(&self.total, f64::abs)
     }
 
     /// The mechanical energy's largest rise above its initial value,
@@ -154,11 +150,16 @@ impl ImpactRun {
     /// system; only the staggered kinetic energy of the membranes'
     /// half-step velocities can raise it).
     pub fn largest_gain(&self) -> f64 {
-        let e0 = self.mechanical.first().copied().unwrap_or(0.0);
+        self.largest_change(&self.mechanical, |d| d)
+    }
+
+    /// `max over samples of f(e − e(0)) / kinetic(0)`, at least 0.
+    fn largest_change(&self, series: &[f64], f: fn(f64) -> f64) -> f64 {
+        let e0 = series.first().copied().unwrap_or(0.0);
         let k0 = self.kinetic.first().copied().unwrap_or(0.0);
-        self.mechanical
+        series
             .iter()
-            .map(|e| (e - e0) / k0.max(f64::MIN_POSITIVE))
+            .map(|e| f(e - e0) / k0.max(f64::MIN_POSITIVE))
             .fold(0.0, f64::max)
     }
 }
@@ -243,10 +244,10 @@ fn sample(m: &MembraneContact, out: &mut ImpactRun, row: &mut Vec<f64>, at: [usi
     out.membrane_centre_z.push(sheet.x[at[0]][2]);
     out.membrane_corner_z.push(sheet.x[at[1]][2]);
     out.sphere_top_z.push(p.x[at[2]][2]);
-    let mass: f64 = p.mass.iter().sum();
+    let mass = p.total_mass();
     out.sphere_mass.push(mass);
-    let pz: f64 = (0..p.len()).map(|q| p.mass[q] * p.v[q][2]).sum();
-    out.sphere_vz.push(pz / mass.max(f64::MIN_POSITIVE));
+    out.sphere_vz
+        .push(p.momentum()[2] / mass.max(f64::MIN_POSITIVE));
     row.clear();
     m.history_row(row);
     // Columns (membrane_contact's HISTORY): particle kinetic, strain,
