@@ -6,7 +6,9 @@
 //! layer does not change; with Coulomb friction the tangential impulse is
 //! μ times the normal one to round-off, and the block decelerates at μ g.
 
-use mpmice::contact::{ContactLaw, ContactStats, GridContact, MpmNodes, PointBody};
+use mpmice::contact::{
+    ContactDetection, ContactLaw, ContactStats, GridContact, MpmNodes, PointBody,
+};
 use mpmice::grid::{Boundary, Grid};
 use mpmice::material::{ElasticConstants, SolidMaterial, SolidModel};
 use mpmice::mpm::{
@@ -183,6 +185,7 @@ impl<const D: usize> Scene<D> {
                 mass_floor: self.params.mass_floor,
             },
             law,
+            ContactDetection::Approach,
             self.dt,
         );
         self.grid.mirror_ghosts(&mut self.gs.velocity_new);

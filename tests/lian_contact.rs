@@ -179,6 +179,114 @@ fn a_taut_membrane_catches_a_dropped_block_and_throws_it_back() {
     assert!(vz_end > 0.5, "not thrown back (v_z = {vz_end})");
 }
 
+/// The membrane's height under the plan point (x, y) of a `cells`-square
+/// rectangle mesh of side `side` centred on the axis: bilinear in the
+/// nodes' reference plan places and current heights.
+fn sheet_height(sheet: &mpmice::membrane::element::MembraneMesh, x: f64, y: f64) -> Option<f64> {
+    let n = (sheet.num_nodes() as f64).sqrt().round() as usize;
+    let (lo, he) = (sheet.x0[0][0], sheet.x0[1][0] - sheet.x0[0][0]);
+    let (u, v) = ((x - lo) / he, (y - lo) / he);
+    let (i, j) = (u.floor(), v.floor());
+    if i < 0.0 || j < 0.0 || i as usize + 1 >= n || j as usize + 1 >= n {
+        return None;
+    }
+    let (fu, fv) = (u - i, v - j);
+    let z = |a: usize, b: usize| sheet.x[(j as usize + b) * n + i as usize + a][2];
+    Some(
+        (1.0 - fu) * (1.0 - fv) * z(0, 0)
+            + fu * (1.0 - fv) * z(1, 0)
+            + (1.0 - fu) * fv * z(0, 1)
+            + fu * fv * z(1, 1),
+    )
+}
+
+#[test]
+fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
+    // The taut membrane of the last test; the block's lower face (its
+    // particles' domains) starts 25 mm above it at 2 m/s, half a cell of
+    // 50 mm: Lian's rule acts from the first step (both bodies reach the
+    // same nodes), the gap check once the gap closes, at 12.5 ms of free
+    // flight.
+    let membrane = "prestress = [1e6, 1e6, 0.0]\nfix = [{ boundary = true }]";
+    let onset = |detection: &str, end: f64| {
+        let contact = format!("law = \"slip\"\ndetection = \"{detection}\"");
+        let mut text = scene([0.0, 0.0, -2.0], 0.0, membrane, &contact);
+        text = text.replace("lower = [-0.1, -0.1, 0.0]", "lower = [-0.1, -0.1, 0.025]");
+        text = text.replace("upper = [0.1, 0.1, 0.1] }", "upper = [0.1, 0.1, 0.125] }");
+        let mut m = model(&text);
+        let mass = m.solid.run.particles.total_mass();
+        let half = m.solid.run.particles.half_size[0][2];
+        let mut first: Option<(f64, f64)> = None;
+        // Before contact: the block's largest departure from −2 m/s; after:
+        // the deepest a particle's lower face reaches below the membrane
+        // under it.
+        let (mut free_error, mut overlap, mut vz_end): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        let mut inner: f64 = 0.0;
+        let mut dt = 0.0;
+        let mut t_prev = 0.0;
+        run_to(&mut m, end, |m| {
+            let p = &m.solid.run.particles;
+            let vz = p.momentum()[2] / mass;
+            if first.is_none() && m.contact.last.contact_nodes > 0 {
+                first = Some((m.time(), m.time() - t_prev));
+            }
+            if first.is_none() {
+                free_error = free_error.max((vz + 2.0).abs());
+                dt = m.time() - t_prev;
+            }
+            t_prev = m.time();
+            let sheet = &m.membranes.meshes[0];
+            for (q, x) in p.x.iter().enumerate() {
+                if let Some(z) = sheet_height(sheet, x[0], x[1]) {
+                    // The particle's current half extent along z.
+                    let lz = half * p.f.get(q)[(2, 2)].abs();
+                    let o = z - (x[2] - lz);
+                    if x[0].abs().max(x[1].abs()) < 0.05 {
+                        inner = inner.max(o);
+                    } else {
+                        overlap = overlap.max(o);
+                    }
+                }
+            }
+            vz_end = vz;
+        });
+        (first, dt, free_error, (inner, overlap), vz_end)
+    };
+    let (approach, ..) = onset("approach", 2e-3);
+    let (gap, dt, free_error, overlap, vz_end) = onset("gap", 0.12);
+    let (t_gap, step) = gap.expect("the block reaches the membrane");
+    eprintln!(
+        "taut membrane: Lian's rule acts at {:?} s, the gap check at {t_gap:.6e} s (free flight \
+         1.25e-2, step {step:.3e}); speed before it departs {free_error:.2e} from 2 m/s; a \
+         particle's face reaches {:.3e} m below the membrane at most within a cell of the \
+         block's edge, {:.3e} m farther in; final v_z {vz_end:.3} m/s",
+        approach.map(|a| a.0),
+        overlap.1,
+        overlap.0
+    );
+    // Lian's rule acts at once, half a cell early.
+    assert!(approach.expect("acts").0 < 1e-3, "{approach:?}");
+    // The gap closes in the step that ends at or after 12.5 ms: the first
+    // step whose predicted gap is ≤ 0.
+    assert!(
+        t_gap >= 1.25e-2 * (1.0 - 1e-9) && t_gap < 1.25e-2 + step + 1e-12,
+        "contact at {t_gap} (step {step}, the last free step {dt})"
+    );
+    assert!(
+        free_error < 1e-12,
+        "the block's speed changed in free flight: {free_error}"
+    );
+    // Away from the block's edge the faces meet: the check lets the gap
+    // close by at most one step's travel (2 m/s × Δt) before the force
+    // acts. Within a cell of the edge the membrane bends round the block's
+    // corner between grid nodes, where the contact cannot see it: there a
+    // face may cross by a fraction of the cell (0.05 m).
+    let (inner, edge) = overlap;
+    assert!(inner < 2.0 * step, "overlap {inner} away from the edge");
+    assert!(edge < 0.25 * 0.05, "overlap {edge} at the edge");
+    assert!(vz_end > 0.5, "not thrown back (v_z = {vz_end})");
+}
+
 #[test]
 fn bad_contact_settings_name_their_key() {
     let cases = [
@@ -203,6 +311,13 @@ fn bad_contact_settings_name_their_key() {
     }
     let e = parse(&scene([0.0; 3], 0.0, "", "law = \"glue\"")).expect_err("unknown law");
     assert!(e.to_string().contains("contact"), "{e}");
+    let e =
+        parse(&scene([0.0; 3], 0.0, "", "detection = \"near\"")).expect_err("unknown detection");
+    eprintln!("{e}");
+    assert!(
+        e.to_string().contains("contact") && e.to_string().contains("gap"),
+        "{e}"
+    );
 }
 
 #[test]

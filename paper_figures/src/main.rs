@@ -797,7 +797,9 @@ fn lian_vibration(quick: bool, out: &Path) -> anyhow::Result<()> {
 /// `verification lian_impact [--quick]` first): the membrane on the held
 /// sphere, its centre and corner z(t) (Fig. 6); the sphere on the clamped
 /// membrane, the membrane centre and the sphere's top z(t) (Figs. 9, 11),
-/// one line per cell size. One PNG per case.
+/// one line per cell size. One PNG per case and contact detection
+/// (`lian_impact_{case}.png`, Lian's; `lian_impact_{case}_gap.png`, the gap
+/// check).
 fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
     let dir = study_results_dir(quick);
     let cases = [
@@ -818,10 +820,14 @@ fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
             ],
         ),
     ];
-    for (case, title, curves) in cases {
+    let detections = [("", ""), ("_gap", ", gap check")];
+    let figures = cases
+        .iter()
+        .flat_map(|c| detections.iter().map(move |d| (c, *d)));
+    for ((case, title, curves), (suffix, tag)) in figures {
         let mut series = Vec::new();
         for h in ["2", "1", "0.5"] {
-            let path = dir.join(format!("lian_impact_{case}_h{h}.csv"));
+            let path = dir.join(format!("lian_impact_{case}{suffix}_h{h}.csv"));
             let Ok(text) = std::fs::read_to_string(&path) else {
                 continue;
             };
@@ -834,7 +840,7 @@ fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
                         .collect()
                 })
                 .collect();
-            for (name, column) in curves {
+            for &(name, column) in curves {
                 let c = head
                     .iter()
                     .position(|x| *x == column)
@@ -848,13 +854,14 @@ fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
         }
         if series.is_empty() {
             bail!(
-                "no lian_impact_{case}_h*.csv in {}; run `verification lian_impact{}` first",
+                "no lian_impact_{case}{suffix}_h*.csv in {}; run `verification lian_impact{}` first",
                 dir.display(),
                 if quick { " --quick" } else { "" }
             );
         }
-        let png = out.join(format!("lian_impact_{case}.png"));
-        plot_xy(&png, title, "t [ms]", "z [mm]", false, false, &series)?;
+        let png = out.join(format!("lian_impact_{case}{suffix}.png"));
+        let title = format!("{title}{tag}");
+        plot_xy(&png, &title, "t [ms]", "z [mm]", false, false, &series)?;
         println!("wrote {}", png.display());
     }
     Ok(())

@@ -65,6 +65,26 @@ pub enum ContactLaw {
     },
 }
 
+/// Where a contact force may act.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum ContactDetection {
+    /// Lian's rule: at every node both bodies reach where they approach
+    /// (Eq. 52). Both bodies' shape functions reach a node up to a cell
+    /// before they touch, so the force starts acting that much early.
+    #[default]
+    Approach,
+    /// Lian's rule and a closing gap: the bodies also have to close, within
+    /// the step, the gap between them measured along the node's normal —
+    /// from the point body's position at the node (its nodes' mass-weighted
+    /// mean, [`GridContact::centre`]) to the MPM body's nearest particle
+    /// surface among the particles the node reaches (each particle's
+    /// centre less its half extent along the normal,
+    /// [`GridContact::surface`]). The gap at the end of the step is
+    /// predicted with the trial velocities:
+    /// `g − Δt (v̄^r − v̄^s)·n ≤ 0`.
+    Gap,
+}
+
 /// The point body as the contact sees it (Lian's FE nodes): positions at
 /// the start of the step, lumped masses, trial velocities `v̄^{n+1/2}`
 /// (Lian Eq. 46) and nodal normals (the sum of the adjoining elements'
@@ -164,6 +184,17 @@ pub struct GridContact<const D: usize> {
     pub touched: Vec<usize>,
     /// Whether a held point reaches the node.
     pub held: Vec<bool>,
+    /// The point body's position at the node, `Σ_K N_I(x_K) m_K x_K / m_I^r`
+    /// (before the mirror folding at walls).
+    pub centre: Vec<SVector<f64, D>>,
+    /// The unit contact normal at a node both bodies reach, from the point
+    /// body into the MPM body ([`Self::measure_gaps`]; zero elsewhere).
+    pub unit_normal: Vec<SVector<f64, D>>,
+    /// The MPM body's nearest surface along the node's normal,
+    /// `min_p (x_p·n − Σ_d |n_d| l_{p,d})` over the particles the node
+    /// reaches (`l_p` a particle's current half extents,
+    /// [`Self::add_surface_point`]).
+    pub surface: Vec<f64>,
     /// Each point's weights and first node from [`Self::map_points`], for
     /// the correction back (Eq. 59) at the same positions.
     weights: Vec<(ParticleWeights<D, 2>, usize)>,
@@ -197,6 +228,9 @@ impl<const D: usize> GridContact<D> {
             force: vec![SVector::zeros(); n],
             touched: Vec::with_capacity(n.min(4096)),
             held: vec![false; n],
+            centre: vec![SVector::zeros(); n],
+            unit_normal: vec![SVector::zeros(); n],
+            surface: vec![f64::INFINITY; n],
             weights: Vec::new(),
             strides: grid.strides(),
         }
@@ -214,6 +248,8 @@ impl<const D: usize> GridContact<D> {
             self.normal[i] = SVector::zeros();
             self.force[i] = SVector::zeros();
             self.held[i] = false;
+            self.centre[i] = SVector::zeros();
+            self.unit_normal[i] = SVector::zeros();
         }
         self.touched.clear();
         self.weights.clear();
@@ -236,8 +272,12 @@ impl<const D: usize> GridContact<D> {
                 self.mass[i] += w * m;
                 self.momentum[i] += p * w;
                 self.normal[i] += n * w;
+                self.centre[i] += body.x[k] * (w * m);
                 self.held[i] |= held;
             });
+        }
+        for &i in &self.touched {
+            self.centre[i] /= self.mass[i];
         }
         self.mirror_at_walls(grid);
         Ok(())
@@ -263,6 +303,74 @@ impl<const D: usize> GridContact<D> {
         }
     }
 
+    /// The unit normal at node `i` if both bodies reach it: the point
+    /// body's mapped normal turned towards the MPM body, against the MPM
+    /// body's outward normal (its mass gradient, Lian Eq. 51).
+    fn oriented_normal(&self, i: usize, s: &MpmNodes<'_, D>) -> Option<SVector<f64, D>> {
+        if s.mass[i] <= s.mass_floor || self.mass[i] <= 0.0 {
+            return None;
+        }
+        let nn = self.normal[i].norm();
+        if nn <= 0.0 {
+            return None;
+        }
+        let n = self.normal[i] / nn;
+        // `Σ m_p ∇N_I(x_p)` points out of the MPM body: n must point the
+        // other way, from r into s.
+        Some(if n.dot(&s.mass_gradient[i]) > 0.0 {
+            -n
+        } else {
+            n
+        })
+    }
+
+    /// Starts the gap measurement of [`ContactDetection::Gap`] (after
+    /// [`Self::map_points`]): the normal of every node both bodies reach,
+    /// and an open gap. Then [`Self::add_surface_point`] for every particle
+    /// and node of its stencil.
+    /// Returns the number of such nodes (none: no particle pass is needed).
+    pub fn measure_gaps(&mut self, s: &MpmNodes<'_, D>) -> usize {
+        let mut shared = 0;
+        for k in 0..self.touched.len() {
+            let i = self.touched[k];
+            let n = self.oriented_normal(i, s);
+            shared += usize::from(n.is_some());
+            self.unit_normal[i] = n.unwrap_or_else(SVector::zeros);
+            self.surface[i] = f64::INFINITY;
+        }
+        shared
+    }
+
+    /// A particle at `x` with half extents `half` reaches node `i`: the MPM
+    /// body's surface there is at most `x·n − Σ_d |n_d| half_d` along the
+    /// node's normal.
+    #[inline]
+    pub fn add_surface_point(&mut self, i: usize, x: &SVector<f64, D>, half: &SVector<f64, D>) {
+        if self.mass[i] <= 0.0 {
+            return;
+        }
+        let n = self.unit_normal[i];
+        if n == SVector::<f64, D>::zeros() {
+            return;
+        }
+        let reach = n
+            .iter()
+            .zip(half.iter())
+            .map(|(a, b)| a.abs() * b)
+            .sum::<f64>();
+        let d = x.dot(&n) - reach;
+        if d < self.surface[i] {
+            self.surface[i] = d;
+        }
+    }
+
+    /// The gap between the bodies along the normal at node `i`
+    /// ([`Self::measure_gaps`] first): the MPM body's surface less the
+    /// point body's position.
+    pub fn gap(&self, i: usize) -> f64 {
+        self.surface[i] - self.centre[i].dot(&self.unit_normal[i])
+    }
+
     /// Steps 4(b)–(d) on the grid: at every node both bodies reach, the
     /// normal is the point body's mapped normal turned towards the MPM
     /// body (against the MPM body's outward normal, its mass gradient); where the bodies
@@ -275,8 +383,16 @@ impl<const D: usize> GridContact<D> {
     /// or, for Coulomb slip, its normal part `f_n = f^r·n` plus its
     /// tangential part capped at `μ |f_n|` (Lian Eqs. 56–58). The MPM body
     /// takes `−f^r` (Eq. 53) in its velocity and acceleration. Separating
-    /// bodies feel nothing.
-    pub fn resolve(&mut self, s: &mut MpmNodes<'_, D>, law: ContactLaw, dt: f64) -> ContactStats {
+    /// bodies feel nothing; with [`ContactDetection::Gap`] (after
+    /// [`Self::measure_gaps`]) neither do bodies that stay apart through
+    /// the step.
+    pub fn resolve(
+        &mut self,
+        s: &mut MpmNodes<'_, D>,
+        law: ContactLaw,
+        detection: ContactDetection,
+        dt: f64,
+    ) -> ContactStats {
         let mut stats = ContactStats::default();
         let mut impulse = SVector::<f64, D>::zeros();
         for &i in &self.touched {
@@ -285,21 +401,20 @@ impl<const D: usize> GridContact<D> {
                 continue;
             }
             stats.shared_nodes += 1;
-            let nn = self.normal[i].norm();
-            if nn <= 0.0 {
+            let Some(n) = self.oriented_normal(i, s) else {
                 continue;
-            }
-            let mut n = self.normal[i] / nn;
-            // `Σ m_p ∇N_I(x_p)` is the MPM body's outward normal at I (Lian
-            // Eq. 51): n must point the other way, from r into s.
-            if n.dot(&s.mass_gradient[i]) > 0.0 {
-                n = -n;
-            }
+            };
             let pr = self.momentum[i];
             let ps = s.velocity[i] * ms;
             // Lian Eq. 52: r moves towards s along n.
             if (pr * ms - ps * mr).dot(&n) <= 0.0 {
                 continue;
+            }
+            if detection == ContactDetection::Gap {
+                let closing = (pr / mr - ps / ms).dot(&n);
+                if self.gap(i) - dt * closing > 0.0 {
+                    continue;
+                }
             }
             // Lian Eq. 55; where a held point reaches the node the point
             // body is a wall (m^r → ∞): the MPM body takes its velocity,

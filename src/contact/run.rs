@@ -17,7 +17,7 @@
 
 use nalgebra::SVector;
 
-use super::{ContactLaw, ContactStats, GridContact, MpmNodes, PointBody};
+use super::{ContactDetection, ContactLaw, ContactStats, GridContact, MpmNodes, PointBody};
 use crate::error::{Error, FailureSite, Result};
 use crate::membrane::element::{MembraneMesh, V3};
 use crate::mpm::{BodyForce, CoupledMpm, UpdateScheme};
@@ -29,6 +29,9 @@ use crate::stepper::SolidRun;
 pub struct MembraneContactStep {
     /// Stick or Coulomb slip.
     pub law: ContactLaw,
+    /// Where the force may act: Lian's approach rule, or that and a closing
+    /// gap.
+    pub detection: ContactDetection,
     /// One set of grid contact buffers per membrane.
     contact: Vec<GridContact<3>>,
     /// Nodal normals of each membrane (area-weighted element normals).
@@ -64,10 +67,16 @@ fn failure(solid: &SolidRun<3>, what: String) -> Error {
 
 impl MembraneContactStep {
     /// Buffers for `solid`'s grid and `meshes`.
-    pub fn new(solid: &SolidRun<3>, meshes: &[MembraneMesh], law: ContactLaw) -> Self {
+    pub fn new(
+        solid: &SolidRun<3>,
+        meshes: &[MembraneMesh],
+        law: ContactLaw,
+        detection: ContactDetection,
+    ) -> Self {
         let n = solid.grid.num_nodes();
         Self {
             law,
+            detection,
             contact: (0..meshes.len())
                 .map(|_| GridContact::new(&solid.grid))
                 .collect(),
@@ -150,17 +159,31 @@ impl MembraneContactStep {
                 return Err(failure(s, what));
             }
             let gs = &mut s.grid_state;
-            let st = self.contact[k].resolve(
-                &mut MpmNodes {
-                    mass: &gs.mass,
-                    velocity: &mut gs.velocity_new,
-                    accel: &mut gs.accel,
-                    mass_gradient: &self.grad,
-                    mass_floor: s.params.mass_floor,
-                },
-                self.law,
-                dt,
-            );
+            let mut nodes = MpmNodes {
+                mass: &gs.mass,
+                velocity: &mut gs.velocity_new,
+                accel: &mut gs.accel,
+                mass_gradient: &self.grad,
+                mass_floor: s.params.mass_floor,
+            };
+            let contact = &mut self.contact[k];
+            if self.detection == ContactDetection::Gap && contact.measure_gaps(&nodes) > 0 {
+                // The particles' current half extents `l0_d |F_dd|` (the
+                // GIMP domain's rule), once per particle.
+                let p = &s.particles;
+                let mut half = (usize::MAX, SVector::<f64, 3>::zeros());
+                mpm.for_each_support(p, &s.scratch, &mut |q, i| {
+                    if half.0 != q {
+                        let f = p.f.get(q);
+                        half = (
+                            q,
+                            SVector::from_fn(|d, _| p.half_size[q][d] * f[(d, d)].abs()),
+                        );
+                    }
+                    contact.add_surface_point(i, &p.x[q], &half.1);
+                });
+            }
+            let st = contact.resolve(&mut nodes, self.law, self.detection, dt);
             // Without a contact force the correction changes nothing.
             let acted = st.contact_nodes > 0;
             if acted {

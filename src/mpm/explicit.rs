@@ -860,6 +860,38 @@ impl<const D: usize> CoupledMpm<'_, D> {
             values
         )
     }
+
+    /// Calls `f(p, i)` for every particle `p` and every node `i` of its
+    /// stencil with a positive weight, at the positions and domains of this
+    /// step's [`Self::p2g`] (call it first), particle by particle on one
+    /// thread. Ghost nodes are visited as they are (not folded).
+    pub fn for_each_support(
+        &self,
+        particles: &Particles<D>,
+        scratch: &StepScratch<D>,
+        f: &mut dyn FnMut(usize, usize),
+    ) {
+        fn run<const D: usize, const S: usize, K: Stencil<S>>(
+            kernel: K,
+            ctx: &Ctx<'_, D>,
+            particles: &Particles<D>,
+            scratch: &StepScratch<D>,
+            f: &mut dyn FnMut(usize, usize),
+        ) {
+            let grid = ctx.grid;
+            let strides = grid.strides();
+            for p in 0..particles.len() {
+                let (pw, base) = weights_at(grid, kernel, &particles.x[p], &scratch.lp, p);
+                pw.for_each(|m, w, _| {
+                    if w > 0.0 {
+                        f(p, base + offset(m, &strides));
+                    }
+                });
+            }
+        }
+        let ctx = self.ctx(None);
+        with_kernel!(self.params.shape, run, &ctx, particles, scratch, f)
+    }
 }
 
 /// A nodal quantity [`CoupledMpm::g2p_add`] interpolates: a scalar or a

@@ -83,6 +83,21 @@ pub struct ContactSpec {
     /// Coulomb friction coefficient μ ≥ 0 (`slip`; 0 = free slip).
     #[serde(default)]
     pub friction: f64,
+    /// Where the force may act: `approach` (Lian Eq. 52 alone, default) or
+    /// `gap` (and the bodies close their measured gap within the step).
+    #[serde(default)]
+    pub detection: ContactDetectionSpec,
+}
+
+/// The contact detection's name in a scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactDetectionSpec {
+    /// Lian's rule: both bodies reach the node and approach.
+    #[default]
+    Approach,
+    /// Lian's rule and a closing gap between particle surface and points.
+    Gap,
 }
 
 /// The contact law's name in a scene.
@@ -104,6 +119,14 @@ impl ContactSpec {
             ContactLawSpec::Slip => crate::contact::ContactLaw::Slip {
                 friction: self.friction,
             },
+        }
+    }
+
+    /// The kernel's detection rule.
+    pub fn detection(&self) -> crate::contact::ContactDetection {
+        match self.detection {
+            ContactDetectionSpec::Approach => crate::contact::ContactDetection::Approach,
+            ContactDetectionSpec::Gap => crate::contact::ContactDetection::Gap,
         }
     }
 }

@@ -239,8 +239,10 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
 /// case), and of each curve of the paper's Figs. 6, 9 and 11 (its largest
 /// difference over time, against the coarser h), the contact's onset against the free-flight time, and the energy
 /// account's largest departure (the contact's and the hourglass losses
-/// booked). Every run's curves go to
-/// `lian_impact_{case}_h{h_mm}.csv` beside the study's JSON.
+/// booked). Each case runs twice: with Lian's detection and with the gap
+/// check (`contact.detection = "gap"`, series marked so). Every run's
+/// curves go to `lian_impact_{case}_h{h_mm}.csv` (the gap check:
+/// `lian_impact_{case}_gap_h{h_mm}.csv`) beside the study's JSON.
 ///
 /// # Errors
 /// A scene or solver error.
@@ -275,19 +277,31 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
          folds across those planes); stick contact; 2 particles per cell and direction; sampled \
          every 10 us. The grid contact acts once the bodies share grid nodes, about a cell \
          before they touch: with the paper's 1 mm gap it acts from the first step at h = 2 and \
-         1 mm, so the curves shift in time between 1 and 0.5 mm."
+         1 mm, so the curves shift in time between 1 and 0.5 mm. The series marked (gap \
+         check) run the same cases with contact.detection = \"gap\": the force acts only once \
+         the gap between the particles' faces and the membrane closes within the step."
             .to_string(),
     ];
-    for (case, hs, onset) in cases {
+    // Lian's detection (the cases' own), then the gap check
+    // (`contact.detection = "gap"`).
+    let detections = [
+        (scene::ContactDetectionSpec::Approach, "", ""),
+        (scene::ContactDetectionSpec::Gap, "_gap", " (gap check)"),
+    ];
+    let runs_of = cases
+        .iter()
+        .flat_map(|c| detections.iter().map(move |d| (c.clone(), *d)));
+    for ((case, hs, onset), (detection, suffix, tag)) in runs_of {
         let base = scene::load(
             &crate::coupled_studies::repo_root().join(format!("cases/lian_{case}.toml")),
         )?;
         let mut runs: Vec<ImpactRun> = Vec::new();
         for &h in &hs {
-            let sc = impact_scene(&base, h)?;
-            let r = run_impact(&sc, 1e-5).with_context(|| format!("{case}, h = {h}"))?;
+            let mut sc = impact_scene(&base, h)?;
+            sc.contact.get_or_insert_with(Default::default).detection = detection;
+            let r = run_impact(&sc, 1e-5).with_context(|| format!("{case}{tag}, h = {h}"))?;
             notes.push(format!(
-                "{case}, h = {} mm: first contact at {:.2} us (free flight {:.2} us), smallest \
+                "{case}{tag}, h = {} mm: first contact at {:.2} us (free flight {:.2} us), smallest \
                  clearance {:.3} mm, energy {:.4e} -> mechanical {:.4e} + hourglass {:.4e} + \
                  contact {:.4e} = {:.4e} (the account's largest departure {:.3} %; largest \
                  rise of the mechanical energy {:.2e}); {} steps, {:.1} s",
@@ -325,7 +339,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                 ));
             }
             std::fs::write(
-                root.join(format!("lian_impact_{case}_h{}.csv", h * 1e3)),
+                root.join(format!("lian_impact_{case}{suffix}_h{}.csv", h * 1e3)),
                 csv,
             )?;
             runs.push(r);
@@ -372,7 +386,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                         .with_extra("value_h_half", f(&w[1]))
                 })
                 .collect();
-            series.push(Series::new(format!("{case}: {name}"), norm, pts));
+            series.push(Series::new(format!("{case}{tag}: {name}"), norm, pts));
         }
         for (name, curve) in curves {
             if case == "membrane_on_sphere" && name == "sphere top z" {
@@ -389,7 +403,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                 })
                 .collect();
             series.push(Series::new(
-                format!("{case}: {name}"),
+                format!("{case}{tag}: {name}"),
                 "max over t of |z(h) - z(h/2)| [m]",
                 pts,
             ));
@@ -404,7 +418,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
             })
             .collect();
         series.push(Series::new(
-            format!("{case}: contact onset"),
+            format!("{case}{tag}: contact onset"),
             "|t_contact - t_free flight| / t_free flight",
             onset_pts,
         ));
@@ -422,7 +436,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
             })
             .collect();
         series.push(Series::new(
-            format!("{case}: energy account"),
+            format!("{case}{tag}: energy account"),
             "max over t of |E(t) - E0| / E0, E = kinetic + stored + hourglass + contact losses",
             account,
         ));

@@ -4,7 +4,7 @@
 //! part is an [`ExplicitSolid`], the membranes a [`MembraneFe`]; this model
 //! steps them together and reports both.
 
-use crate::contact::{ContactLaw, MembraneContactStep};
+use crate::contact::{ContactDetection, ContactLaw, MembraneContactStep};
 use crate::driver::model::{
     Conserved, Counts, Description, DtRequest, FieldSet, Model, StepStats, Violation,
 };
@@ -23,9 +23,14 @@ pub struct MembraneContact {
 }
 
 impl MembraneContact {
-    /// Joins the two parts with the contact `law`.
-    pub fn new(solid: ExplicitSolid<3>, membranes: MembraneFe, law: ContactLaw) -> Self {
-        let contact = MembraneContactStep::new(&solid.run, &membranes.meshes, law);
+    /// Joins the two parts with the contact `law` and `detection`.
+    pub fn new(
+        solid: ExplicitSolid<3>,
+        membranes: MembraneFe,
+        law: ContactLaw,
+        detection: ContactDetection,
+    ) -> Self {
+        let contact = MembraneContactStep::new(&solid.run, &membranes.meshes, law, detection);
         Self {
             solid,
             membranes,
@@ -43,8 +48,8 @@ impl MembraneContact {
         let solid = ExplicitSolid {
             run: crate::scene::build_solid_run::<3>(scene)?,
         };
-        let law = scene.contact.clone().unwrap_or_default().law();
-        Ok(Self::new(solid, fe, law))
+        let spec = scene.contact.clone().unwrap_or_default();
+        Ok(Self::new(solid, fe, spec.law(), spec.detection()))
     }
 }
 
