@@ -126,6 +126,33 @@ pub struct ImpactRun {
 }
 
 impl ImpactRun {
+    /// The sampled curves as CSV with a header: time, the membrane's centre
+    /// and corner z, the sphere's top z and mean v_z, the mechanical
+    /// energy, the hourglass and contact losses and the account.
+    pub fn curves_csv(&self) -> String {
+        let mut csv = String::from(
+            "t [s],membrane_centre_z [m],membrane_corner_z [m],sphere_top_z [m],sphere_vz [m/s],\
+             mechanical [J],hourglass [J],contact [J],total [J]\n",
+        );
+        for k in 0..self.t.len() {
+            let row = [
+                self.t[k],
+                self.membrane_centre_z[k],
+                self.membrane_corner_z[k],
+                self.sphere_top_z[k],
+                self.sphere_vz[k],
+                self.mechanical[k],
+                self.hourglass[k],
+                self.contact[k],
+                self.total[k],
+            ];
+            let row: Vec<String> = row.iter().map(f64::to_string).collect();
+            csv.push_str(&row.join(","));
+            csv.push('\n');
+        }
+        csv
+    }
+
     /// The largest difference of a curve between this run and `other`
     /// over their common samples (same `every`).
     pub fn max_difference(&self, other: &Self, curve: fn(&Self) -> &[f64]) -> f64 {

@@ -320,27 +320,9 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                 r.wall_s
             ));
             eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
-            let mut csv = String::from(
-                "t [s],membrane_centre_z [m],membrane_corner_z [m],sphere_top_z [m],sphere_vz [m/s],\
-                 mechanical [J],hourglass [J],contact [J],total [J]\n",
-            );
-            for k in 0..r.t.len() {
-                csv.push_str(&format!(
-                    "{},{},{},{},{},{},{},{},{}\n",
-                    r.t[k],
-                    r.membrane_centre_z[k],
-                    r.membrane_corner_z[k],
-                    r.sphere_top_z[k],
-                    r.sphere_vz[k],
-                    r.mechanical[k],
-                    r.hourglass[k],
-                    r.contact[k],
-                    r.total[k]
-                ));
-            }
             std::fs::write(
                 root.join(format!("lian_impact_{case}{suffix}_h{}.csv", h * 1e3)),
-                csv,
+                r.curves_csv(),
             )?;
             runs.push(r);
         }

@@ -1,7 +1,7 @@
 //! Lian Sec. 7.1's membrane–sphere impacts (issue 17) at one cell size and
 //! contact detection: the contact's onset, the clearance, the peak
 //! deflection, the rebound and the energy account, and with `CURVES=1` the
-//! sampled curves.
+//! sampled curves (CSV).
 //!
 //! `cargo run --release -p probes --bin lian_impact_probe -- CASE H END [approach|gap] [EVERY]`
 //!
@@ -29,21 +29,7 @@ fn main() -> anyhow::Result<()> {
     spec.detection = detection;
     let r = run_impact(&sc, every)?;
     if std::env::var_os("CURVES").is_some() {
-        println!("t centre_z corner_z sphere_top_z sphere_vz mechanical hourglass contact total");
-        for k in 0..r.t.len() {
-            println!(
-                "{:.4e} {:.6e} {:.6e} {:.6e} {:.5e} {:.5e} {:.5e} {:.5e} {:.5e}",
-                r.t[k],
-                r.membrane_centre_z[k],
-                r.membrane_corner_z[k],
-                r.sphere_top_z[k],
-                r.sphere_vz[k],
-                r.mechanical[k],
-                r.hourglass[k],
-                r.contact[k],
-                r.total[k]
-            );
-        }
+        print!("{}", r.curves_csv());
     }
     let lowest =
         r.membrane_centre_z
