@@ -331,6 +331,7 @@ fn gas_expanding_in_a_membrane_stays_inside_and_rounds_it() {
         end: 0.5,
         every: 0.05,
         law: mpmice::contact::ContactLaw::Stick,
+        detection: mpmice::contact::ContactDetection::Approach,
         pic_fraction: 0.0,
     };
     let dir = std::env::temp_dir().join("mpmice_test_lian_gas");
@@ -377,6 +378,7 @@ fn a_pic_share_brings_the_expanded_gas_to_rest_round_and_keeps_its_energy_as_hea
             end: 2.0,
             every: 0.05,
             law: mpmice::contact::ContactLaw::Stick,
+            detection: mpmice::contact::ContactDetection::Approach,
             pic_fraction,
         };
         let dir = std::env::temp_dir().join(format!("mpmice_test_lian_pic_{pic_fraction}"));

@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::contact::ContactLaw;
+use crate::contact::{ContactDetection, ContactLaw};
 use crate::driver::model::{DtRequest, Model};
 use crate::driver::models::MembraneContact;
 use crate::error::Error;
@@ -29,6 +29,9 @@ pub struct GasExpansion {
     pub every: f64,
     /// The contact law between gas and membrane.
     pub law: ContactLaw,
+    /// Where the contact force may act (Lian's approach rule or the gap
+    /// check).
+    pub detection: ContactDetection,
     /// PIC share of the gas points' velocity update (`mpm.pic_fraction`;
     /// 0: FLIP).
     pub pic_fraction: f64,
@@ -108,6 +111,7 @@ impl GasExpansion {
             end,
             every: 0.01,
             law: ContactLaw::Stick,
+            detection: ContactDetection::Approach,
             pic_fraction: 0.0,
         }
     }
@@ -160,6 +164,7 @@ fix = [
 ]
 [contact]
 law = "{law}"
+detection = "{detection}"
 "#,
             end = self.end,
             ppc = self.per_cell,
@@ -168,6 +173,10 @@ law = "{law}"
             law = match self.law {
                 ContactLaw::Stick => "stick",
                 ContactLaw::Slip { .. } => "slip",
+            },
+            detection = match self.detection {
+                ContactDetection::Approach => "approach",
+                ContactDetection::Gap => "gap",
             },
         )
     }
@@ -181,7 +190,7 @@ law = "{law}"
         std::fs::write(&mesh, quarter_mesh(self.element, self.cell))
             .map_err(|e| Error::io(&mesh, e))?;
         let scene = parse(&self.scene(&mesh))?;
-        // The scene text carries `self.law`.
+        // The scene text carries `self.law` and `self.detection`.
         let mut m = MembraneContact::from_scene(&scene)?;
         let start = Instant::now();
         let mut out = GasExpansionRun::default();

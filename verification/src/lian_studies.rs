@@ -172,6 +172,7 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
                 end,
                 every: 0.01,
                 law,
+                detection: mpmice::contact::ContactDetection::Approach,
                 pic_fraction,
             };
             let r = case.run(&dir).with_context(|| format!("{name}, h = {h}"))?;
