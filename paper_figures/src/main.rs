@@ -75,6 +75,11 @@ const FIGURES: &[(&str, &str, Figure)] = &[
         lian_impacts,
     ),
     (
+        "lian_fig12",
+        "water drop on a soft membrane (Lian 7.2): membrane centre and the drop's top z(t) (Fig. 12) at every cell size of the lian_water study, with Lian's detection and the gap check",
+        lian_water,
+    ),
+    (
         "lian_vibration",
         "pre-tensioned square membrane (Lian 4 elements): centre deflection vs time against exact mode (1,1)",
         lian_vibration,
@@ -801,7 +806,6 @@ fn lian_vibration(quick: bool, out: &Path) -> anyhow::Result<()> {
 /// (`lian_impact_{case}.png`, Lian's; `lian_impact_{case}_gap.png`, the gap
 /// check).
 fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
-    let dir = study_results_dir(quick);
     let cases = [
         (
             "membrane_on_sphere",
@@ -820,6 +824,38 @@ fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
             ],
         ),
     ];
+    impact_curves(quick, out, "lian_impact", &cases)
+}
+
+/// Lian Sec. 7.2's water drop from the `lian_water` study's curves (run
+/// `verification lian_water [--quick]` first): the membrane centre and the
+/// drop's top z(t) (Fig. 12), one line per cell size; one PNG per contact
+/// detection (`lian_impact_water_sphere.png`, `…_gap.png`).
+fn lian_water(quick: bool, out: &Path) -> anyhow::Result<()> {
+    let cases = [(
+        "water_sphere",
+        "Lian 7.2, water drop on a soft clamped membrane (Fig. 12)",
+        [
+            ("membrane centre", "membrane_centre_z [m]"),
+            ("drop top", "sphere_top_z [m]"),
+        ],
+    )];
+    impact_curves(quick, out, "lian_water", &cases)
+}
+
+/// A case's name, its figure's title and two (label, CSV column) curves.
+type ImpactFigure<'a> = (&'a str, &'a str, [(&'a str, &'a str); 2]);
+
+/// The z(t) curves of Lian's impact cases from `study`'s CSVs
+/// (`lian_impact_{case}[_gap]_h{h}.csv`), one line per cell size, one PNG
+/// per case and detection.
+fn impact_curves(
+    quick: bool,
+    out: &Path,
+    study: &str,
+    cases: &[ImpactFigure<'_>],
+) -> anyhow::Result<()> {
+    let dir = study_results_dir(quick);
     let detections = [("", ""), ("_gap", ", gap check")];
     let figures = cases
         .iter()
@@ -854,7 +890,7 @@ fn lian_impacts(quick: bool, out: &Path) -> anyhow::Result<()> {
         }
         if series.is_empty() {
             bail!(
-                "no lian_impact_{case}{suffix}_h*.csv in {}; run `verification lian_impact{}` first",
+                "no lian_impact_{case}{suffix}_h*.csv in {}; run `verification {study}{}` first",
                 dir.display(),
                 if quick { " --quick" } else { "" }
             );

@@ -19,9 +19,11 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
+use crate::contact::node_normals;
 use crate::driver::model::{DtRequest, Model};
 use crate::driver::models::MembraneContact;
 use crate::error::{Error, SceneError};
+use crate::membrane::element::V3;
 use crate::scene::{Geometry, MeshSpec, Scene};
 
 /// A case refined to the cell size `h`: the grid's cells set to
@@ -119,6 +121,12 @@ pub struct ImpactRun {
     /// at the membrane's node nearest the particle in plan (negative: the
     /// particle passed through).
     pub min_clearance: f64,
+    /// Smallest clearance along the membrane's normal: a particle's
+    /// distance from the membrane node nearest to it (in space, now), along
+    /// that node's unit normal, on the side the sphere started on. Unlike
+    /// [`Self::min_clearance`] it follows a membrane that moves in plan or
+    /// slopes (the water drop's bowl, many cells deep).
+    pub min_normal_clearance: f64,
     /// Steps taken.
     pub steps: u64,
     /// Wall time \[s\].
@@ -227,10 +235,15 @@ pub fn run_impact(sc: &Scene, every: f64) -> Result<ImpactRun, Error> {
         .unwrap_or(0);
     // Which side of the membrane the sphere starts on.
     let side = (sheet.x[centre_node][2] - centre[2]).signum();
+    let mut normals = vec![V3::zeros(); sheet.num_nodes()];
+    node_normals(sheet, &mut normals);
+    let to_sphere = V3::new(centre[0], centre[1], centre[2]) - sheet.x[centre_node];
+    let normal_side = to_sphere.dot(&normals[centre_node]).signum();
     let start = Instant::now();
     let mut out = ImpactRun {
         h,
         min_clearance: f64::INFINITY,
+        min_normal_clearance: f64::INFINITY,
         ..Default::default()
     };
     let mut row = Vec::new();
@@ -245,6 +258,8 @@ pub fn run_impact(sc: &Scene, every: f64) -> Result<ImpactRun, Error> {
                 [centre_node, corner_node, top_particle],
             );
             clearance(&m, &plan, &lattice, side, &mut out.min_clearance);
+            node_normals(&m.membranes.meshes[0], &mut normals);
+            normal_clearance(&m, &normals, normal_side, &mut out.min_normal_clearance);
             next += every;
         }
         if m.time() >= end * (1.0 - 1e-12) {
@@ -290,6 +305,23 @@ fn sample(m: &MembraneContact, out: &mut ImpactRun, row: &mut Vec<f64>, at: [usi
 
 /// Updates `min` with the smallest clearance of the sphere's particles
 /// from the membrane node nearest each in plan.
+/// [`ImpactRun::min_normal_clearance`] now: `min_p side (x_p − x_k)·n̂_k`, `k`
+/// the node nearest to particle `p`.
+fn normal_clearance(m: &MembraneContact, normals: &[V3], side: f64, min: &mut f64) {
+    let sheet = &m.membranes.meshes[0];
+    for x in &m.solid.run.particles.x {
+        let nearest = (0..sheet.num_nodes()).min_by(|&a, &b| {
+            (sheet.x[a] - x)
+                .norm_squared()
+                .total_cmp(&(sheet.x[b] - x).norm_squared())
+        });
+        if let Some(k) = nearest {
+            let n = normals[k].normalize();
+            *min = min.min(side * (x - sheet.x[k]).dot(&n));
+        }
+    }
+}
+
 fn clearance(
     m: &MembraneContact,
     plan: &HashMap<(i64, i64), usize>,

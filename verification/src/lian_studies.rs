@@ -229,78 +229,64 @@ pub fn lian_gas_expansion(quick: bool) -> Result<StudyResult> {
     })
 }
 
-/// `lian_impact`: Lian Sec. 7.1's membrane–sphere impacts
-/// (`cases/lian_sphere_on_membrane.toml`, a quarter model, and
-/// `cases/lian_membrane_on_sphere.toml`, the whole model) under refinement
-/// of the cell and element size h with 2 particles per cell and direction. The sphere on
-/// the clamped membrane at h = 2, 1, 0.5 mm (quick: 2) to 1.2 ms, the
-/// membrane on the held sphere at h = 2, 1 mm (quick: 2) to 0.6 ms. Series:
-/// the change between successive sizes of the peak deflection and the
-/// rebound speed (sphere case) and of the centre's height at rest (membrane
-/// case), and of each curve of the paper's Figs. 6, 9 and 11 (its largest
-/// difference over time, against the coarser h), the contact's onset against the free-flight time, and the energy
-/// account's largest departure (the contact's and the hourglass losses
-/// booked). Each case runs twice: with Lian's detection and with the gap
-/// check (`contact.detection = "gap"`, series marked so). Every run's
-/// curves go to `lian_impact_{case}_h{h_mm}.csv` (the gap check:
-/// `lian_impact_{case}_gap_h{h_mm}.csv`) beside the study's JSON.
-///
-/// # Errors
-/// A scene or solver error.
-pub fn lian_impact(quick: bool) -> Result<StudyResult> {
+/// A curve of an [`mpmice::diagnostics::lian_impact::ImpactRun`].
+type Curve = fn(&mpmice::diagnostics::lian_impact::ImpactRun) -> &[f64];
+/// One number of a run, compared between successive sizes.
+type Measure = fn(&mpmice::diagnostics::lian_impact::ImpactRun) -> f64;
+
+/// One of Lian's impact cases (`cases/lian_{case}.toml`, to its own end
+/// time), run at each size `hs` with Lian's detection and with the gap
+/// check: its measures and curves compared between successive sizes, the
+/// contact's onset against the free flight, the energy account.
+struct ImpactCase {
+    case: &'static str,
+    hs: Vec<f64>,
+    /// Free flight over the initial gap [s].
+    onset: f64,
+    measures: Vec<(&'static str, &'static str, Measure)>,
+    curves: Vec<(&'static str, Curve)>,
+    /// The energy account's norm (its departure is measured against the
+    /// initial kinetic energy).
+    account_norm: &'static str,
+    /// The membrane deflects by many cells: the notes report the MPM body's
+    /// mass over the samples and the clearance along the membrane's normals
+    /// ([`mpmice::diagnostics::lian_impact::ImpactRun::min_normal_clearance`];
+    /// the plan clearance assumes a membrane that stays nearly flat).
+    large_deflection: bool,
+}
+
+/// Runs `c` with both detections, adding its series and notes and writing
+/// each run's curves to `lian_impact_{case}[_gap]_h{h_mm}.csv` in `root`.
+fn impact_series(
+    root: &std::path::Path,
+    c: &ImpactCase,
+    series: &mut Vec<Series>,
+    notes: &mut Vec<String>,
+) -> Result<()> {
     use mpmice::diagnostics::lian_impact::{impact_scene, run_impact, ImpactRun};
     use mpmice::scene;
-    let root = crate::plot_dir(quick);
-    std::fs::create_dir_all(&root)?;
-    let cases = [
-        (
-            "sphere_on_membrane",
-            if quick {
-                vec![2e-3]
-            } else {
-                vec![2e-3, 1e-3, 5e-4]
-            },
-            // Free flight over the 1 mm gap at 10 m/s.
-            1e-3 / 10.0,
-        ),
-        (
-            "membrane_on_sphere",
-            if quick { vec![2e-3] } else { vec![2e-3, 1e-3] },
-            // Over the 1 mm gap at 50 m/s.
-            1e-3 / 50.0,
-        ),
-    ];
-    let mut series = Vec::new();
-    let mut notes = vec![
-        "No reference curve exists here (the paper's is LS-DYNA's): a curve's error at h is its \
-         largest difference over time from the run at h/2. The sphere case is a quarter model \
-         (symmetry planes x = 0, y = 0), the membrane case the whole model (its wrinkling edge \
-         folds across those planes); stick contact; 2 particles per cell and direction; sampled \
-         every 10 us. The grid contact acts once the bodies share grid nodes, about a cell \
-         before they touch: with the paper's 1 mm gap it acts from the first step at h = 2 and \
-         1 mm, so the curves shift in time between 1 and 0.5 mm. The series marked (gap \
-         check) run the same cases with contact.detection = \"gap\": the force acts only once \
-         the gap between the particles' faces and the membrane closes within the step."
-            .to_string(),
-    ];
+    let (case, onset) = (c.case, c.onset);
+    let base =
+        scene::load(&crate::coupled_studies::repo_root().join(format!("cases/lian_{case}.toml")))?;
     // Lian's detection (the cases' own), then the gap check
     // (`contact.detection = "gap"`).
     let detections = [
         (scene::ContactDetectionSpec::Approach, "", ""),
         (scene::ContactDetectionSpec::Gap, "_gap", " (gap check)"),
     ];
-    let runs_of = cases
-        .iter()
-        .flat_map(|c| detections.iter().map(move |d| (c.clone(), *d)));
-    for ((case, hs, onset), (detection, suffix, tag)) in runs_of {
-        let base = scene::load(
-            &crate::coupled_studies::repo_root().join(format!("cases/lian_{case}.toml")),
-        )?;
+    for (detection, suffix, tag) in detections {
         let mut runs: Vec<ImpactRun> = Vec::new();
-        for &h in &hs {
+        for &h in &c.hs {
             let mut sc = impact_scene(&base, h)?;
             sc.contact.get_or_insert_with(Default::default).detection = detection;
             let r = run_impact(&sc, 1e-5).with_context(|| format!("{case}{tag}, h = {h}"))?;
+            let m0 = r.sphere_mass.first().copied().unwrap_or(f64::NAN);
+            let mass_change = r
+                .sphere_mass
+                .iter()
+                .map(|m| (m - m0).abs())
+                .fold(0.0, f64::max)
+                / m0;
             notes.push(format!(
                 "{case}{tag}, h = {} mm: first contact at {:.2} us (free flight {:.2} us), smallest \
                  clearance {:.3} mm, energy {:.4e} -> mechanical {:.4e} + hourglass {:.4e} + \
@@ -320,6 +306,17 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                 r.steps,
                 r.wall_s
             ));
+            if c.large_deflection {
+                notes.push(format!(
+                    "{case}{tag}, h = {} mm: the MPM body's mass departs at most \
+                     {mass_change:.1e} (relative) from its initial value over the samples; the \
+                     smallest clearance along the membrane's normals {:.3} mm (the plan clearance \
+                     above takes the membrane node under a particle's initial plan place and is \
+                     not valid once the membrane is many cells deep)",
+                    h * 1e3,
+                    r.min_normal_clearance * 1e3
+                ));
+            }
             eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
             std::fs::write(
                 root.join(format!("lian_impact_{case}{suffix}_h{}.csv", h * 1e3)),
@@ -327,39 +324,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
             )?;
             runs.push(r);
         }
-        type Curve = fn(&ImpactRun) -> &[f64];
-        let curves: [(&str, Curve); 3] = [
-            ("membrane centre z", |r| &r.membrane_centre_z),
-            ("membrane corner z", |r| &r.membrane_corner_z),
-            ("sphere top z", |r| &r.sphere_top_z),
-        ];
-        // One number per run, compared between successive sizes: the
-        // membrane centre's lowest point (the sphere case's peak
-        // deflection), the sphere's speed at the end (its rebound), the
-        // membrane centre's height at the end (where the draped membrane
-        // rests on the sphere).
-        type Measure = fn(&ImpactRun) -> f64;
-        let lowest: Measure = |r| {
-            r.membrane_centre_z
-                .iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min)
-        };
-        let end_vz: Measure = |r| r.sphere_vz.last().copied().unwrap_or(f64::NAN);
-        let end_z: Measure = |r| r.membrane_centre_z.last().copied().unwrap_or(f64::NAN);
-        let measures: Vec<(&str, &str, Measure)> = if case == "sphere_on_membrane" {
-            vec![
-                ("peak deflection", "|min z_c(h) - min z_c(h/2)| [m]", lowest),
-                (
-                    "rebound speed",
-                    "|v_z(end, h) - v_z(end, h/2)| [m/s]",
-                    end_vz,
-                ),
-            ]
-        } else {
-            vec![("centre at rest", "|z_c(end, h) - z_c(end, h/2)| [m]", end_z)]
-        };
-        for (name, norm, f) in measures {
+        for &(name, norm, f) in &c.measures {
             let pts = runs
                 .windows(2)
                 .map(|w| {
@@ -371,13 +336,7 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
                 .collect();
             series.push(Series::new(format!("{case}{tag}: {name}"), norm, pts));
         }
-        for (name, curve) in curves {
-            if case == "membrane_on_sphere" && name == "sphere top z" {
-                continue; // the held sphere barely moves
-            }
-            if case == "sphere_on_membrane" && name == "membrane corner z" {
-                continue; // the clamped corner does not move
-            }
+        for &(name, curve) in &c.curves {
             let pts = runs
                 .windows(2)
                 .map(|w| {
@@ -409,23 +368,202 @@ pub fn lian_impact(quick: bool) -> Result<StudyResult> {
             .iter()
             .map(|r| {
                 let ups = r.steps as f64 / r.wall_s.max(1e-12);
-                Point::new(r.h, r.energy_residual(), r.wall_s, ups)
+                let p = Point::new(r.h, r.energy_residual(), r.wall_s, ups)
                     .with_extra(
                         "contact_dissipated_j",
                         r.contact.last().copied().unwrap_or(0.0),
                     )
                     .with_extra("hourglass_j", r.hourglass.last().copied().unwrap_or(0.0))
-                    .with_extra("min_clearance_m", r.min_clearance)
+                    .with_extra("min_clearance_m", r.min_clearance);
+                if c.large_deflection {
+                    p.with_extra("min_normal_clearance_m", r.min_normal_clearance)
+                } else {
+                    p
+                }
             })
             .collect();
         series.push(Series::new(
             format!("{case}{tag}: energy account"),
-            "max over t of |E(t) - E0| / E0, E = kinetic + stored + hourglass + contact losses",
+            c.account_norm,
             account,
         ));
     }
+    Ok(())
+}
+
+/// The solid cases' account norm (their initial energy is kinetic).
+const SOLID_ACCOUNT: &str =
+    "max over t of |E(t) - E0| / E0, E = kinetic + stored + hourglass + contact losses";
+
+/// The membrane centre's lowest point.
+fn lowest_centre(r: &mpmice::diagnostics::lian_impact::ImpactRun) -> f64 {
+    r.membrane_centre_z
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The MPM body's mean v_z at the end.
+fn end_vz(r: &mpmice::diagnostics::lian_impact::ImpactRun) -> f64 {
+    r.sphere_vz.last().copied().unwrap_or(f64::NAN)
+}
+
+/// The membrane centre's z at the end.
+fn end_centre(r: &mpmice::diagnostics::lian_impact::ImpactRun) -> f64 {
+    r.membrane_centre_z.last().copied().unwrap_or(f64::NAN)
+}
+
+/// `lian_impact`: Lian Sec. 7.1's membrane–sphere impacts
+/// (`cases/lian_sphere_on_membrane.toml`, a quarter model, and
+/// `cases/lian_membrane_on_sphere.toml`, the whole model) under refinement
+/// of the cell and element size h with 2 particles per cell and direction. The sphere on
+/// the clamped membrane at h = 2, 1, 0.5 mm (quick: 2) to 1.2 ms, the
+/// membrane on the held sphere at h = 2, 1 mm (quick: 2) to 0.6 ms. Series:
+/// the change between successive sizes of the peak deflection and the
+/// rebound speed (sphere case) and of the centre's height at rest (membrane
+/// case), and of each curve of the paper's Figs. 6, 9 and 11 (its largest
+/// difference over time, against the coarser h), the contact's onset against the free-flight time, and the energy
+/// account's largest departure (the contact's and the hourglass losses
+/// booked). Each case runs twice: with Lian's detection and with the gap
+/// check (`contact.detection = "gap"`, series marked so). Every run's
+/// curves go to `lian_impact_{case}_h{h_mm}.csv` (the gap check:
+/// `lian_impact_{case}_gap_h{h_mm}.csv`) beside the study's JSON.
+///
+/// # Errors
+/// A scene or solver error.
+pub fn lian_impact(quick: bool) -> Result<StudyResult> {
+    let root = crate::plot_dir(quick);
+    std::fs::create_dir_all(&root)?;
+    let cases = [
+        ImpactCase {
+            case: "sphere_on_membrane",
+            hs: if quick {
+                vec![2e-3]
+            } else {
+                vec![2e-3, 1e-3, 5e-4]
+            },
+            // Free flight over the 1 mm gap at 10 m/s.
+            onset: 1e-3 / 10.0,
+            measures: vec![
+                (
+                    "peak deflection",
+                    "|min z_c(h) - min z_c(h/2)| [m]",
+                    lowest_centre,
+                ),
+                (
+                    "rebound speed",
+                    "|v_z(end, h) - v_z(end, h/2)| [m/s]",
+                    end_vz,
+                ),
+            ],
+            // The clamped corner does not move.
+            curves: vec![
+                ("membrane centre z", |r| &r.membrane_centre_z),
+                ("sphere top z", |r| &r.sphere_top_z),
+            ],
+            account_norm: SOLID_ACCOUNT,
+            large_deflection: false,
+        },
+        ImpactCase {
+            case: "membrane_on_sphere",
+            hs: if quick { vec![2e-3] } else { vec![2e-3, 1e-3] },
+            // Over the 1 mm gap at 50 m/s.
+            onset: 1e-3 / 50.0,
+            measures: vec![(
+                "centre at rest",
+                "|z_c(end, h) - z_c(end, h/2)| [m]",
+                end_centre,
+            )],
+            // The held sphere barely moves.
+            curves: vec![
+                ("membrane centre z", |r| &r.membrane_centre_z),
+                ("membrane corner z", |r| &r.membrane_corner_z),
+            ],
+            account_norm: SOLID_ACCOUNT,
+            large_deflection: false,
+        },
+    ];
+    let mut series = Vec::new();
+    let mut notes = vec![
+        "No reference curve exists here (the paper's is LS-DYNA's): a curve's error at h is its \
+         largest difference over time from the run at h/2. The sphere case is a quarter model \
+         (symmetry planes x = 0, y = 0), the membrane case the whole model (its wrinkling edge \
+         folds across those planes); stick contact; 2 particles per cell and direction; sampled \
+         every 10 us. The grid contact acts once the bodies share grid nodes, about a cell \
+         before they touch: with the paper's 1 mm gap it acts from the first step at h = 2 and \
+         1 mm, so the curves shift in time between 1 and 0.5 mm. The series marked (gap \
+         check) run the same cases with contact.detection = \"gap\": the force acts only once \
+         the gap between the particles' faces and the membrane closes within the step."
+            .to_string(),
+    ];
+    for c in &cases {
+        impact_series(&root, c, &mut series, &mut notes)?;
+    }
     Ok(StudyResult {
         study: "lian_impact".into(),
+        h_axis: "cell and element size h [m]".into(),
+        error_axis: "change under refinement / relative".into(),
+        series,
+        notes,
+    })
+}
+
+/// `lian_water`: Lian Sec. 7.2's water drop (`cases/lian_water_sphere.toml`,
+/// a quarter model: gas points with Lian's Mie–Grüneisen EOS, pressure
+/// floored at 0, falling at 10 m/s on the soft clamped membrane) at h = 2,
+/// 1 mm (quick: 2) to 2 ms, with Lian's detection and with the gap check.
+/// Series: the change between successive sizes of the membrane centre's
+/// and the drop's v_z at the end and of the Fig. 12 curves (membrane centre
+/// and the drop's top z(t)), the contact's onset, the energy account
+/// (against the drop's initial kinetic energy). The drop's mass and the
+/// smallest clearance are in the notes. Curves go to
+/// `lian_impact_water_sphere[_gap]_h{h_mm}.csv` beside the study's JSON.
+///
+/// # Errors
+/// A scene or solver error.
+pub fn lian_water(quick: bool) -> Result<StudyResult> {
+    let root = crate::plot_dir(quick);
+    std::fs::create_dir_all(&root)?;
+    let case = ImpactCase {
+        case: "water_sphere",
+        hs: if quick { vec![2e-3] } else { vec![2e-3, 1e-3] },
+        // The drop's lowest point 0.5 mm above the membrane at 10 m/s (its
+        // discrete face: 1 mm at h = 2 mm, 0.5 mm at 1 mm).
+        onset: 0.5e-3 / 10.0,
+        measures: vec![
+            (
+                "membrane centre at the end",
+                "|z_c(end, h) - z_c(end, h/2)| [m]",
+                end_centre,
+            ),
+            (
+                "drop speed at the end",
+                "|v_z(end, h) - v_z(end, h/2)| [m/s]",
+                end_vz,
+            ),
+        ],
+        curves: vec![
+            ("membrane centre z", |r| &r.membrane_centre_z),
+            ("drop top z", |r| &r.sphere_top_z),
+        ],
+        account_norm: "max over t of |E(t) - E0| / KE0, KE0 the drop's initial kinetic energy, \
+                       E = kinetic + internal + membrane stored + hourglass + contact losses",
+        large_deflection: true,
+    };
+    let mut series = Vec::new();
+    let mut notes = vec![
+        "Lian Sec. 7.2, quarter model: water r = 4.5 mm at 10 m/s, 0.5 mm above a clamped \
+         50 x 50 x 0.1 mm membrane (E = 60 kPa, rho = 750); gas points with Lian's \
+         Mie-Grueneisen EOS (Table 1), pressure floored at 0 (Eq. 66), no viscosity, no air; \
+         stick contact; 2 particles per cell and direction; sampled every 10 us. The contact \
+         onset is measured against the exact sphere's 50 us; the points' lowest faces start 1 mm \
+         above the membrane at h = 2 mm and 0.5 mm at 1 mm (100 and 50 us). The paper's \
+         break-up after 0.6 ms is not seen to 2 ms."
+            .to_string(),
+    ];
+    impact_series(&root, &case, &mut series, &mut notes)?;
+    Ok(StudyResult {
+        study: "lian_water".into(),
         h_axis: "cell and element size h [m]".into(),
         error_axis: "change under refinement / relative".into(),
         series,

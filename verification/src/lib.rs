@@ -202,6 +202,11 @@ pub const STUDIES: &[Study] = &[
         lian_studies::lian_impact,
     ),
     (
+        "lian_water",
+        "Lian 7.2 water drop (gas points, Mie-Grueneisen, p >= 0) on a soft clamped membrane: centre and drop top z(t) vs h, both contact detections, energy account, mass",
+        lian_studies::lian_water,
+    ),
+    (
         "ice_sod",
         "Sod shock tube, explicit ICE, L1(rho) vs exact Riemann, 1st/2nd order advection",
         ice_studies::ice_sod,

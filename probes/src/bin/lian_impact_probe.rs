@@ -41,12 +41,13 @@ fn main() -> anyhow::Result<()> {
                 |a, (k, z)| if z < a.1 { (k, z) } else { a },
             );
     println!(
-        "{case} h = {} mm, {detection:?}: first contact {:.2} us, smallest clearance {:.3} mm, \
+        "{case} h = {} mm, {detection:?}: first contact {:.2} us, smallest clearance {:.3} mm (along the normals {:.3} mm), \
          centre lowest {:.5} mm at {:.3} ms, centre at end {:.5} mm, sphere v_z at end {:.4} m/s, \
          contact loss {:.4e} J, account's largest departure {:.3} %, {} steps, {:.1} s",
         h * 1e3,
         r.first_contact.unwrap_or(f64::NAN) * 1e6,
         r.min_clearance * 1e3,
+        r.min_normal_clearance * 1e3,
         lowest.1 * 1e3,
         r.t.get(lowest.0).copied().unwrap_or(f64::NAN) * 1e3,
         r.membrane_centre_z.last().copied().unwrap_or(f64::NAN) * 1e3,
