@@ -15,6 +15,8 @@
 //! 5. G2P: particle velocities and positions (Eq. 65, Eq. 19).
 //! 6. Membrane positions (Eq. 47) and element stresses.
 
+use std::time::Instant;
+
 use nalgebra::SVector;
 
 use super::{ContactDetection, ContactLaw, ContactStats, GridContact, MpmNodes, PointBody};
@@ -49,6 +51,9 @@ pub struct MembraneContactStep {
     particle_kick: Vec<SVector<f64, 3>>,
     /// What the contact did over the run, all membranes together.
     pub totals: ContactStats,
+    /// Wall time of the step's parts outside the MPM body's own phases
+    /// ([`SolidRun::phase_times`]), accumulated over the run.
+    pub times: ContactTimes,
     /// The last step's.
     pub last: ContactStats,
 }
@@ -96,6 +101,7 @@ impl MembraneContactStep {
                 .collect(),
             particle_kick: Vec::new(),
             totals: ContactStats::default(),
+            times: ContactTimes::default(),
             last: ContactStats::default(),
         }
     }
@@ -132,7 +138,14 @@ impl MembraneContactStep {
         };
         // Steps 1–2: the MPM trial solution.
         mpm.p2g(&s.particles, &mut s.grid_state, &mut s.scratch)?;
+        let mut clock = Instant::now();
+        let mut lap = |acc: &mut f64| {
+            let now = Instant::now();
+            *acc += (now - clock).as_secs_f64();
+            clock = now;
+        };
         mpm.mass_gradient(&s.particles, &s.scratch, &mut self.grad);
+        lap(&mut self.times.contact_s);
         mpm.solve(
             &mut s.particles,
             &mut s.grid_state,
@@ -141,10 +154,12 @@ impl MembraneContactStep {
             &[],
         )?;
         let mut step_stats = ContactStats::default();
+        lap(&mut 0.0);
         for (k, mesh) in meshes.iter_mut().enumerate() {
             // Step 3: the membrane's trial solution.
             mesh.compute_forces(dt);
             mesh.trial_velocities(dt);
+            lap(&mut self.times.membrane_s);
             node_normals(mesh, &mut self.normals[k]);
             // Step 4: contact.
             let body = PointBody {
@@ -203,6 +218,7 @@ impl MembraneContactStep {
                 st.dissipated -= mesh.correction_work(&self.trial[k]);
             }
             step_stats.add(&st);
+            lap(&mut self.times.contact_s);
         }
         s.grid.mirror_ghosts(&mut s.grid_state.velocity_new);
         s.grid.mirror_ghosts(&mut s.grid_state.accel);
@@ -219,6 +235,7 @@ impl MembraneContactStep {
                 .sum::<f64>()
         };
         let mut particle_work = 0.0;
+        lap(&mut self.times.contact_s);
         if touched {
             s.grid.mirror_ghosts(&mut self.kick);
             self.particle_kick.clear();
@@ -232,13 +249,16 @@ impl MembraneContactStep {
             );
             particle_work += 0.5 * work(&s.particles, &self.particle_kick);
         }
+        lap(&mut self.times.loss_s);
         // Step 5: G2P.
         mpm.g2p(&mut s.particles, &s.grid_state, &mut s.scratch, &[])?;
+        lap(&mut 0.0);
         if touched {
             particle_work += 0.5 * work(&s.particles, &self.particle_kick);
             step_stats.dissipated -= particle_work;
             self.kick.iter_mut().for_each(|k| *k = SVector::zeros());
         }
+        lap(&mut self.times.loss_s);
         // Step 6: the membranes move and update their stresses.
         for (mesh, name) in meshes.iter_mut().zip(names) {
             mesh.update_positions(dt);
@@ -247,12 +267,26 @@ impl MembraneContactStep {
                 return Err(failure(s, what));
             }
         }
+        lap(&mut self.times.membrane_s);
         s.t += dt;
         s.steps += 1;
         self.last = step_stats;
         self.totals.add(&step_stats);
         Ok(dt)
     }
+}
+
+/// Wall time of the coupled step's own parts, accumulated over steps (the
+/// MPM body's P2G, grid and G2P are in its [`SolidRun::phase_times`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ContactTimes {
+    /// The membranes' trial solution and update (forces, velocities,
+    /// positions, stresses).
+    pub membrane_s: f64,
+    /// The contact: mass gradient, normals, map, gaps, forces, correction.
+    pub contact_s: f64,
+    /// Measuring the contact's loss on the particles (steps with contact).
+    pub loss_s: f64,
 }
 
 /// The nodal normals of a membrane: each quad's area vector
