@@ -385,7 +385,7 @@ impl<const D: usize> GridContact<D> {
     /// takes `−f^r` (Eq. 53) in its velocity and acceleration. Separating
     /// bodies feel nothing; with [`ContactDetection::Gap`] (after
     /// [`Self::measure_gaps`]) neither do bodies that stay apart through
-    /// the step.
+    /// the step (its normals are `measure_gaps`'s).
     pub fn resolve(
         &mut self,
         s: &mut MpmNodes<'_, D>,
@@ -401,7 +401,14 @@ impl<const D: usize> GridContact<D> {
                 continue;
             }
             stats.shared_nodes += 1;
-            let Some(n) = self.oriented_normal(i, s) else {
+            // The gap check has the normal already (`measure_gaps`).
+            let n = match detection {
+                ContactDetection::Gap => {
+                    Some(self.unit_normal[i]).filter(|n| *n != SVector::<f64, D>::zeros())
+                }
+                ContactDetection::Approach => self.oriented_normal(i, s),
+            };
+            let Some(n) = n else {
                 continue;
             };
             let pr = self.momentum[i];
