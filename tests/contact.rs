@@ -172,6 +172,7 @@ impl<const D: usize> Scene<D> {
             v: &self.v,
             normal: &self.n,
             held: &[],
+            half_thickness: &[],
         };
         self.contact
             .map_points(&self.grid, &points)

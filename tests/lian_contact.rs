@@ -202,11 +202,14 @@ fn sheet_height(sheet: &mpmice::membrane::element::MembraneMesh, x: f64, y: f64)
 
 #[test]
 fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
-    // The taut membrane of the last test; the block's lower face (its
-    // particles' domains) starts 25 mm above it at 2 m/s, half a cell of
-    // 50 mm: Lian's rule acts from the first step (both bodies reach the
-    // same nodes), the gap check once the gap closes, at 12.5 ms of free
+    // The taut membrane of the last test (1 mm thick); the block's lower
+    // face (its particles' domains) starts 25 mm above its mid-surface, 24.5
+    // mm above its upper surface, at 2 m/s, about half a cell of 50 mm:
+    // Lian's rule acts from the first step (both bodies reach the same
+    // nodes), the gap check once the gap closes, at 12.25 ms of free
     // flight.
+    let half_thickness = 0.5e-3;
+    let touch = (0.025 - half_thickness) / 2.0;
     let membrane = "prestress = [1e6, 1e6, 0.0]\nfix = [{ boundary = true }]";
     let onset = |detection: &str, end: f64| {
         let contact = format!("law = \"slip\"\ndetection = \"{detection}\"");
@@ -218,7 +221,7 @@ fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
         let half = m.solid.run.particles.half_size[0][2];
         let mut first: Option<(f64, f64)> = None;
         // Before contact: the block's largest departure from −2 m/s; after:
-        // the deepest a particle's lower face reaches below the membrane
+        // the deepest a particle's lower face reaches below the membrane's upper surface
         // under it.
         let (mut free_error, mut overlap, mut vz_end): (f64, f64, f64) = (0.0, 0.0, 0.0);
         let mut inner: f64 = 0.0;
@@ -240,7 +243,7 @@ fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
                 if let Some(z) = sheet_height(sheet, x[0], x[1]) {
                     // The particle's current half extent along z.
                     let lz = half * p.f.get(q)[(2, 2)].abs();
-                    let o = z - (x[2] - lz);
+                    let o = z + half_thickness - (x[2] - lz);
                     if x[0].abs().max(x[1].abs()) < 0.05 {
                         inner = inner.max(o);
                     } else {
@@ -257,19 +260,19 @@ fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
     let (t_gap, step) = gap.expect("the block reaches the membrane");
     eprintln!(
         "taut membrane: Lian's rule acts at {:?} s, the gap check at {t_gap:.6e} s (free flight \
-         1.25e-2, step {step:.3e}); speed before it departs {free_error:.2e} from 2 m/s; a \
-         particle's face reaches {:.3e} m below the membrane at most within a cell of the \
-         block's edge, {:.3e} m farther in; final v_z {vz_end:.3} m/s",
+         {touch:.4e}, step {step:.3e}); speed before it departs {free_error:.2e} from 2 m/s; a \
+         particle's face reaches {:.3e} m below the membrane's upper surface at most within a \
+         cell of the block's edge, {:.3e} m farther in; final v_z {vz_end:.3} m/s",
         approach.map(|a| a.0),
         overlap.1,
         overlap.0
     );
     // Lian's rule acts at once, half a cell early.
     assert!(approach.expect("acts").0 < 1e-3, "{approach:?}");
-    // The gap closes in the step that ends at or after 12.5 ms: the first
+    // The gap closes in the step that ends at or after 12.25 ms: the first
     // step whose predicted gap is ≤ 0.
     assert!(
-        t_gap >= 1.25e-2 * (1.0 - 1e-9) && t_gap < 1.25e-2 + step + 1e-12,
+        t_gap >= touch * (1.0 - 1e-9) && t_gap < touch + step + 1e-12,
         "contact at {t_gap} (step {step}, the last free step {dt})"
     );
     assert!(

@@ -31,7 +31,7 @@ use crate::mpm::explicit::offset;
 use crate::shape::{LinearHat, ParticleWeights};
 
 mod run;
-pub use run::{node_normals, ContactTimes, MembraneContactStep};
+pub use run::{node_half_thickness, node_normals, ContactTimes, MembraneContactStep};
 
 /// A surface normal under the mirror convention: its image across any
 /// wall or symmetry face flips the component normal to the face (a
@@ -75,10 +75,11 @@ pub enum ContactDetection {
     Approach,
     /// Lian's rule and a closing gap: the bodies also have to close, within
     /// the step, the gap between them measured along the node's normal —
-    /// from the point body's position at the node (its nodes' mass-weighted
-    /// mean, [`GridContact::centre`]) to the MPM body's nearest particle
-    /// surface among the particles the node reaches (each particle's
-    /// centre less its half extent along the normal,
+    /// from the point body's surface at the node (its nodes' mass-weighted
+    /// mean position, [`GridContact::centre`], plus their mean half
+    /// thickness, [`GridContact::half_thickness`]) to the MPM body's nearest
+    /// particle surface among the particles the node reaches (each
+    /// particle's centre less its half extent along the normal,
     /// [`GridContact::surface`]). The gap at the end of the step is
     /// predicted with the trial velocities:
     /// `g − Δt (v̄^r − v̄^s)·n ≤ 0`.
@@ -103,6 +104,10 @@ pub struct PointBody<'a, const D: usize> {
     /// Points held in every direction (empty: none): a wall of infinite
     /// mass for the contact (see [`GridContact::resolve`]).
     pub held: &'a [bool],
+    /// Each point's half thickness, the distance from its position to the
+    /// body's surface along its normal (empty: zero, a surface of no
+    /// thickness; only [`ContactDetection::Gap`] uses it).
+    pub half_thickness: &'a [f64],
 }
 
 /// The MPM body's side of a contact step: its nodal mass, its trial nodal
@@ -187,6 +192,9 @@ pub struct GridContact<const D: usize> {
     /// The point body's position at the node, `Σ_K N_I(x_K) m_K x_K / m_I^r`
     /// (before the mirror folding at walls).
     pub centre: Vec<SVector<f64, D>>,
+    /// The point body's half thickness at a node, mass-weighted like
+    /// [`Self::centre`] (zero where the body gives none).
+    pub half_thickness: Vec<f64>,
     /// The unit contact normal at a node both bodies reach, from the point
     /// body into the MPM body ([`Self::measure_gaps`]; zero elsewhere).
     pub unit_normal: Vec<SVector<f64, D>>,
@@ -229,6 +237,7 @@ impl<const D: usize> GridContact<D> {
             touched: Vec::with_capacity(n.min(4096)),
             held: vec![false; n],
             centre: vec![SVector::zeros(); n],
+            half_thickness: vec![0.0; n],
             unit_normal: vec![SVector::zeros(); n],
             surface: vec![f64::INFINITY; n],
             weights: Vec::new(),
@@ -249,6 +258,7 @@ impl<const D: usize> GridContact<D> {
             self.force[i] = SVector::zeros();
             self.held[i] = false;
             self.centre[i] = SVector::zeros();
+            self.half_thickness[i] = 0.0;
             self.unit_normal[i] = SVector::zeros();
         }
         self.touched.clear();
@@ -261,6 +271,7 @@ impl<const D: usize> GridContact<D> {
             self.weights.push((pw, base));
             let (m, p, n) = (body.mass[k], body.v[k] * body.mass[k], body.normal[k]);
             let held = body.held.get(k).copied().unwrap_or(false);
+            let half = body.half_thickness.get(k).copied().unwrap_or(0.0);
             pw.for_each(|o, w, _| {
                 if w <= 0.0 {
                     return;
@@ -273,11 +284,13 @@ impl<const D: usize> GridContact<D> {
                 self.momentum[i] += p * w;
                 self.normal[i] += n * w;
                 self.centre[i] += body.x[k] * (w * m);
+                self.half_thickness[i] += half * (w * m);
                 self.held[i] |= held;
             });
         }
         for &i in &self.touched {
             self.centre[i] /= self.mass[i];
+            self.half_thickness[i] /= self.mass[i];
         }
         self.mirror_at_walls(grid);
         Ok(())
@@ -366,9 +379,9 @@ impl<const D: usize> GridContact<D> {
 
     /// The gap between the bodies along the normal at node `i`
     /// ([`Self::measure_gaps`] first): the MPM body's surface less the
-    /// point body's position.
+    /// point body's (its position plus its half thickness).
     pub fn gap(&self, i: usize) -> f64 {
-        self.surface[i] - self.centre[i].dot(&self.unit_normal[i])
+        self.surface[i] - self.centre[i].dot(&self.unit_normal[i]) - self.half_thickness[i]
     }
 
     /// Steps 4(b)–(d) on the grid: at every node both bodies reach, the

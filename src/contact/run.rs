@@ -40,6 +40,9 @@ pub struct MembraneContactStep {
     normals: Vec<Vec<V3>>,
     /// Each membrane's nodes held in all three directions.
     held: Vec<Vec<bool>>,
+    /// Each membrane's half thickness at its nodes and the nodes' adjoining
+    /// areas (scratch), for the gap check.
+    half_thickness: Vec<(Vec<f64>, Vec<f64>)>,
     /// The MPM body's nodal mass gradient.
     grad: Vec<SVector<f64, 3>>,
     /// The contact's change of the MPM body's nodal velocity, `−Δt Σ f/m`
@@ -98,6 +101,10 @@ impl MembraneContactStep {
             trial: meshes
                 .iter()
                 .map(|m| vec![V3::zeros(); m.num_nodes()])
+                .collect(),
+            half_thickness: meshes
+                .iter()
+                .map(|m| (vec![0.0; m.num_nodes()], vec![0.0; m.num_nodes()]))
                 .collect(),
             particle_kick: Vec::new(),
             totals: ContactStats::default(),
@@ -168,6 +175,13 @@ impl MembraneContactStep {
                 v: &mesh.v,
                 normal: &self.normals[k],
                 held: &self.held[k],
+                half_thickness: if self.detection == ContactDetection::Gap {
+                    let (h, a) = &mut self.half_thickness[k];
+                    node_half_thickness(mesh, h, a);
+                    h
+                } else {
+                    &[]
+                },
             };
             if let Err(node) = self.contact[k].map_points(&s.grid, &body) {
                 let what = format!("membrane `{}` node {node} has left the grid", names[k]);
@@ -287,6 +301,27 @@ pub struct ContactTimes {
     pub contact_s: f64,
     /// Measuring the contact's loss on the particles (steps with contact).
     pub loss_s: f64,
+}
+
+/// The half thickness of a membrane at its nodes: the mean of the adjoining
+/// quads' `t/2`, weighted by their areas `½ |(x₃ − x₁) × (x₄ − x₂)|`.
+/// `area` is scratch of the same length (each node's adjoining area).
+pub fn node_half_thickness(mesh: &MembraneMesh, out: &mut [f64], area: &mut [f64]) {
+    out.iter_mut().for_each(|h| *h = 0.0);
+    area.iter_mut().for_each(|a| *a = 0.0);
+    for (q, t) in mesh.quads.iter().zip(&mesh.thickness) {
+        let p = q.map(|n| mesh.x[n as usize]);
+        let a = 0.5 * (p[2] - p[0]).cross(&(p[3] - p[1])).norm();
+        for &n in q {
+            out[n as usize] += 0.5 * t * a;
+            area[n as usize] += a;
+        }
+    }
+    out.iter_mut().zip(area.iter()).for_each(|(h, a)| {
+        if *a > 0.0 {
+            *h /= a;
+        }
+    });
 }
 
 /// The nodal normals of a membrane: each quad's area vector
