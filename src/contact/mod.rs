@@ -71,7 +71,6 @@ pub enum ContactDetection {
     /// Lian's rule: at every node both bodies reach where they approach
     /// (Eq. 52). Both bodies' shape functions reach a node up to a cell
     /// before they touch, so the force starts acting that much early.
-    #[default]
     Approach,
     /// Lian's rule and a closing gap: the bodies also have to close, within
     /// the step, the gap between them measured along the node's normal —
@@ -82,7 +81,8 @@ pub enum ContactDetection {
     /// particle's centre less its half extent along the normal,
     /// [`GridContact::surface`]). The gap at the end of the step is
     /// predicted with the trial velocities:
-    /// `g − Δt (v̄^r − v̄^s)·n ≤ 0`.
+    /// `g − Δt (v̄^r − v̄^s)·n ≤ 0`. The default.
+    #[default]
     Gap,
 }
 

@@ -83,8 +83,9 @@ pub struct ContactSpec {
     /// Coulomb friction coefficient μ ≥ 0 (`slip`; 0 = free slip).
     #[serde(default)]
     pub friction: f64,
-    /// Where the force may act: `approach` (Lian Eq. 52 alone, default) or
-    /// `gap` (and the bodies close their measured gap within the step).
+    /// Where the force may act: `gap` (Lian Eq. 52 and the bodies close
+    /// their measured gap within the step, default) or `approach` (Lian
+    /// Eq. 52 alone, as published).
     #[serde(default)]
     pub detection: ContactDetectionSpec,
 }
@@ -94,9 +95,9 @@ pub struct ContactSpec {
 #[serde(rename_all = "snake_case")]
 pub enum ContactDetectionSpec {
     /// Lian's rule: both bodies reach the node and approach.
-    #[default]
     Approach,
     /// Lian's rule and a closing gap between particle surface and points.
+    #[default]
     Gap,
 }
 

@@ -4,12 +4,12 @@
 //! with it, the gas's kinetic energy carried by its points and the part of it the grid sees,
 //! at every `EVERY` of time.
 //!
-//! `cargo run --release -p probes --bin lian_gas_probe -- H END [stick|slip] [EVERY] [PIC] [approach|gap]`
+//! `cargo run --release -p probes --bin lian_gas_probe -- H END [stick|slip] [EVERY] [PIC] [gap|approach]`
 //!
 //! `H` is the element and cell size (4 particles per cell and direction),
 //! `END` the end time, `PIC` the PIC share of the gas points' velocity
 //! update (`mpm.pic_fraction`, default 0: FLIP), the last argument the
-//! contact's detection (`contact.detection`, default Lian's `approach`).
+//! contact's detection (`contact.detection`: `gap`, the default, or Lian's `approach`).
 
 use mpmice::contact::{ContactDetection, ContactLaw};
 use mpmice::diagnostics::lian_gas::GasExpansion;
@@ -24,9 +24,9 @@ fn main() -> anyhow::Result<()> {
     };
     let every: f64 = a.get(4).map_or(Ok(0.25), |s| s.parse())?;
     let pic_fraction: f64 = a.get(5).map_or(Ok(0.0), |s| s.parse())?;
-    let detection = match a.get(6).map_or("approach", String::as_str) {
-        "gap" => ContactDetection::Gap,
-        _ => ContactDetection::Approach,
+    let detection = match a.get(6).map_or("gap", String::as_str) {
+        "approach" => ContactDetection::Approach,
+        _ => ContactDetection::Gap,
     };
     let dir = std::env::temp_dir().join(format!("lian_gas_probe_{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;

@@ -3,7 +3,7 @@
 //! deflection, the rebound and the energy account, and with `CURVES=1` the
 //! sampled curves (CSV).
 //!
-//! `cargo run --release -p probes --bin lian_impact_probe -- CASE H END [approach|gap] [EVERY]`
+//! `cargo run --release -p probes --bin lian_impact_probe -- CASE H END [gap|approach] [EVERY]`
 //!
 //! `CASE` is `sphere_on_membrane` or `membrane_on_sphere`
 //! (`cases/lian_CASE.toml`), `H` the cell and element size [m], `END` the
@@ -17,9 +17,9 @@ fn main() -> anyhow::Result<()> {
     let case = a.get(1).map_or("sphere_on_membrane", String::as_str);
     let h: f64 = a.get(2).map_or(Ok(2e-3), |s| s.parse())?;
     let end: f64 = a.get(3).map_or(Ok(1.2e-3), |s| s.parse())?;
-    let detection = match a.get(4).map_or("approach", String::as_str) {
-        "gap" => ContactDetectionSpec::Gap,
-        _ => ContactDetectionSpec::Approach,
+    let detection = match a.get(4).map_or("gap", String::as_str) {
+        "approach" => ContactDetectionSpec::Approach,
+        _ => ContactDetectionSpec::Gap,
     };
     let every: f64 = a.get(5).map_or(Ok(1e-5), |s| s.parse())?;
     let base = scene::load(std::path::Path::new(&format!("cases/lian_{case}.toml")))?;
