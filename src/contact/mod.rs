@@ -31,7 +31,7 @@ use crate::mpm::explicit::offset;
 use crate::shape::{LinearHat, ParticleWeights};
 
 mod run;
-pub use run::{node_half_thickness, node_normals, ContactTimes, MembraneContactStep};
+pub use run::{node_normals, ContactTimes, MembraneContactStep};
 
 /// A surface normal under the mirror convention: its image across any
 /// wall or symmetry face flips the component normal to the face (a

@@ -167,7 +167,11 @@ impl MembraneContactStep {
             mesh.compute_forces(dt);
             mesh.trial_velocities(dt);
             lap(&mut self.times.membrane_s);
-            node_normals(mesh, &mut self.normals[k]);
+            // The membrane's half thickness only for the gap check.
+            let gap = self.detection == ContactDetection::Gap;
+            let (h, a) = &mut self.half_thickness[k];
+            let half = gap.then_some((h.as_mut_slice(), a.as_mut_slice()));
+            node_normals(mesh, &mut self.normals[k], half);
             // Step 4: contact.
             let body = PointBody {
                 x: &mesh.x,
@@ -175,13 +179,7 @@ impl MembraneContactStep {
                 v: &mesh.v,
                 normal: &self.normals[k],
                 held: &self.held[k],
-                half_thickness: if self.detection == ContactDetection::Gap {
-                    let (h, a) = &mut self.half_thickness[k];
-                    node_half_thickness(mesh, h, a);
-                    h
-                } else {
-                    &[]
-                },
+                half_thickness: if gap { &self.half_thickness[k].0 } else { &[] },
             };
             if let Err(node) = self.contact[k].map_points(&s.grid, &body) {
                 let what = format!("membrane `{}` node {node} has left the grid", names[k]);
@@ -303,37 +301,41 @@ pub struct ContactTimes {
     pub loss_s: f64,
 }
 
-/// The half thickness of a membrane at its nodes: the mean of the adjoining
-/// quads' `t/2`, weighted by their areas `½ |(x₃ − x₁) × (x₄ − x₂)|`.
-/// `area` is scratch of the same length (each node's adjoining area).
-pub fn node_half_thickness(mesh: &MembraneMesh, out: &mut [f64], area: &mut [f64]) {
-    out.iter_mut().for_each(|h| *h = 0.0);
-    area.iter_mut().for_each(|a| *a = 0.0);
-    for (q, t) in mesh.quads.iter().zip(&mesh.thickness) {
-        let p = q.map(|n| mesh.x[n as usize]);
-        let a = 0.5 * (p[2] - p[0]).cross(&(p[3] - p[1])).norm();
-        for &n in q {
-            out[n as usize] += 0.5 * t * a;
-            area[n as usize] += a;
-        }
-    }
-    out.iter_mut().zip(area.iter()).for_each(|(h, a)| {
-        if *a > 0.0 {
-            *h /= a;
-        }
-    });
-}
-
 /// The nodal normals of a membrane: each quad's area vector
 /// `½ (x₃ − x₁) × (x₄ − x₂)` (its area times its unit normal, exact for a
-/// planar quad) added to its four corners.
-pub fn node_normals(mesh: &MembraneMesh, out: &mut [V3]) {
+/// planar quad) added to its four corners. With `half = Some((h, area))`
+/// also the half thickness at the nodes: the mean of the adjoining quads'
+/// `t/2` weighted by their areas (the area vectors' lengths), `area` being
+/// scratch of the same length.
+pub fn node_normals(
+    mesh: &MembraneMesh,
+    out: &mut [V3],
+    mut half: Option<(&mut [f64], &mut [f64])>,
+) {
     out.iter_mut().for_each(|n| *n = V3::zeros());
-    for q in &mesh.quads {
+    if let Some((h, area)) = half.as_mut() {
+        h.iter_mut().for_each(|v| *v = 0.0);
+        area.iter_mut().for_each(|v| *v = 0.0);
+    }
+    for (q, t) in mesh.quads.iter().zip(&mesh.thickness) {
         let p = q.map(|n| mesh.x[n as usize]);
         let a = (p[2] - p[0]).cross(&(p[3] - p[1])) * 0.5;
         for &n in q {
             out[n as usize] += a;
         }
+        if let Some((h, area)) = half.as_mut() {
+            let len = a.norm();
+            for &n in q {
+                h[n as usize] += 0.5 * t * len;
+                area[n as usize] += len;
+            }
+        }
+    }
+    if let Some((h, area)) = half {
+        h.iter_mut().zip(area.iter()).for_each(|(v, a)| {
+            if *a > 0.0 {
+                *v /= a;
+            }
+        });
     }
 }

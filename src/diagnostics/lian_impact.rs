@@ -236,7 +236,7 @@ pub fn run_impact(sc: &Scene, every: f64) -> Result<ImpactRun, Error> {
     // Which side of the membrane the sphere starts on.
     let side = (sheet.x[centre_node][2] - centre[2]).signum();
     let mut normals = vec![V3::zeros(); sheet.num_nodes()];
-    node_normals(sheet, &mut normals);
+    node_normals(sheet, &mut normals, None);
     let to_sphere = V3::new(centre[0], centre[1], centre[2]) - sheet.x[centre_node];
     let normal_side = to_sphere.dot(&normals[centre_node]).signum();
     let start = Instant::now();
@@ -258,7 +258,7 @@ pub fn run_impact(sc: &Scene, every: f64) -> Result<ImpactRun, Error> {
                 [centre_node, corner_node, top_particle],
             );
             clearance(&m, &plan, &lattice, side, &mut out.min_clearance);
-            node_normals(&m.membranes.meshes[0], &mut normals);
+            node_normals(&m.membranes.meshes[0], &mut normals, None);
             normal_clearance(&m, &normals, normal_side, &mut out.min_normal_clearance);
             next += every;
         }
@@ -303,8 +303,6 @@ fn sample(m: &MembraneContact, out: &mut ImpactRun, row: &mut Vec<f64>, at: [usi
     out.total.push(row[8]);
 }
 
-/// Updates `min` with the smallest clearance of the sphere's particles
-/// from the membrane node nearest each in plan.
 /// [`ImpactRun::min_normal_clearance`] now: `min_p side (x_p − x_k)·n̂_k`, `k`
 /// the node nearest to particle `p`.
 fn normal_clearance(m: &MembraneContact, normals: &[V3], side: f64, min: &mut f64) {
@@ -322,6 +320,8 @@ fn normal_clearance(m: &MembraneContact, normals: &[V3], side: f64, min: &mut f6
     }
 }
 
+/// Updates `min` with the smallest clearance of the sphere's particles
+/// from the membrane node nearest each in plan.
 fn clearance(
     m: &MembraneContact,
     plan: &HashMap<(i64, i64), usize>,
