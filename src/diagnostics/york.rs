@@ -37,6 +37,9 @@ pub struct YorkSod {
     pub right: (f64, f64, f64),
     /// The tube `[lower, upper]` along x, closed at both ends (York: [0, 1]).
     pub tube: (f64, f64),
+    /// PIC share of the point velocity update (`mpm.pic_fraction`; York: 0,
+    /// FLIP).
+    pub pic_fraction: f64,
 }
 
 impl Default for YorkSod {
@@ -57,6 +60,7 @@ impl Default for YorkSod {
             left: SOD_LEFT,
             right: SOD_RIGHT,
             tube: (0.0, 1.0),
+            pic_fraction: 0.0,
         }
     }
 }
@@ -88,6 +92,7 @@ cfl = {cfl:e}
 [mpm]
 shape = "{shape}"
 update = "musl"
+pic_fraction = {pic:e}
 [[materials]]
 name = "gas"
 type = "fluid"
@@ -114,6 +119,7 @@ velocity = [{ur:e}, 0.0]
         n = ((hi - lo) * s.cells as f64).round() as usize,
         end = s.end,
         cfl = s.cfl,
+        pic = s.pic_fraction,
         ppc = s.ppc,
         rl = s.left.0,
         ul = s.left.1,
