@@ -103,7 +103,7 @@ pub const NOSE_QUANTILE: f64 = 1e-3;
 /// with the mean axial velocity of those points. Centres, not centre ±
 /// `F_zz l⁰`: that is meaningless for the eroded points, stretched along
 /// the crater wall.
-fn measure(run: &MultiphaseRun<2>, rod: usize) -> (f64, f64, f64) {
+pub fn measure(run: &MultiphaseRun<2>, rod: usize) -> (f64, f64, f64) {
     let p = &run.phases[rod].particles;
     let mut tail = f64::NEG_INFINITY;
     let (mut mv, mut m) = (0.0, 0.0);

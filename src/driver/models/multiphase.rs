@@ -174,6 +174,11 @@ impl<const D: usize> Model for Multiphase<D> {
         ck.put_f64("model.time", vec![1], vec![self.run.t]);
         ck.put_u64("model.steps", vec![1], vec![self.run.steps]);
         ck.put_f64("model.drag_heat", vec![1], vec![self.run.drag_heat]);
+        ck.put_f64(
+            "model.drag_dissipation",
+            vec![1],
+            vec![self.run.drag_dissipation],
+        );
     }
 
     fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
@@ -185,6 +190,9 @@ impl<const D: usize> Model for Multiphase<D> {
         self.run.steps = ck.take_u64("model.steps", Some(&[1]))?[0];
         if ck.shape("model.drag_heat").is_some() {
             self.run.drag_heat = ck.take_f64("model.drag_heat", Some(&[1]))?[0];
+        }
+        if ck.shape("model.drag_dissipation").is_some() {
+            self.run.drag_dissipation = ck.take_f64("model.drag_dissipation", Some(&[1]))?[0];
         }
         // The nodal fields of the restored points (a failure here shows
         // again, named, at the next step); then the points' stiffening, the
