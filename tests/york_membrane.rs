@@ -453,3 +453,35 @@ fn a_weak_membrane_under_a_bursting_pressure_inflates_to_the_walls_without_nan()
     assert!(stretch > 5.0, "largest stretch {stretch:.2}");
     assert!(de > -0.05, "energy lost {de:+.3e}");
 }
+
+/// Open defect (issue 16), kept as a reproducer: the gas points' own
+/// volumes (continuity, York Eq. 16) should add up to the area inside the
+/// membrane. In the dog-bone at h = 0.2 they fall behind it while the
+/// membrane overshoots (0.89 of it at t = 0.1), reach 1.54 times it by t = 0.4
+/// and go on growing once the area is steady (1.90 at t = 0.8, 3.51 at
+/// t = 4, area 5.71–5.76 throughout): an ideal-gas point pushes the nodes
+/// with (γ − 1) m e whatever its volume, so nothing holds its J to the
+/// space it takes. Taking J from the rate's trace alone (York Eq. 16 to
+/// the letter, instead of det(I + Δt L)) gives 4.09; a PIC share of 0.01
+/// gives 2.39.
+#[test]
+#[ignore = "open defect: the dog-bone's gas point volumes outgrow the membrane's area (issue 16)"]
+fn the_dog_bones_gas_point_volumes_add_up_to_the_enclosed_area() {
+    use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
+    let r = run_dog_bone(&DogBone {
+        h: 0.2,
+        end: 4.0,
+        ..DogBone::default()
+    })
+    .expect("dog-bone runs");
+    for x in &r.history {
+        let ratio = x.gas_volume / x.area;
+        assert!(
+            (ratio - 1.0).abs() < 0.1,
+            "t = {:.2}: gas point volumes {:.3} against the enclosed area {:.3} ({ratio:.3})",
+            x.t,
+            x.gas_volume,
+            x.area
+        );
+    }
+}

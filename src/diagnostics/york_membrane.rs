@@ -47,6 +47,9 @@ pub struct MembraneMeasures {
     pub area_pressure: f64,
     /// Area inside the (closed) membrane polygon.
     pub area: f64,
+    /// Σ V_p of the gas points (their volumes from continuity, York Eq.
+    /// 16); the area inside the membrane if they tiled it.
+    pub gas_volume: f64,
     /// Length of the membrane polygon.
     pub perimeter: f64,
 }
@@ -97,7 +100,7 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
         }
         area = area.abs();
     }
-    let (mut psum, mut pn, mut pv) = (0.0, 0usize, 0.0);
+    let (mut psum, mut pn, mut pv, mut gas_volume) = (0.0, 0usize, 0.0, 0.0);
     for i in 0..p.len() {
         if let Some(g) = run.materials[p.material[i] as usize].gas() {
             let rho = p.mass[i] / p.vol[i];
@@ -105,6 +108,7 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
             let pi = g.pressure(rho, e);
             psum += pi;
             pv += pi * p.vol[i];
+            gas_volume += p.vol[i];
             pn += 1;
         }
     }
@@ -118,6 +122,7 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
         mean_pressure: if pn > 0 { psum / pn as f64 } else { 0.0 },
         area_pressure: if area > 0.0 { pv / area } else { 0.0 },
         area,
+        gas_volume,
         perimeter,
     }
 }
@@ -307,6 +312,10 @@ pub struct DogBoneSample {
     pub internal: f64,
     /// Membrane strain energy.
     pub strain: f64,
+    /// Area inside the membrane.
+    pub area: f64,
+    /// Σ V_p of the gas points ([`MembraneMeasures::gas_volume`]).
+    pub gas_volume: f64,
 }
 
 /// A dog-bone run's results.
@@ -337,11 +346,11 @@ impl DogBoneRun {
     /// grid_kinetic, internal, strain, total` (York Figs. 12–13's curves).
     pub fn history_csv(&self) -> String {
         let mut csv = String::from(
-            "t,radius_0,radius_90,mean_radius,kinetic,grid_kinetic,internal,strain,total\n",
+            "t,radius_0,radius_90,mean_radius,kinetic,grid_kinetic,internal,strain,total,area,gas_volume\n",
         );
         for x in &self.history {
             csv.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{}\n",
                 x.t,
                 x.radius_0,
                 x.radius_90,
@@ -350,7 +359,9 @@ impl DogBoneRun {
                 x.grid_kinetic,
                 x.internal,
                 x.strain,
-                x.kinetic + x.internal + x.strain
+                x.kinetic + x.internal + x.strain,
+                x.area,
+                x.gas_volume
             ));
         }
         csv
@@ -412,6 +423,8 @@ pub fn run_dog_bone(s: &DogBone) -> Result<DogBoneRun> {
                 grid_kinetic,
                 internal,
                 strain,
+                area: m.area,
+                gas_volume: m.gas_volume,
             });
             outside_max = outside_max.max(gas_outside(&run));
             next_hist += s.history_interval;
