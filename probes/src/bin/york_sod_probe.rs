@@ -1,4 +1,5 @@
-//! Probe: York Sod with gas points, L1(ρ) split by region (Sod) and the
+//! Probe: York Sod with gas points, L1(ρ) split by wave (Sod's fan,
+//! contact and shock, in ξ = (x − 0.5)/t) and the
 //! density/energy range (all cases).
 //! `[CASE=123|ratio] [SHAPE=q|c|l] [DUMP=1] cargo run --release -p probes --bin york_sod_probe -- G KAPPA C1 C2 CFL PPC CELLS...`
 //! (G = g/Δx; York's defaults: 1.4142135623730951 0.75 1 1 0.4 3 200);
@@ -69,28 +70,35 @@ fn main() {
                 continue;
             }
         };
-        // region split on the bottom-row profile (1D: weight = spacing)
+        // Region split on the bottom-row profile (1D: weight = spacing),
+        // in the self-similar ξ = (x − 0.5)/t, so that it holds at any END:
+        // Sod's fan (−1.4, −0.03), contact [−0.03, 1.2) (with the dip
+        // behind the fan's tail), shock ≥ 1.2, and the rest.
         let t = s.end;
-        let edges = [0.0, 0.32, 0.5, 0.6, 0.68, 0.72, 0.78, 1.0];
-        let mut reg = vec![0.0; edges.len() - 1];
+        let edges = [-1.4, -0.03, 1.2, f64::INFINITY];
+        let mut reg = [0.0; 4];
         let pr = &r.profile;
         for i in 0..pr.len() {
             let x = pr[i][0];
+            if !(0.0..=1.0).contains(&x) {
+                continue;
+            }
             let w = if i + 1 < pr.len() {
                 pr[i + 1][0] - x
             } else {
                 1.0 - x
             };
-            let e = exact.sample((x - 0.5) / t);
-            let k = edges
-                .iter()
-                .rposition(|&b| b <= x)
-                .unwrap()
-                .min(reg.len() - 1);
+            let xi = (x - 0.5) / t;
+            let e = exact.sample(xi);
+            let k = if xi <= edges[0] {
+                3
+            } else {
+                edges.iter().position(|&b| xi < b).unwrap_or(3) - 1
+            };
             reg[k] += (pr[i][1] - e.rho).abs() * w;
         }
         println!(
-            "N {n}: L1 {:.3e}  rho [{:.3e}, {:.3e}]  e_min {:.3e}  regions {:?}  steps {} wall {:.2}",
+            "N {n}: L1 {:.3e}  rho [{:.3e}, {:.3e}]  e_min {:.3e}  regions (fan, contact, shock, rest) {:?}  steps {} wall {:.2}",
             r.l1_density,
             r.density_range.0,
             r.density_range.1,
