@@ -361,13 +361,8 @@ fixed_ends = true
 /// inside it and drift onto it).
 #[test]
 fn the_dog_bone_expands_to_a_laplace_circle_and_keeps_its_gas() {
-    use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
-    let r = run_dog_bone(&DogBone {
-        h: 0.2,
-        end: 4.0,
-        ..DogBone::default()
-    })
-    .expect("dog-bone runs");
+    use mpmice::diagnostics::york_membrane::DogBone;
+    let r = dog_bone_h02_to_t4();
     let m = r.last;
     let laplace = m.area_pressure * m.mean_radius / DogBone::THICKNESS;
     let hoop = m.mean_stress / laplace - 1.0;
@@ -454,6 +449,17 @@ fn a_weak_membrane_under_a_bursting_pressure_inflates_to_the_walls_without_nan()
     assert!(de > -0.05, "energy lost {de:+.3e}");
 }
 
+/// The case's dog-bone at h = 0.2, run to t = 4 (the two dog-bone tests).
+fn dog_bone_h02_to_t4() -> mpmice::diagnostics::york_membrane::DogBoneRun {
+    use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
+    run_dog_bone(&DogBone {
+        h: 0.2,
+        end: 4.0,
+        ..DogBone::default()
+    })
+    .expect("dog-bone runs")
+}
+
 /// Open defect (issue 16), kept as a reproducer: the gas points' own
 /// volumes (continuity, York Eq. 16) should add up to the area inside the
 /// membrane. In the dog-bone at h = 0.2 they fall behind it while the
@@ -467,13 +473,7 @@ fn a_weak_membrane_under_a_bursting_pressure_inflates_to_the_walls_without_nan()
 #[test]
 #[ignore = "open defect: the dog-bone's gas point volumes outgrow the membrane's area (issue 16)"]
 fn the_dog_bones_gas_point_volumes_add_up_to_the_enclosed_area() {
-    use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
-    let r = run_dog_bone(&DogBone {
-        h: 0.2,
-        end: 4.0,
-        ..DogBone::default()
-    })
-    .expect("dog-bone runs");
+    let r = dog_bone_h02_to_t4();
     for x in &r.history {
         let ratio = x.gas_volume / x.area;
         assert!(
