@@ -343,7 +343,9 @@ pub struct DogBoneRun {
 
 impl DogBoneRun {
     /// The history as CSV: `t, radius_0, radius_90, mean_radius, kinetic,
-    /// grid_kinetic, internal, strain, total` (York Figs. 12–13's curves).
+    /// grid_kinetic, internal, strain, total` (York Figs. 12–13's curves),
+    /// then `area, gas_volume` (the enclosed area and the gas points'
+    /// summed volume).
     pub fn history_csv(&self) -> String {
         let mut csv = String::from(
             "t,radius_0,radius_90,mean_radius,kinetic,grid_kinetic,internal,strain,total,area,gas_volume\n",
