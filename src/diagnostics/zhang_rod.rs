@@ -65,6 +65,12 @@ pub struct RodRun {
     /// |K₀ + S₀ − K − S| / K₀ at the end, S the stored work of the stress
     /// (strain, plastic and gas internal energy): the scheme's energy error.
     pub energy_error: f64,
+    /// The kinetic energy the drag took from the points by the end, over
+    /// K₀ ([`MultiphaseRun::drag_heat`], counted in S above).
+    pub drag_heat: f64,
+    /// Eq. 5's dissipation on the nodes by the end, over K₀
+    /// ([`MultiphaseRun::drag_dissipation`]).
+    pub drag_dissipation: f64,
     /// The time at which the run stopped early because the stable step
     /// fell below 1 % of the first (gas crushed in a pocket; see
     /// `multiphase.min_fraction`), if it did.
@@ -200,6 +206,8 @@ pub fn run(scene: &Scene, every: f64) -> Result<RodRun, Error> {
         momentum_drift: drift,
         kinetic0: e0.kinetic,
         energy_error: ((e0.kinetic + e0.strain) - (e.kinetic + e.strain)).abs() / e0.kinetic,
+        drag_heat: run.drag_heat / e0.kinetic,
+        drag_dissipation: run.drag_dissipation / e0.kinetic,
         stopped_at,
         phase_drift: run
             .phases

@@ -29,7 +29,7 @@ pub fn zhang_rod(quick: bool) -> Result<StudyResult> {
         let r = run(&scene(n, end)?, every)?;
         let last = r.samples.last().copied();
         println!(
-            "R/{n}: {} points, {} steps, {:.1} s, dt_min {:.2e}, stopped {:?}, P {:.2} mm, L {:.2} mm, momentum drift {:.1e}, energy error {:.1e}",
+            "R/{n}: {} points, {} steps, {:.1} s, dt_min {:.2e}, stopped {:?}, P {:.2} mm, L {:.2} mm, momentum drift {:.1e}, energy error {:.1e}, drag heat {:.3e} of K0 (nodal {:.3e})",
             r.points,
             r.steps,
             r.wall_s,
@@ -38,7 +38,9 @@ pub fn zhang_rod(quick: bool) -> Result<StudyResult> {
             last.map_or(f64::NAN, |s| s.penetration * 1e3),
             last.map_or(f64::NAN, |s| s.length * 1e3),
             r.momentum_drift,
-            r.energy_error
+            r.energy_error,
+            r.drag_heat,
+            r.drag_dissipation
         );
         for (name, d, v) in &r.phase_drift {
             println!(
@@ -75,6 +77,8 @@ pub fn zhang_rod(quick: bool) -> Result<StudyResult> {
                 .with_extra("dt_min_s", r.dt_min)
                 .with_extra("momentum_drift", r.momentum_drift)
                 .with_extra("energy_error", r.energy_error)
+                .with_extra("drag_heat_over_k0", r.drag_heat)
+                .with_extra("drag_dissipation_over_k0", r.drag_dissipation)
                 .with_extra("stopped_at_s", r.stopped_at.unwrap_or(f64::NAN));
             p.extra.insert(
                 "t_s".into(),
