@@ -109,7 +109,7 @@ pub const NOSE_QUANTILE: f64 = 1e-3;
 /// with the mean axial velocity of those points. Centres, not centre ±
 /// `F_zz l⁰`: that is meaningless for the eroded points, stretched along
 /// the crater wall.
-pub fn measure(run: &MultiphaseRun<2>, rod: usize) -> (f64, f64, f64) {
+fn measure(run: &MultiphaseRun<2>, rod: usize) -> (f64, f64, f64) {
     let p = &run.phases[rod].particles;
     let mut tail = f64::NEG_INFINITY;
     let (mut mv, mut m) = (0.0, 0.0);
@@ -156,10 +156,22 @@ fn axial_momentum(run: &MultiphaseRun<2>) -> f64 {
 /// # Errors
 /// A scene that does not build, or a failed step.
 pub fn run(scene: &Scene, every: f64) -> Result<RodRun, Error> {
-    let mut run: MultiphaseRun<2> = build_multiphase_run(scene)?;
+    run_observed(build_multiphase_run(scene)?, every, |_, _| {})
+}
+
+/// [`run`] on a built run (to its `time.end`), calling `observe` with the
+/// run and each sample as it is taken (the first at t = 0).
+///
+/// # Errors
+/// A failed step.
+pub fn run_observed(
+    mut run: MultiphaseRun<2>,
+    every: f64,
+    mut observe: impl FnMut(&MultiphaseRun<2>, &RodSample),
+) -> Result<RodRun, Error> {
     let rod = run.phase_of("tungsten").unwrap_or(0);
     let h = run.grid.h[0];
-    let end = scene.time.end;
+    let end = run.time.end;
     let p0 = axial_momentum(&run);
     let phase_p0: Vec<f64> = run.phases.iter().map(phase_momentum).collect();
     let e0 = run.energies();
@@ -173,7 +185,12 @@ pub fn run(scene: &Scene, every: f64) -> Result<RodRun, Error> {
             tail_velocity: v,
         }
     };
-    samples.push(sample(&run));
+    let mut push = |run: &MultiphaseRun<2>| {
+        let s = sample(run);
+        observe(run, &s);
+        samples.push(s);
+    };
+    push(&run);
     let (mut drift, mut dt_min) = (0.0f64, f64::INFINITY);
     let mut next = every;
     let clock = Instant::now();
@@ -183,14 +200,14 @@ pub fn run(scene: &Scene, every: f64) -> Result<RodRun, Error> {
         let dt = run.stable_dt().min(end - run.t);
         if dt < 1e-2 * dt0 && run.t + dt < end * (1.0 - 1e-12) {
             stopped_at = Some(run.t);
-            samples.push(sample(&run));
+            push(&run);
             break;
         }
         dt_min = dt_min.min(dt);
         run.step(dt)?;
         drift = drift.max((axial_momentum(&run) - p0).abs() / p0.abs());
         if run.t >= next * (1.0 - 1e-12) {
-            samples.push(sample(&run));
+            push(&run);
             next += every;
         }
     }

@@ -5,7 +5,7 @@
 //! `cargo run --release -p probes --bin zhang_rod_probe -- N [END_US] [EVERY_US]`
 //! (N cells per rod radius; defaults 50 and 2 µs); `DRAG=f` scales the
 //! drag coefficients.
-use mpmice::diagnostics::zhang_rod::{measure, scene};
+use mpmice::diagnostics::zhang_rod::{run_observed, scene};
 use mpmice::multiphase::MultiphaseRun;
 use mpmice::scene::build_multiphase_run;
 
@@ -22,7 +22,6 @@ fn main() -> anyhow::Result<()> {
         let f: f64 = f.parse().expect("DRAG: a factor on the drag coefficients");
         run.model.drag.iter_mut().for_each(|k| *k *= f);
     }
-    let rod = run.phase_of("tungsten").unwrap_or(0);
     let k0 = run.energies().kinetic;
     let names: Vec<String> = run
         .phases
@@ -34,14 +33,13 @@ fn main() -> anyhow::Result<()> {
         run.phases.iter().map(|q| q.particles.len()).sum::<usize>(),
         names.join(", ")
     );
-    let print = |run: &MultiphaseRun<2>| {
-        let (nose, tail, _) = measure(run, rod);
+    let r = run_observed(run, every, |run, s| {
         let e = run.energies();
         let mut line = format!(
             "{:6.2} {:7.3} {:7.3} {:+.4e}",
-            run.t * 1e6,
-            -nose * 1e3,
-            (tail - nose) * 1e3,
+            s.t * 1e6,
+            s.penetration * 1e3,
+            s.length * 1e3,
             (e.kinetic + e.strain) / k0 - 1.0
         );
         for ph in &run.phases {
@@ -58,22 +56,10 @@ fn main() -> anyhow::Result<()> {
             run.stable_dt()
         );
         println!("{line}");
-    };
-    print(&run);
-    let clock = std::time::Instant::now();
-    let mut next = every;
-    while run.t < end * (1.0 - 1e-12) {
-        let dt = run.stable_dt().min(end - run.t);
-        run.step(dt)?;
-        if run.t >= next * (1.0 - 1e-12) {
-            print(&run);
-            next += every;
-        }
-    }
+    })?;
     println!(
-        "{} steps, {:.1} s",
-        run.steps,
-        clock.elapsed().as_secs_f64()
+        "{} steps, {:.1} s, stopped early at {:?}",
+        r.steps, r.wall_s, r.stopped_at
     );
     Ok(())
 }
