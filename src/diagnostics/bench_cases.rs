@@ -5,7 +5,9 @@ use nalgebra::SVector;
 
 use crate::grid::{Boundary, Grid};
 use crate::material::eos::{FluidEos, IdealGas};
-use crate::material::{ArtificialViscosity, ElasticConstants, GasPoint, SolidMaterial, SolidModel};
+use crate::material::{
+    ArtificialViscosity, ElasticConstants, GasPoint, PointDensity, SolidMaterial, SolidModel,
+};
 use crate::mpm::{ExplicitParams, Particles, UpdateScheme};
 use crate::shape::ShapeKind;
 use crate::stepper::{SolidRun, TimeControl};
@@ -212,6 +214,7 @@ fn block_material(material: BlockMaterial, h: f64) -> (SolidMaterial, f64, f64) 
                         c2: ArtificialViscosity::DEFAULT_C2,
                     },
                     min_pressure: f64::NEG_INFINITY,
+                    density: PointDensity::Continuity,
                 }),
                 elastic: ElasticConstants {
                     lambda: 0.0,

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::riemann::{ExactRiemann, PrimitiveState};
 use crate::error::{Result, SceneError};
-use crate::material::ArtificialViscosity;
+use crate::material::{ArtificialViscosity, PointDensity};
 use crate::shape::ShapeKind;
 
 /// One York Sod run's settings: a Riemann problem with gas points on a
@@ -40,6 +40,9 @@ pub struct YorkSod {
     /// PIC share of the point velocity update (`mpm.pic_fraction`; York: 0,
     /// FLIP).
     pub pic_fraction: f64,
+    /// Where the points' density comes from (`point_density`; York Eq. 16:
+    /// continuity).
+    pub point_density: PointDensity,
 }
 
 impl Default for YorkSod {
@@ -61,6 +64,7 @@ impl Default for YorkSod {
             right: SOD_RIGHT,
             tube: (0.0, 1.0),
             pic_fraction: 0.0,
+            point_density: PointDensity::Continuity,
         }
     }
 }
@@ -101,6 +105,7 @@ eos = "ideal_gas"
 gamma = 1.4
 cv = 2.5
 artificial_viscosity = {{ g_over_dx = {g:e}, kappa = {kappa:e}, c1 = {c1:e}, c2 = {c2:e} }}
+point_density = "{density}"
 [[objects]]
 material = "gas"
 geometry = {{ type = "box", lower = [{lo:e}, 0.0], upper = [0.5, {h:e}] }}
@@ -120,6 +125,7 @@ velocity = [{ur:e}, 0.0]
         end = s.end,
         cfl = s.cfl,
         pic = s.pic_fraction,
+        density = s.point_density.name(),
         ppc = s.ppc,
         rl = s.left.0,
         ul = s.left.1,

@@ -4,6 +4,7 @@
 //! and by `Σ p V / V_enclosed` — and the runner of York's airbag impact
 //! (Tables V–VI, Figs. 14–17).
 
+use crate::material::PointDensity;
 use crate::membrane::inside_polygon;
 use crate::stepper::SolidRun;
 use nalgebra::Vector2;
@@ -207,6 +208,9 @@ pub struct Airbag {
     /// FLIP, York's update). It damps the gas points' disordered motion
     /// that the inviscid gas grows (see `gas_viscosity`).
     pub pic_fraction: f64,
+    /// Where the air points' density comes from (`point_density`; York Eq.
+    /// 16's continuity, the default, or the grid's).
+    pub point_density: PointDensity,
 }
 
 impl Default for Airbag {
@@ -222,6 +226,7 @@ impl Default for Airbag {
             gas_margin_over_h: 0.25,
             gas_viscosity: 0.2,
             pic_fraction: 0.0,
+            point_density: PointDensity::Continuity,
         }
     }
 }
@@ -334,6 +339,7 @@ gamma = {gamma}
 cv = 718.0
 viscosity = {mu:e}
 artificial_viscosity = {{ g_over_dx = 1.4142135623730951, kappa = 0.75, c1 = 1.0, c2 = 1.0 }}
+point_density = "{density}"
 
 [[materials]]
 name = "fabric"
@@ -380,6 +386,7 @@ formats = ["csv"]
             gamma = Self::GAMMA,
             mu = self.gas_viscosity,
             pic = self.pic_fraction,
+            density = self.point_density.name(),
             rho_f = Self::FABRIC_DENSITY,
             young = self.young,
             nu = Self::POISSON,

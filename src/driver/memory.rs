@@ -92,9 +92,15 @@ impl MemoryEstimate {
         }
         let particles = object_particles.iter().fold(0.0, |a, b| a + b);
         // Node fields: mass, momentum, force, velocity, new velocity,
-        // acceleration, normals and scratch.
+        // acceleration, normals and scratch; gas points reading the grid's
+        // density add their nodal mass, density and the nodes' volumes.
+        let grid_density = scene
+            .materials
+            .iter()
+            .any(|m| m.point_density == Some(crate::material::PointDensity::Grid));
+        let density_fields = if grid_density { 3.0 } else { 0.0 };
         let grid_bytes = if has_particles {
-            particle_fields * nodes * F64 * (4.0 + 6.0 * dimf)
+            particle_fields * nodes * F64 * (4.0 + 6.0 * dimf + density_fields)
         } else {
             0.0
         };

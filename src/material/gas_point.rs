@@ -106,6 +106,41 @@ impl ArtificialViscosity {
     }
 }
 
+/// Where a gas point's density comes from at the start of each step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PointDensity {
+    /// York Eq. 16: `ρ = m / V`, `V = J V⁰`, J carried by the point and
+    /// advanced by `det(I + Δt L)` every step.
+    #[default]
+    Continuity,
+    /// The gas's own density on the grid: the nodal mass of the points of
+    /// every gas material that reads it, `m_i = Σ_p S_ip m_p` (folded at the
+    /// walls like the nodal mass), over the node's share of the domain
+    /// `V_i = ∫_Ω S_i dV` (per radian in r–z), interpolated back,
+    /// `ρ_p = Σ_i S_ip m_i / V_i`, exact for a uniform gas however the
+    /// points lie. The step then advances it by continuity, `J = (ρ_ref /
+    /// ρ_p) det(I + Δt L)`. A point's J otherwise measures only its own
+    /// history: FLIP lets points crowd and part without their volumes
+    /// following, so the carried volumes of an expanding gas come to
+    /// exceed the space it fills (issue 16's dog-bone: Σ V_p 3.5 times the
+    /// enclosed area by t = 4). An ideal gas's nodal force `(γ − 1) m e ∇S`
+    /// and energy update do not read ρ; its pressure reading, `q`, the
+    /// viscous stress and the time-step limits do. Near a free surface the
+    /// gas's nodes are part-filled and read low.
+    Grid,
+}
+
+impl PointDensity {
+    /// The scene's name (`point_density`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Continuity => "continuity",
+            Self::Grid => "grid",
+        }
+    }
+}
+
 /// A gas on material points: equation of state, shear viscosity and
 /// artificial viscosity (York Sec. 3.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,6 +155,8 @@ pub struct GasPoint {
     /// (Lian Eq. 66 sets a liquid's pressure to 0 in tension, so that it can
     /// break up); `f64::NEG_INFINITY` for none.
     pub min_pressure: f64,
+    /// Where the point's density comes from ([`PointDensity`]).
+    pub density: PointDensity,
 }
 
 /// The per-point inputs of a gas-point update beyond its velocity gradient.
@@ -256,6 +293,7 @@ mod tests {
                 c2: 1.0,
             },
             min_pressure: f64::NEG_INFINITY,
+            density: PointDensity::Continuity,
         }
     }
 

@@ -19,6 +19,6 @@ pub mod plasticity;
 pub mod solid;
 pub mod solid_eos;
 
-pub use gas_point::{ArtificialViscosity, GasPoint};
+pub use gas_point::{ArtificialViscosity, GasPoint, PointDensity};
 pub use membrane::MembraneLaw;
 pub use solid::{ElasticConstants, GasInput, PointState, SolidMaterial, SolidModel};

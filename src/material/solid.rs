@@ -163,6 +163,14 @@ impl SolidMaterial {
         }
     }
 
+    /// Whether this is a gas whose points read their density from the grid
+    /// ([`crate::material::PointDensity::Grid`]).
+    #[inline]
+    pub fn reads_grid_density(&self) -> bool {
+        self.gas()
+            .is_some_and(|g| g.density == super::gas_point::PointDensity::Grid)
+    }
+
     /// The membrane law of this material, if it is a membrane.
     #[inline]
     pub fn membrane(&self) -> Option<&MembraneLaw> {

@@ -25,7 +25,7 @@ use super::particles::Particles;
 use super::scatter::{Bins, SharedMut};
 use super::wall_reaction::WallRecord;
 use crate::error::{Error, FailureSite, Result};
-use crate::grid::Grid;
+use crate::grid::{Grid, GHOST};
 use crate::material::failure::failed_stress;
 use crate::material::plasticity::PlasticState;
 use crate::material::{GasInput, PointState, SolidMaterial};
@@ -116,6 +116,15 @@ pub struct GridState<const D: usize> {
     /// The particles' own fields on the nodes the wall fold touches, for
     /// the walls' reaction ([`GridState::wall_impulse`]).
     walls: WallRecord<D>,
+    /// Gas points that read their density from the grid
+    /// ([`crate::material::PointDensity::Grid`]): their nodal mass, folded
+    /// like `mass` (empty when no material does).
+    gas_mass: Vec<f64>,
+    /// Their nodal density `gas_mass / node_volume`, ghosts mirrored.
+    gas_density: Vec<f64>,
+    /// Each node's share of the domain as the points sample it
+    /// ([`node_volumes`]); empty until a step needs it.
+    node_volume: Vec<f64>,
 }
 
 impl<const D: usize> GridState<D> {
@@ -129,6 +138,9 @@ impl<const D: usize> GridState<D> {
             velocity_new: vec![SVector::zeros(); n],
             accel: vec![SVector::zeros(); n],
             walls: WallRecord::default(),
+            gas_mass: Vec::new(),
+            gas_density: Vec::new(),
+            node_volume: Vec::new(),
         }
     }
 
@@ -1050,13 +1062,31 @@ fn p2g<
 ) {
     let grid = ctx.grid;
     let strides = grid.strides();
+    // Gas points that read their density from the grid (York Eq. 16
+    // replaced): their own nodal mass beside the total.
+    let grid_rho = MASS && ctx.materials.iter().any(SolidMaterial::reads_grid_density);
+    if grid_rho {
+        if gs.node_volume.is_empty() {
+            // Once per run: the grid, the shape function and the points'
+            // seeding are fixed; the lattice is the first reading point's.
+            let half = (0..particles.len())
+                .find(|&p| ctx.materials[particles.material[p] as usize].reads_grid_density())
+                .map_or_else(|| grid.h * 0.25, |p| particles.half_size[p]);
+            gs.node_volume = node_volumes(grid, kernel, &half);
+            gs.gas_mass = vec![0.0; gs.mass.len()];
+            gs.gas_density = vec![0.0; gs.mass.len()];
+        }
+        gs.gas_mass.par_iter_mut().for_each(|m| *m = 0.0);
+    }
     let mass = SharedMut::new(&mut gs.mass);
+    let gas_mass = SharedMut::new(&mut gs.gas_mass);
     let momentum = SharedMut::new(&mut gs.momentum);
     let force = SharedMut::new(&mut gs.force);
     let (t, body) = (ctx.t, ctx.body);
     bins.for_each_colored(|p| {
         let (pw, base) = weights_at(grid, kernel, &particles.x[p], lp, p);
         let mp = particles.mass[p];
+        let gas_mp = grid_rho && ctx.materials[particles.material[p] as usize].reads_grid_density();
         let mv = particles.v[p] * mp;
         let mut fb = SVector::<f64, D>::zeros();
         let mut vs = SMatrix::<f64, D, D>::zeros();
@@ -1088,6 +1118,9 @@ fn p2g<
             unsafe {
                 if MASS {
                     *mass.get(idx) += w * mp;
+                    if gas_mp {
+                        *gas_mass.get(idx) += w * mp;
+                    }
                 }
                 if MOMENTUM {
                     *momentum.get(idx) += mv * w;
@@ -1115,12 +1148,67 @@ fn p2g<
     if MASS {
         grid.fold_ghosts(&mut gs.mass);
     }
+    if grid_rho {
+        grid.fold_ghosts(&mut gs.gas_mass);
+        gs.gas_density
+            .par_iter_mut()
+            .zip(gs.gas_mass.par_iter().zip(gs.node_volume.par_iter()))
+            .for_each(|(rho, (&m, &v))| *rho = if v > 0.0 { m / v } else { 0.0 });
+        grid.mirror_ghosts(&mut gs.gas_density);
+    }
     if MOMENTUM {
         grid.fold_ghosts(&mut gs.momentum);
     }
     if FORCE {
         grid.fold_ghosts(&mut gs.force);
     }
+}
+
+/// Each node's share of the domain, `V_i = ∫_Ω S_i dV` (r–z: `∫_Ω S_i r
+/// dr dz`, per radian), as the points sample it: the sum `Σ_q S_iq V_q`
+/// over a lattice of points with half-size `half` (per axis; `ppc = h / 2
+/// half` to a cell, at the sub-cell centres, as the scene seeds them)
+/// filling the domain, folded at the walls as P2G folds the nodal mass. So
+/// `Σ_p S_ip m_p / V_i` is exact for a uniform gas seeded so, at walls,
+/// symmetry planes and the axis too, where the points' sum is not the
+/// integral (at the axis `∫ S_0 |r| dr` against the points' midpoint sum:
+/// 9 % apart for the hat at 2 points per cell).
+fn node_volumes<const D: usize, const S: usize, K: Stencil<S>>(
+    grid: &Grid<D>,
+    kernel: K,
+    half: &SVector<f64, D>,
+) -> Vec<f64> {
+    let axes: Vec<Vec<f64>> = (0..D)
+        .map(|d| {
+            let ppc = (grid.h[d] / (2.0 * half[d])).round().max(1.0) as usize;
+            let lp = half[d] * grid.inv_h[d];
+            let mut v = vec![0.0; grid.node_dims[d]];
+            for k in 0..grid.cells[d] * ppc {
+                let xi = (k as f64 + 0.5) / ppc as f64;
+                let radius = if d == 0 && grid.axisymmetric {
+                    grid.lower[0] + xi * grid.h[0]
+                } else {
+                    1.0
+                };
+                let wq = grid.h[d] / ppc as f64 * radius;
+                let w1 = kernel.eval(xi, lp);
+                for (j, w) in w1.w.iter().enumerate() {
+                    v[(w1.base + j as isize + GHOST as isize) as usize] += w * wq;
+                }
+            }
+            v
+        })
+        .collect();
+    let mut vol: Vec<f64> = (0..grid.num_nodes())
+        .map(|i| {
+            let c = grid.node_coords(i);
+            (0..D)
+                .map(|d| axes[d][(c[d] + GHOST as isize) as usize])
+                .product()
+        })
+        .collect();
+    grid.fold_ghosts(&mut vol);
+    vol
 }
 
 /// v = p/m on nodes with mass, zero elsewhere; ghosts mirrored (the boundary
@@ -1316,10 +1404,18 @@ fn g2p<
             let mut vel = SVector::<f64, D>::zeros();
             let mut l = SMatrix::<f64, D, D>::zeros();
             let mut v_r = 0.0;
+            // A gas point that reads its density from the grid: ρ at x_p,
+            // where P2G mapped it ([`crate::material::PointDensity::Grid`]).
+            let reads_rho =
+                GRAD != GRAD_NONE && ctx.materials[mat[p] as usize].reads_grid_density();
+            let mut rho_grid = 0.0;
             pw.for_each(|m, w, g| {
                 let idx = base + offset(m, &strides);
                 if FLIP {
                     acc += gs.accel[idx] * w;
+                }
+                if reads_rho {
+                    rho_grid += gs.gas_density[idx] * w;
                 }
                 if POS == POS_APPLY || POS == POS_STORE {
                     vel += gs.velocity_new[idx] * w;
@@ -1429,13 +1525,35 @@ fn g2p<
                     f_new[(2, 2)] = fp[(2, 2)] * (1.0 + dt * l_hoop);
                     j *= f_new[(2, 2)];
                 }
+                let rho_ref = mass[p] / vol0[p];
+                let mut j_old = *vp_vol / vol0[p];
+                if reads_rho {
+                    // The step starts from the grid's density and advances
+                    // it by continuity, J = J_grid det(I + Δt L) (with the
+                    // hoop factor in r–z); F is rescaled to that J (a gas
+                    // reads nothing else of it).
+                    let j_grid = rho_ref / rho_grid;
+                    let hoop_old = if AXI { fp[(2, 2)] } else { 1.0 };
+                    let j_step = j / (det_small(&fd) * hoop_old);
+                    let scale = (j_grid * j_step / j).powf(1.0 / (D + usize::from(AXI)) as f64);
+                    for a in 0..D {
+                        for b in 0..D {
+                            f_new[(a, b)] *= scale;
+                        }
+                    }
+                    if AXI {
+                        f_new[(2, 2)] *= scale;
+                    }
+                    j_old = j_grid;
+                    j = j_grid * j_step;
+                }
                 if !j.is_finite() || j <= 0.0 {
                     failed.fetch_min(p, Ordering::Relaxed);
                     return;
                 }
                 let gas = GasInput {
-                    rho_ref: mass[p] / vol0[p],
-                    j_old: *vp_vol / vol0[p],
+                    rho_ref,
+                    j_old,
                     c_max,
                 };
                 // SAFETY: as above.

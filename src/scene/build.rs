@@ -87,6 +87,7 @@ fn gas_point_material(m: &MaterialSpec, i: usize, h: f64) -> Result<SolidMateria
                 c2: av.c2,
             },
             min_pressure: m.min_pressure.unwrap_or(f64::NEG_INFINITY),
+            density: m.point_density.unwrap_or_default(),
         }),
         elastic: ElasticConstants {
             lambda: 0.0,

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::SceneError;
 use crate::grid::Boundary;
 use crate::material::eos::{EosError, FluidEos, IdealGas, Jwl, MieGruneisen, StiffenedGas};
-use crate::material::SolidModel;
+use crate::material::{PointDensity, SolidModel};
 use crate::mpm::UpdateScheme;
 use crate::multiphase::MAX_PHASES;
 use crate::shape::ShapeKind;
@@ -790,6 +790,11 @@ pub struct MaterialSpec {
     /// liquid's pressure as 0 in tension so that it can break up:
     /// `min_pressure = 0.0`.
     pub min_pressure: Option<f64>,
+    /// Gas points: where a point's density comes from, `"continuity"`
+    /// (York Eq. 16, the default) or `"grid"` (the gas's nodal density
+    /// interpolated back at the start of each step; see
+    /// [`crate::material::PointDensity`]).
+    pub point_density: Option<PointDensity>,
     /// A rigid solid (coupled scenes): its particles move with their
     /// objects' `velocity` (one for all objects of the material),
     /// prescribed; the elastic constants give its bulk EOS in the cells.
@@ -1700,6 +1705,7 @@ fn validate_solid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         (m.frame.is_some(), "frame"),
         (m.artificial_viscosity.is_some(), "artificial_viscosity"),
         (m.min_pressure.is_some(), "min_pressure"),
+        (m.point_density.is_some(), "point_density"),
     ] {
         if v {
             return Err(err(p(k), "only for fluid materials (type = \"fluid\")"));
@@ -1909,6 +1915,12 @@ fn validate_fluid(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(), Sc
         if !pm.is_finite() {
             return Err(err(p("min_pressure"), format!("must be finite (got {pm})")));
         }
+    }
+    if m.point_density.is_some() && !m.on_particles() {
+        return Err(err(
+            p("point_density"),
+            "only for gas points (frame = \"particles\")",
+        ));
     }
     if let Some(av) = &m.artificial_viscosity {
         if !m.on_particles() {
@@ -2235,6 +2247,7 @@ fn validate_membrane(m: &MaterialSpec, p: &dyn Fn(&str) -> String) -> Result<(),
         (m.frame.is_some(), "frame"),
         (m.artificial_viscosity.is_some(), "artificial_viscosity"),
         (m.min_pressure.is_some(), "min_pressure"),
+        (m.point_density.is_some(), "point_density"),
         (m.rigid, "rigid"),
     ] {
         if v {

@@ -11,6 +11,7 @@ use mpmice::diagnostics::york::{
 };
 use mpmice::ice::{run_fluid, shock_tube, Advection, IceBoundary, IceMaterial, IceParams};
 use mpmice::material::eos::IdealGas;
+use mpmice::material::PointDensity;
 use mpmice::shape::ShapeKind;
 
 /// York Sec. 4.1: Sod (ρ, u, p) = (1, 0, 1 | 0.125, 0, 0.1), γ = 1.4, to
@@ -18,7 +19,9 @@ use mpmice::shape::ShapeKind;
 /// halvings; quick: the two coarsest) with 3 points per cell per direction,
 /// MUSL and York's q (g = √2 Δx, κ̃ = 0.75, c₁ = c₂ = 1): L1(ρ) against the
 /// exact Riemann solution for GIMP, York's bilinear hats and the quadratic
-/// and cubic B-splines, and the
+/// and cubic B-splines (York Eq. 16's continuity density), for GIMP and the
+/// cubic B-splines with the points' grid density (`point_density =
+/// "grid"`), and the
 /// project's explicit ICE (first-order donor cell; high resolution) at the
 /// same Δx and time.
 ///
@@ -32,22 +35,37 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
     };
     let end = YorkSod::default().end;
     let mut series = Vec::new();
-    for (shape, label) in [
+    let (continuity, grid) = (PointDensity::Continuity, PointDensity::Grid);
+    for (shape, point_density, label) in [
         (
             ShapeKind::Gimp,
+            continuity,
             "gas points, GIMP, MUSL, York q (3 points per cell per direction)",
         ),
         (
             ShapeKind::Linear,
+            continuity,
             "gas points, bilinear hats (York's choice), MUSL, York q",
         ),
         (
             ShapeKind::QuadraticBspline,
+            continuity,
             "gas points, quadratic B-splines, MUSL, York q",
         ),
         (
             ShapeKind::CubicBspline,
+            continuity,
             "gas points, cubic B-splines, MUSL, York q",
+        ),
+        (
+            ShapeKind::Gimp,
+            grid,
+            "gas points, GIMP, grid density, MUSL, York q",
+        ),
+        (
+            ShapeKind::CubicBspline,
+            grid,
+            "gas points, cubic B-splines, grid density, MUSL, York q",
         ),
     ] {
         let mut points = Vec::new();
@@ -55,6 +73,7 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
             let run = run_york_sod(&YorkSod {
                 cells: n,
                 shape,
+                point_density,
                 ..YorkSod::default()
             })
             .with_context(|| format!("York Sod, {n} cells"))?;
@@ -99,7 +118,12 @@ pub fn york_sod(quick: bool) -> Result<StudyResult> {
         "York Sec. 4.1 with gas points (York Sec. 3.3): L1(rho) = sum_p |m_p/V_p - rho_exact(x_p)| V_p / H (particle quadrature); ICE: mean over cells of |rho - exact cell average|; both at t = 0.143".to_string(),
         "target: gas points within 1.5x the ICE's L1 at equal dx and order >= 0.8".to_string(),
     ];
-    for (gas, name) in [(&series[0], "GIMP"), (&series[3], "cubic B-splines")] {
+    for (gas, name) in [
+        (&series[0], "GIMP"),
+        (&series[3], "cubic B-splines"),
+        (&series[4], "GIMP, grid density"),
+        (&series[5], "cubic B-splines, grid density"),
+    ] {
         for ice in series.iter().filter(|s| s.label.starts_with("ICE")) {
             let ratios: Vec<String> = gas
                 .points
@@ -210,21 +234,25 @@ pub fn york_piston_container(quick: bool) -> Result<StudyResult> {
 
 /// York Sec. 4.3: the dog-bone membrane expansion (York Fig. 10, Tables
 /// II–IV) at element sizes 0.4, 0.2, 0.1, 0.05 (quick: 0.4, 0.2; or the
-/// list in `YORK_DOGBONE_H`) with the quadratic B-spline, and at 0.4, 0.2
-/// with GIMP (the control: there gas points drift through the membrane),
-/// membrane points an eighth of a cell apart, to t = `YORK_DOGBONE_END`
-/// (default 4): final mean radius and pressure, radii at 0° and 90°, hoop
-/// stress against p r / t, energy, gas points outside the membrane, wall
-/// time. Series: the hoop stress's relative difference from Laplace's
-/// p r / t (p from the gas's p V over the enclosed area), per shape, and
-/// the radii's difference |r(0°) − r(90°)| / r. Each run's history goes to
-/// `york_dogbone[_gimp]_h{h}.csv` beside the study's JSON (`results/`,
-/// `results/quick/` or `--out`).
+/// list in `YORK_DOGBONE_H`) with the quadratic B-spline and the gas
+/// points' grid density at CFL 0.2 (the case), the same with York Eq. 16's
+/// continuity density at CFL 0.4 to h = 0.1, and at 0.4, 0.2 with GIMP
+/// and the grid density (the control: there gas points drift through the
+/// membrane), membrane points an eighth of a cell apart, to t =
+/// `YORK_DOGBONE_END` (default 4): final mean radius and pressure, radii
+/// at 0° and 90°, hoop stress against p r / t, energy, gas points outside
+/// the membrane, Σ V_p over the enclosed area, wall time. Series: the hoop
+/// stress's relative difference from Laplace's p r / t (p from the gas's
+/// p V over the enclosed area), per configuration, and the radii's
+/// difference |r(0°) − r(90°)| / r. Each run's history goes to
+/// `york_dogbone[_continuity|_gimp]_h{h}.csv` beside the study's JSON
+/// (`results/`, `results/quick/` or `--out`).
 ///
 /// # Errors
 /// Any solver error.
 pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
     use mpmice::diagnostics::york_membrane::{run_dog_bone, DogBone};
+    use mpmice::material::PointDensity;
     let hs: Vec<f64> = match std::env::var("YORK_DOGBONE_H") {
         Ok(v) => v.split(',').filter_map(|x| x.trim().parse().ok()).collect(),
         Err(_) if quick => vec![0.4, 0.2],
@@ -250,24 +278,42 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
             DogBone::recovered_young()
         ),
         "targets: final radius converges; at the two finest sizes hoop within 2 % of p r / t and radii at 0 and 90 deg within 1 %; no gas point outside".to_string(),
-        "shapes: the quadratic B-spline is the case's; with GIMP gas points drift onto the membrane and through it (6 out at h = 0.2, 10 at h = 0.1 in the stored run of 6d54763, which took 678 s at h = 0.1 as the escaped points expanded)".to_string(),
+        "shapes: the quadratic B-spline is the case's; with GIMP gas points drift onto the membrane and through it (6 out at h = 0.2, 10 at h = 0.1 in the stored run of 6d54763, with continuity density, which took 678 s at h = 0.1 as the escaped points expanded)".to_string(),
+        "density: the case's gas points read their density from the grid (point_density = grid) at CFL 0.2; York Eq. 16's continuity density (CFL 0.4) is the second series: its points' volumes outgrow the enclosed area (sum V_p / area 3.5 at t = 4, h = 0.2), which halves the point-mean pressure and inflates the viscous stress and the viscous time-step limit".to_string(),
     ];
     // Beside the study's JSON: `results/`, `results/quick/` or `--out`.
     let root = crate::plot_dir(quick);
     std::fs::create_dir_all(&root)?;
     let mut series = Vec::new();
     let gimp_hs: Vec<f64> = hs.iter().copied().filter(|&h| h >= 0.2).collect();
-    for (shape, tag, sizes) in [("quadratic_bspline", "", &hs), ("gimp", "_gimp", &gimp_hs)] {
+    // York Eq. 16's continuity density at CFL 0.4 to h = 0.1 (at 0.05 it
+    // took 2079 s, the inflated points' viscous limit setting Δt).
+    let continuity_hs: Vec<f64> = hs.iter().copied().filter(|&h| h >= 0.1).collect();
+    let grid = PointDensity::Grid;
+    for (shape, tag, sizes, density, cfl) in [
+        ("quadratic_bspline", "", &hs, grid, 0.2),
+        (
+            "quadratic_bspline",
+            "_continuity",
+            &continuity_hs,
+            PointDensity::Continuity,
+            0.4,
+        ),
+        ("gimp", "_gimp", &gimp_hs, grid, 0.2),
+    ] {
         let mut points = Vec::new();
         let mut round_points = Vec::new();
+        let name = format!("{shape}, {} density, CFL {cfl}", density.name());
         for &h in sizes {
             let s = DogBone {
                 h,
                 end,
                 shape,
+                point_density: density,
+                cfl,
                 ..DogBone::default()
             };
-            let r = run_dog_bone(&s).with_context(|| format!("dog-bone h = {h}, {shape}"))?;
+            let r = run_dog_bone(&s).with_context(|| format!("dog-bone h = {h}, {name}"))?;
             let m = r.last;
             let laplace = m.area_pressure * m.mean_radius / DogBone::THICKNESS;
             let err = (m.mean_stress - laplace).abs() / laplace;
@@ -286,10 +332,10 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
                 .find(|x| (x.0 - h).abs() < 1e-9)
                 .map_or((f64::NAN, f64::NAN, f64::NAN), |x| (x.1, x.2, x.3));
             notes.push(format!(
-                "{shape}, h = {h}: mean radius {:.4} (York {pr}), radius 0/90 deg {:.4}/{:.4} (differ {:.2} %), point-mean pressure {:.2} (York {pp}), p from p V / area {:.2}, hoop {:.1} (York {ps}) vs p r / t {:.1} ({:.2} %), energy {:.2} -> {:.2} ({:+.3} %; kinetic at the end {:.3} on the points, {:.3} on the grid), gas points outside {} at the end (max {}), {} steps, {} particles, {:.1} s",
+                "{name}, h = {h}: mean radius {:.4} (York {pr}), radius 0/90 deg {:.4}/{:.4} (differ {:.2} %), point-mean pressure {:.2} (York {pp}), p from p V / area {:.2}, hoop {:.1} (York {ps}) vs p r / t {:.1} ({:.2} %), energy {:.2} -> {:.2} ({:+.3} %; kinetic at the end {:.3} on the points, {:.3} on the grid), gas points outside {} at the end (max {}), sum V_p / area {:.3}, {} steps, {} particles, {:.1} s",
                 m.mean_radius, m.radius_0, m.radius_90, 100.0 * round, m.mean_pressure, m.area_pressure,
                 m.mean_stress, laplace, 100.0 * err, e0, e1, 100.0 * (e1 / e0 - 1.0), k1, g1,
-                r.outside_end, r.outside_max, r.steps, r.particles, r.wall_s
+                r.outside_end, r.outside_max, m.gas_volume / m.area, r.steps, r.particles, r.wall_s
             ));
             eprintln!("{}", notes.last().map_or("", |s| s.as_str()));
             std::fs::write(
@@ -321,6 +367,7 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
                     .with_extra("energy_change", e1 / e0 - 1.0)
                     .with_extra("kinetic_end", k1)
                     .with_extra("grid_kinetic_end", g1)
+                    .with_extra("gas_volume_over_area", m.gas_volume / m.area)
                     .with_extra("outside_end", r.outside_end as f64)
                     .with_extra("outside_max", r.outside_max as f64)
                     .with_extra("steps", r.steps as f64),
@@ -331,12 +378,12 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
             continue;
         }
         series.push(Series::new(
-            format!("dog-bone, {shape}: hoop stress vs Laplace p r / t"),
+            format!("dog-bone, {name}: hoop stress vs Laplace p r / t"),
             "|s/(p r/t) - 1|",
             points,
         ));
         series.push(Series::new(
-            format!("dog-bone, {shape}: radii at 0 and 90 deg"),
+            format!("dog-bone, {name}: radii at 0 and 90 deg"),
             "|r(0) - r(90)| / r",
             round_points,
         ));

@@ -1,6 +1,7 @@
 //! Probe of York Sec. 4.3's dog-bone (`diagnostics::york_membrane::DogBone`):
 //! `cargo run --release -p probes --bin york_dogbone_probe -- H END MARGIN SHAPE PIC`
-//! (defaults 0.2, 0.3, 0, the case's `quadratic_bspline`, 0) prints the final measures (radii, hoop
+//! (defaults 0.2, 0.3, 0, the case's `quadratic_bspline`, 0; `DENSITY=continuity` for York Eq. 16's
+//! density instead of the case's grid density, `CFL=c` for the Courant number, default the case's) prints the final measures (radii, hoop
 //! stress against p r / t, gas points out, energy, kinetic energy of the
 //! points and of the grid; `HIST=1` adds the history CSV). With `TRACE=1`
 //! it prints instead, for each gas point the first time it is outside the
@@ -28,6 +29,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         gas_margin_over_h: margin,
         shape,
         pic_fraction: args.get(5).map_or(Ok(0.0), |s| s.parse())?,
+        point_density: match std::env::var("DENSITY").as_deref() {
+            Ok("continuity") => mpmice::material::PointDensity::Continuity,
+            _ => DogBone::default().point_density,
+        },
+        cfl: std::env::var("CFL").map_or(Ok(DogBone::default().cfl), |s| s.parse())?,
         ..DogBone::default()
     };
     if std::env::var("TRACE").is_err() {

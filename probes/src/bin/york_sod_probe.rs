@@ -3,7 +3,8 @@
 //! density/energy range (all cases).
 //! `[CASE=123|ratio] [SHAPE=q|c|l] [DUMP=1] cargo run --release -p probes --bin york_sod_probe -- G KAPPA C1 C2 CFL PPC CELLS...`
 //! (G = g/Δx; York's defaults: 1.4142135623730951 0.75 1 1 0.4 3 200);
-//! `END=T` ends at T instead of the case's time; `PIC=β` sets the PIC share.
+//! `END=T` ends at T instead of the case's time; `PIC=β` sets the PIC share;
+//! `DENSITY=grid` gives the points the grid's density (`point_density`).
 use mpmice::diagnostics::york::{riemann_exact, run_york_sod, YorkSod};
 
 fn main() {
@@ -42,6 +43,9 @@ fn main() {
         },
         _ => YorkSod::default(),
     };
+    if std::env::var("DENSITY").as_deref() == Ok("grid") {
+        base.point_density = mpmice::material::PointDensity::Grid;
+    }
     if let Ok(b) = std::env::var("PIC") {
         base.pic_fraction = b.parse().expect("PIC: a share in [0, 1]");
     }
