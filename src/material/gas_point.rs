@@ -117,10 +117,11 @@ pub enum PointDensity {
     /// The gas's own density on the grid: the nodal mass of the points of
     /// every gas material that reads it, `m_i = Σ_p S_ip m_p` (folded at the
     /// walls like the nodal mass), over the node's share of the domain
-    /// `V_i = ∫_Ω S_i dV` (per radian in r–z), interpolated back,
-    /// `ρ_p = Σ_i S_ip m_i / V_i`, exact for a uniform gas however the
-    /// points lie. The step then advances it by continuity, `J = (ρ_ref /
-    /// ρ_p) det(I + Δt L)`. A point's J otherwise measures only its own
+    /// `V_i` (`∫_Ω S_i dV` as a lattice of points seeded like the scene's
+    /// samples it, folded likewise; per radian in r–z), interpolated back,
+    /// `ρ_p = Σ_i S_ip m_i / V_i`: exact for a uniform gas so seeded,
+    /// whatever volumes and J its points carry. The step then advances it
+    /// by continuity, `J = (ρ_ref / ρ_p) det(I + Δt L)`. A point's J otherwise measures only its own
     /// history: FLIP lets points crowd and part without their volumes
     /// following, so the carried volumes of an expanding gas come to
     /// exceed the space it fills (issue 16's dog-bone: Σ V_p 3.5 times the
