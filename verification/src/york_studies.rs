@@ -244,7 +244,8 @@ pub fn york_piston_container(quick: bool) -> Result<StudyResult> {
 /// the membrane, Σ V_p over the enclosed area, wall time. Series: the hoop
 /// stress's relative difference from Laplace's p r / t (p from the gas's
 /// p V over the enclosed area), per configuration, and the radii's
-/// difference |r(0°) − r(90°)| / r. Each run's history goes to
+/// difference |r(0°) − r(90°)| / r, and the mean-radius history's largest
+/// difference over time from the next finer size's. Each run's history goes to
 /// `york_dogbone[_continuity|_gimp]_h{h}.csv` beside the study's JSON
 /// (`results/`, `results/quick/` or `--out`).
 ///
@@ -303,6 +304,7 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
     ] {
         let mut points = Vec::new();
         let mut round_points = Vec::new();
+        let mut histories = Vec::new();
         let name = format!("{shape}, {} density, CFL {cfl}", density.name());
         for &h in sizes {
             let s = DogBone {
@@ -373,6 +375,7 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
                     .with_extra("steps", r.steps as f64),
             );
             round_points.push(Point::new(h, round, r.wall_s, ups));
+            histories.push((h, r.wall_s, r.history));
         }
         if points.is_empty() {
             continue;
@@ -387,6 +390,30 @@ pub fn york_dogbone(quick: bool) -> Result<StudyResult> {
             "|r(0) - r(90)| / r",
             round_points,
         ));
+        // Over time: each size's mean-radius history against the next finer
+        // size's, sampled at the same times (York Fig. 13's curves).
+        histories.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let pairs: Vec<Point> = histories
+            .windows(2)
+            .map(|w| {
+                let ((h, wall, a), (_, _, b)) = (&w[0], &w[1]);
+                let gap = a
+                    .iter()
+                    .zip(b)
+                    .filter(|(x, y)| (x.t - y.t).abs() < 1e-9)
+                    .map(|(x, y)| (x.mean_radius - y.mean_radius).abs())
+                    .fold(0.0, f64::max);
+                Point::new(*h, gap, *wall, 0.0)
+            })
+            .collect();
+        // (An order needs two pairs: not for GIMP's two sizes.)
+        if pairs.len() >= 2 {
+            series.push(Series::new(
+                format!("dog-bone, {name}: mean-radius history vs the next finer size"),
+                "max_t |r_h(t) - r_h/2(t)|",
+                pairs,
+            ));
+        }
     }
     Ok(StudyResult {
         study: "york_dogbone".into(),
