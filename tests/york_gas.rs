@@ -388,6 +388,15 @@ fn bad_gas_point_input_names_its_key() {
             "expected `continuity` or `grid`",
         ),
         (
+            edit(
+                "eos = \"ideal_gas\"\ngamma = 1.4\ncv = 2.5\n",
+                "eos = \"stiffened_gas\"\ngamma = 1.4\ncv = 2.5\np_inf = 1.0\npoint_density = \
+                 \"grid\"\n",
+            ),
+            "materials[0].point_density",
+            "only with eos = \"ideal_gas\"",
+        ),
+        (
             format!(
                 "{good}\n[[materials]]\nname = \"steel\"\ntype = \"solid\"\nmodel = \
                  \"linear_elastic\"\ndensity = 1.0\nyoungs_modulus = 1.0\npoisson_ratio = \

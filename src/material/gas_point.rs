@@ -127,8 +127,10 @@ pub enum PointDensity {
     /// exceed the space it fills (issue 16's dog-bone: Σ V_p 3.5 times the
     /// enclosed area by t = 4). An ideal gas's nodal force `(γ − 1) m e ∇S`
     /// and energy update do not read ρ; its pressure reading, `q`, the
-    /// viscous stress and the time-step limits do. Near a free surface the
-    /// gas's nodes are part-filled and read low.
+    /// viscous stress and the time-step limits do. Near a wall, another
+    /// material or a free surface the gas's nodes are part-filled and read
+    /// low; another EOS's forces would feel that, so the scene accepts this
+    /// for the ideal gas only.
     Grid,
 }
 
