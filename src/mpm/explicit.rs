@@ -1357,6 +1357,9 @@ fn g2p<
     } else {
         0.0
     };
+    // Gas points reading the grid's density: looked up per point only when
+    // some material does.
+    let grid_rho = GRAD != GRAD_NONE && ctx.materials.iter().any(SolidMaterial::reads_grid_density);
     // Plastic state travels only when some material is plastic, damage
     // only when some material fails.
     let plastic = GRAD != GRAD_NONE && ctx.materials.iter().any(|m| m.plasticity().is_some());
@@ -1406,8 +1409,7 @@ fn g2p<
             let mut v_r = 0.0;
             // A gas point that reads its density from the grid: ρ at x_p,
             // where P2G mapped it ([`crate::material::PointDensity::Grid`]).
-            let reads_rho =
-                GRAD != GRAD_NONE && ctx.materials[mat[p] as usize].reads_grid_density();
+            let reads_rho = grid_rho && ctx.materials[mat[p] as usize].reads_grid_density();
             let mut rho_grid = 0.0;
             pw.for_each(|m, w, g| {
                 let idx = base + offset(m, &strides);
