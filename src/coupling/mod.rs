@@ -240,6 +240,9 @@ pub struct ImplicitTotals {
     pub max_newton_iterations: u64,
     /// Krylov iterations (0 with the direct solver).
     pub linear_iterations: u64,
+    /// Tangents assembled and factorised (fewer than the Newton iterations
+    /// with `implicit.modified_newton`).
+    pub factorisations: u64,
     /// Coupled steps redone with a smaller Δt after a failed solve.
     pub step_retries: u64,
     /// Seconds in P2G, pattern, residual and tangent assembly.
@@ -263,6 +266,7 @@ impl ImplicitTotals {
         self.newton_iterations += st.newton_iterations as u64;
         self.max_newton_iterations = self.max_newton_iterations.max(st.newton_iterations as u64);
         self.linear_iterations += st.linear_iterations as u64;
+        self.factorisations += st.factorisations as u64;
         self.assembly_s += st.assembly_s;
         self.factor_s += st.factor_s;
         self.solve_s += st.solve_s;

@@ -473,6 +473,9 @@ pub struct FieldIterations {
     pub newton_max: u64,
     /// Mean Krylov iterations per step (0 with the direct solver).
     pub linear_mean: f64,
+    /// Mean tangent factorisations per step (the Newton iterations with
+    /// full Newton, fewer with `implicit.modified_newton`).
+    pub factorisations_mean: f64,
 }
 
 /// How a model describes itself in the run summary.

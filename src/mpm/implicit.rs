@@ -298,6 +298,10 @@ pub struct StepStats {
     pub newton_iterations: usize,
     /// Linear (Krylov) iterations of the accepted attempt (0 for direct).
     pub linear_iterations: usize,
+    /// Tangents assembled and factorised in the accepted attempt (one per
+    /// Newton iteration with full Newton; fewer with
+    /// [`ImplicitParams::modified_newton`]).
+    pub factorisations: usize,
     /// Euclidean residual norm ‖R‖ at every Newton iterate (first = at u = 0,
     /// last = at the converged u).
     pub residuals: Vec<f64>,
@@ -1026,6 +1030,7 @@ impl<const D: usize> ImplicitRun<D> {
             }
             du.copy_from_slice(&rhs);
             let lin = self.solve(&vals, &mut du, assemble)?;
+            st.factorisations += usize::from(assemble);
             st.linear_iterations += lin.iterations;
             st.used_lu |= lin.used_lu;
             st.factor_s += lin.factor_s;

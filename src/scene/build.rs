@@ -659,6 +659,7 @@ fn implicit_params(scene: &Scene, min_mass: f64) -> ImplicitParams {
     params.tol_displacement = im.tolerance_displacement;
     params.tol_energy = im.tolerance_energy;
     params.max_newton = im.max_newton_iterations;
+    params.modified_newton = im.modified_newton;
     params.linear = match im.linear_solver {
         NewtonSolverKind::Cholesky => ImplicitLinear::Cholesky,
         NewtonSolverKind::PcgJacobi => ImplicitLinear::PcgJacobi {

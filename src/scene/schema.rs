@@ -1465,6 +1465,12 @@ pub struct ImplicitSpec {
     /// Newton iterations per attempt (≥ 1).
     #[serde(default = "default_max_newton")]
     pub max_newton_iterations: usize,
+    /// Modified Newton: the tangent is assembled and factorised at the
+    /// first iteration of a step's attempt only (and again after an
+    /// iteration that contracts the residual by less than 10×), the later
+    /// iterations reuse its factorisation (default `false`: full Newton).
+    #[serde(default)]
+    pub modified_newton: bool,
     /// Loads (gravity, pressures) ramp linearly to full over this time
     /// (default: applied at once).
     pub load_ramp: Option<f64>,
@@ -1584,6 +1590,7 @@ impl Default for ImplicitSpec {
             tolerance_displacement: default_tol_disp(),
             tolerance_energy: default_tol_energy(),
             max_newton_iterations: default_max_newton(),
+            modified_newton: false,
             load_ramp: None,
             dt_max: None,
             max_cell_fraction: None,

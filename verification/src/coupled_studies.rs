@@ -63,6 +63,7 @@ pub fn cylinder_scene_at(
         point
             .with_extra("newton_iterations", it.newton_iterations as f64)
             .with_extra("max_newton_iterations", it.max_newton_iterations as f64)
+            .with_extra("factorisations", it.factorisations as f64)
             .with_extra("step_retries", it.step_retries as f64)
             .with_extra("pressure_s", run.pressure_s)
             .with_extra("newton_assembly_s", it.assembly_s)

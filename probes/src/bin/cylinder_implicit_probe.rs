@@ -6,7 +6,8 @@
 //! (DT: the implicit step, default the case's `time.dt`). `PASSES=N` sets
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
 //! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
-//! steel Newmark instead of quasistatic.
+//! steel Newmark instead of quasistatic; `MODIFIED=1` / `MODIFIED=0` sets
+//! `implicit.modified_newton`.
 
 use mpmice::diagnostics::coupled::run_cylinder_scene;
 use mpmice::scene;
@@ -32,6 +33,9 @@ fn main() -> anyhow::Result<()> {
             if std::env::var("DYNAMIC").is_ok() {
                 sc.implicit.dynamic = true;
             }
+            if let Ok(m) = std::env::var("MODIFIED") {
+                sc.implicit.modified_newton = m == "1";
+            }
             let ci = &mut sc.implicit.coupling;
             if let Ok(n) = std::env::var("PASSES") {
                 ci.max_iterations = n.parse()?;
@@ -50,14 +54,15 @@ fn main() -> anyhow::Result<()> {
         let it = run.implicit_totals;
         println!(
             "{name:8} dx {dx}: Eq.43 {:.4e}  P {:.4e} Pa  steps {}  wall {:.3} s  \
-             newton {} (max {}) passes {} (max {}) retries {}; s: pressure {:.2} assembly {:.2} factor {:.2} \
-             solve {:.2} particles {:.2}",
+             newton {} (max {}, {} factorisations) passes {} (max {}) retries {}; s: pressure {:.2} \
+             assembly {:.2} factor {:.2} solve {:.2} particles {:.2}",
             m.error43,
             m.pressure,
             run.steps,
             wall,
             it.newton_iterations,
             it.max_newton_iterations,
+            it.factorisations,
             it.coupling_iterations,
             it.max_coupling_iterations,
             it.step_retries,

@@ -318,6 +318,7 @@ fn coupled_iterations<const D: usize>(run: &CoupledRun<D>) -> Option<CoupledIter
             newton_mean: f.implicit_totals.newton_iterations as f64 / n,
             newton_max: f.implicit_totals.max_newton_iterations,
             linear_mean: f.implicit_totals.linear_iterations as f64 / n,
+            factorisations_mean: f.implicit_totals.factorisations as f64 / n,
         })
         .collect();
     (!fields.is_empty()).then(|| CoupledIterations {
