@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use mpmice::diagnostics::coupled::{measure_cylinder, run_cylinder_scene};
+use mpmice::diagnostics::coupled::{measure_cylinder, run_cylinder_history, run_cylinder_scene};
 use mpmice::driver::{run_scene, RunOptions};
 use mpmice::scene::{self, Scene};
 
@@ -18,12 +18,40 @@ fn case(name: &str) -> Scene {
 /// measured inner gauge pressure): first order in dx in 40 steps of 1e-4 s
 /// (the explicit run takes 3594 steps at dx = 0.05), and as close to Lamé
 /// as the explicit coupled run at the same dx.
+///
+/// Over time: the quasistatic steel is in equilibrium with each step's load,
+/// so Lamé holds at every step with that step's P. During the heating
+/// (t from 1 to 3 ms) every step's Eq. 43 stays below 0.27 at dx 0.1 and
+/// 0.15 at dx 0.05 (measured 0.254–0.259 and 0.128–0.143). After the heating
+/// stops a transient of a few steps lifts it (dx 0.05: 0.295 at 3.4 ms,
+/// back to 0.137 at 3.7 ms; printed, not asserted; the study's series
+/// 'max over t in [1, 4] ms' shows it shrinking with dx).
 #[test]
 fn implicit_cylinder_converges_to_lame_at_large_steps() {
     let mut errors = Vec::new();
-    for dx in [0.1, 0.05] {
-        let (run, m, _) = run_cylinder_scene(case("pressurized_cylinder_implicit.toml"), dx)
-            .expect("implicit cylinder runs");
+    for (dx, heating_bound) in [(0.1, 0.27), (0.05, 0.15)] {
+        let (run, m, _, history) =
+            run_cylinder_history(case("pressurized_cylinder_implicit.toml"), dx, 1e-3)
+                .expect("implicit cylinder runs");
+        let heating: Vec<f64> = history
+            .iter()
+            .filter(|h| h.t <= 3.0e-3 + 1e-9)
+            .map(|h| h.error43)
+            .collect();
+        let after = history
+            .iter()
+            .filter(|h| h.t > 3.0e-3 + 1e-9)
+            .fold(0.0_f64, |a, h| a.max(h.error43));
+        let heating_max = heating.iter().copied().fold(0.0, f64::max);
+        println!(
+            "dx {dx}: Eq. 43 over the heating (t in [1, 3] ms, {} steps) {:.4e} … {:.4e}, \
+             largest after it {after:.4e}",
+            heating.len(),
+            heating.iter().copied().fold(f64::INFINITY, f64::min),
+            heating_max
+        );
+        assert_eq!(heating.len(), 21, "a sample every step from 1 to 3 ms");
+        assert!(heating_max < heating_bound, "dx {dx}: {heating_max}");
         let it = run.implicit_totals;
         println!(
             "dx {dx}: Eq. 43 {:.4e}, P {:.4e} Pa, {} steps, {} Newton iterations (max {}), \
@@ -58,6 +86,32 @@ fn implicit_cylinder_converges_to_lame_at_large_steps() {
         "implicit {} against explicit {}",
         errors[0],
         explicit.error43
+    );
+}
+
+/// Reproducer (ignored: a known defect of issue 20): after the heating stops
+/// nothing should change the inner gas pressure but the steel's tiny
+/// creep, yet in implicit mode it decays, because each step's pressure
+/// stage moves the steel's interface faces by Δt² ∇p/ρ_s as if the steel
+/// had no stiffness, and the gas locked to them flows into the steel's
+/// cells. At dx 0.05, Δt 1e-4 s, P falls from 1.8746e7 Pa at 3.2 ms to
+/// 1.7922e7 at 8 ms (−4.4 %); the explicit case holds 19.24 MPa at 8 ms.
+/// Asserted: P at 8 ms within 0.5 % of P at 3.2 ms.
+#[test]
+#[ignore = "issue 20: the implicit step's gas leaks into the steel's cells"]
+fn implicit_cylinder_keeps_its_gas_after_the_heating() {
+    let mut sc = case("pressurized_cylinder_implicit.toml");
+    sc.time.end = 8e-3;
+    let (_, m, _, history) = run_cylinder_history(sc, 0.05, 3.2e-3 - 1e-9).expect("runs");
+    let p0 = history[0].pressure;
+    println!(
+        "P {:.4e} Pa at {:.2e} s, {:.4e} Pa at 8 ms",
+        p0, history[0].t, m.pressure
+    );
+    assert!(
+        (m.pressure / p0 - 1.0).abs() < 5e-3,
+        "{p0} → {}",
+        m.pressure
     );
 }
 

@@ -429,17 +429,63 @@ pub fn eq43_particle_error(stress: &nalgebra::Matrix3<f64>, target: f64) -> f64 
 /// # Errors
 /// The scene's build error or the run's failure.
 pub fn run_cylinder_scene(
-    mut sc: crate::scene::Scene,
+    sc: crate::scene::Scene,
     dx: f64,
 ) -> Result<(CoupledRun<2>, CylinderMeasured, f64)> {
+    let (run, m, wall, _) = run_cylinder_history(sc, dx, f64::INFINITY)?;
+    Ok((run, m, wall))
+}
+
+/// One accepted step of [`run_cylinder_history`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CylinderSample {
+    /// Time at the end of the step.
+    pub t: f64,
+    /// Measured inner gauge pressure `P` (as [`CylinderMeasured::pressure`]).
+    pub pressure: f64,
+    /// Guilkey Eq. 43 against that `P`.
+    pub error43: f64,
+}
+
+/// [`run_cylinder_scene`] with Eq. 43 and `P` measured after every step
+/// that ends at `t ≥ from` with `P > 0` (a quasistatic solid is in
+/// equilibrium with the step's load at every step, so Lamé holds at each;
+/// the first steps' `P` is 0: the pressure of a step is set before the
+/// step's heat is added). The wall time counts the steps only, not the
+/// measurements.
+///
+/// # Errors
+/// The scene's build error or the run's failure.
+pub fn run_cylinder_history(
+    mut sc: crate::scene::Scene,
+    dx: f64,
+    from: f64,
+) -> Result<(CoupledRun<2>, CylinderMeasured, f64, Vec<CylinderSample>)> {
     let n = (1.2 / dx).round() as usize;
     sc.grid.cells = vec![n, n];
+    let p_ref = sc.coupling.reference_pressure;
+    let t_end = sc.time.end;
     let mut run = crate::scene::build_coupled_run::<2>(&sc)?;
-    let start = std::time::Instant::now();
-    run.advance_to(sc.time.end)?;
-    let wall = start.elapsed().as_secs_f64();
-    let m = measure_cylinder(&run, 0.5, sc.coupling.reference_pressure);
-    Ok((run, m, wall))
+    let mut wall = 0.0;
+    let mut history = Vec::new();
+    // As `CoupledRun::advance_to`, with a measurement between the steps.
+    while run.fluid.time < t_end * (1.0 - 1e-12) {
+        let start = std::time::Instant::now();
+        run.step(t_end - run.fluid.time)?;
+        wall += start.elapsed().as_secs_f64();
+        if run.fluid.time >= from {
+            let m = measure_cylinder(&run, 0.5, p_ref);
+            if m.pressure > 0.0 {
+                history.push(CylinderSample {
+                    t: run.fluid.time,
+                    pressure: m.pressure,
+                    error43: m.error43,
+                });
+            }
+        }
+    }
+    let m = measure_cylinder(&run, 0.5, p_ref);
+    Ok((run, m, wall, history))
 }
 
 /// Guilkey Eq. 43 and the Fig. 3a row of a coupled cylinder run (inner

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use mpmice::coupling::RigidInterface;
-use mpmice::diagnostics::coupled::{piston_history, run_cylinder_scene};
+use mpmice::diagnostics::coupled::{piston_history, run_cylinder_history};
 use mpmice::scene;
 use mpmice::shape::ShapeKind;
 
@@ -45,7 +45,19 @@ pub fn cylinder_scene_at(
     sc: scene::Scene,
     dx: f64,
 ) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
-    let (run, m, wall) = run_cylinder_scene(sc, dx)?;
+    cylinder_history_at(sc, dx, f64::INFINITY)
+}
+
+/// [`cylinder_scene_at`] with Eq. 43 also measured after every step that
+/// ends at `t ≥ from` ([`run_cylinder_history`]): its largest and smallest
+/// value over those steps as the extras `eq43_max_over_time`,
+/// `eq43_min_over_time` (with `history_steps`, their number).
+pub fn cylinder_history_at(
+    sc: scene::Scene,
+    dx: f64,
+    from: f64,
+) -> anyhow::Result<(Point, Vec<RowStress>, f64)> {
+    let (run, m, wall, history) = run_cylinder_history(sc, dx, from)?;
     let it = run.implicit_totals;
     let np = run.fields[0].particles.len();
     let nc = run.fluid.layout.num_interior();
@@ -59,6 +71,15 @@ pub fn cylinder_scene_at(
     .with_extra("particles", np as f64)
     .with_extra("cells", nc as f64)
     .with_extra("inner_pressure", m.pressure);
+    let point = if history.is_empty() {
+        point
+    } else {
+        let e = history.iter().map(|h| h.error43);
+        point
+            .with_extra("eq43_max_over_time", e.clone().fold(0.0, f64::max))
+            .with_extra("eq43_min_over_time", e.fold(f64::INFINITY, f64::min))
+            .with_extra("history_steps", history.len() as f64)
+    };
     let point = if it.solves > 0 {
         point
             .with_extra("newton_iterations", it.newton_iterations as f64)

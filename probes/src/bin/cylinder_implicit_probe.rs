@@ -7,9 +7,10 @@
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
 //! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
 //! steel Newmark instead of quasistatic; `MODIFIED=1` / `MODIFIED=0` sets
-//! `implicit.modified_newton`.
+//! `implicit.modified_newton`; `END=t` sets `time.end`; `HISTORY=1` prints P and Eq. 43 after every
+//! step.
 
-use mpmice::diagnostics::coupled::run_cylinder_scene;
+use mpmice::diagnostics::coupled::run_cylinder_history;
 use mpmice::scene;
 
 fn main() -> anyhow::Result<()> {
@@ -33,6 +34,9 @@ fn main() -> anyhow::Result<()> {
             if std::env::var("DYNAMIC").is_ok() {
                 sc.implicit.dynamic = true;
             }
+            if let Ok(e) = std::env::var("END") {
+                sc.time.end = e.parse()?;
+            }
             if let Ok(m) = std::env::var("MODIFIED") {
                 sc.implicit.modified_newton = m == "1";
             }
@@ -50,7 +54,15 @@ fn main() -> anyhow::Result<()> {
                 ci.relaxation = scene::RelaxationKind::Constant;
             }
         }
-        let (run, m, wall) = run_cylinder_scene(sc, dx)?;
+        let (run, m, wall, history) = run_cylinder_history(sc, dx, 0.0)?;
+        if std::env::var("HISTORY").is_ok() {
+            for h in &history {
+                println!(
+                    "{name:8} t {:.4e}  P {:.4e} Pa  Eq.43 {:.4e}",
+                    h.t, h.pressure, h.error43
+                );
+            }
+        }
         let it = run.implicit_totals;
         println!(
             "{name:8} dx {dx}: Eq.43 {:.4e}  P {:.4e} Pa  steps {}  wall {:.3} s  \
