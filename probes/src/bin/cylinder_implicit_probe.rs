@@ -7,8 +7,8 @@
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
 //! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
 //! steel Newmark instead of quasistatic; `MODIFIED=1` / `MODIFIED=0` sets
-//! `implicit.modified_newton`; `END=t` sets `time.end`; `HISTORY=1` prints P and Eq. 43 after every
-//! step.
+//! `implicit.modified_newton`; `END=t` sets `time.end`; `HISTORY=1` prints
+//! P and Eq. 43 after every step.
 
 use mpmice::diagnostics::coupled::run_cylinder_history;
 use mpmice::scene;
