@@ -416,13 +416,15 @@ fn semi_implicit_piston_matches_the_adiabatic_law() {
     );
 }
 
-/// The coupled step halves its Δt when the implicit pressure's outer
-/// iteration fails to converge; the summary counts those halvings as
-/// retries (it reported 0). With the cap at 20 outer iterations and the
-/// step free to grow (`max_dt_growth = 1e6`: every step asks for the CFL
-/// limit) the piston halves most steps; with the case's cap of 100 and
-/// growth limit of 1.2, rarely (measured: 18 in 405 steps; 27 in 401 when
-/// the first step was not acoustic).
+/// The coupled step halves its Δt when the pressure stage fails retryably;
+/// the summary counts those halvings as retries (it once reported 0). With
+/// the step free to grow (`max_dt_growth = 1e6`: every step asks for the
+/// CFL limit) the piston's first steps overshoot the outflow Courant limit
+/// and are halved (measured: 3 halvings in 327 steps); the case's growth
+/// limit of 1.2 needs none (357 steps). Before the implicit pressure matrix
+/// held rigid materials fixed (`ice::implicit`), its outer iteration failed
+/// often: 863 halvings in 655 steps with a cap of 20 outer iterations and
+/// free growth, 18 in 405 steps with the case.
 #[test]
 fn coupled_semi_implicit_halvings_are_counted_as_retries() {
     let run = |sets: &[&str]| {
@@ -433,16 +435,17 @@ fn coupled_semi_implicit_halvings_are_counted_as_retries() {
         )
         .expect("run")
     };
-    let capped = run(&[
-        "fluid.pressure.max_outer_iterations=20",
-        "fluid.pressure.max_dt_growth=1e6",
-    ]);
+    let free = run(&["fluid.pressure.max_dt_growth=1e6"]);
     let case = run(&[]);
     eprintln!(
-        "cap 20, free growth: {} steps, {} retries; case: {} steps, {} retries",
-        capped.steps, capped.retries, case.steps, case.retries
+        "free growth: {} steps, {} retries; case: {} steps, {} retries",
+        free.steps, free.retries, case.steps, case.retries
     );
-    assert!(capped.retries > capped.steps / 2, "{}", capped.retries);
-    assert!(case.retries < case.steps / 4, "{}", case.retries);
-    assert!(capped.steps > case.steps);
+    assert!(
+        (1..=10).contains(&free.retries),
+        "{} retries in {} steps",
+        free.retries,
+        free.steps
+    );
+    assert!(case.retries < free.retries, "{}", case.retries);
 }
