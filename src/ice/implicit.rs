@@ -383,6 +383,12 @@ fn assemble_matrix<const D: usize>(
     let stk = &ws.sum_theta_kappa;
     let interior = &layout.interior;
     let scale: [f64; D] = std::array::from_fn(|d| dt * fdt * vol / (layout.h[d] * layout.h[d]));
+    // The exchange's held materials (none: the plain exchange).
+    let fixed = if rigid[..nm].contains(&true) {
+        &rigid[..nm]
+    } else {
+        &[][..]
+    };
     system.assemble(
         |f, d| {
             let l = f - layout.strides[d];
@@ -400,11 +406,6 @@ fn assemble_matrix<const D: usize>(
             }
             if let Some(k) = k_mom {
                 // ... and the exchange holds it (as `face_exchange` does).
-                let fixed = if rigid[..nm].contains(&true) {
-                    &rigid[..nm]
-                } else {
-                    &[][..]
-                };
                 exchange_momentum_fixed(
                     k,
                     dt,

@@ -54,8 +54,10 @@ fn main() -> anyhow::Result<()> {
                 ci.relaxation = scene::RelaxationKind::Constant;
             }
         }
-        let (run, m, wall, history) = run_cylinder_history(sc, dx, 0.0)?;
-        if std::env::var("HISTORY").is_ok() {
+        let trace = std::env::var("HISTORY").is_ok();
+        let from = if trace { 0.0 } else { f64::INFINITY };
+        let (run, m, wall, history) = run_cylinder_history(sc, dx, from)?;
+        if trace {
             for h in &history {
                 println!(
                     "{name:8} t {:.4e}  P {:.4e} Pa  Eq.43 {:.4e}",
