@@ -289,9 +289,12 @@ impl J2 {
     /// (a fixed point in T, converged by the outer iteration on Δε̄), and
     /// that temperature.
     ///
-    /// The fixed point changes only the thermal factor, so the strain and
-    /// rate factors (a `powf` and a `ln`) are taken once: five `powf` per
-    /// call instead of ten and five `ln` (the same flow stress to the bit).
+    /// The fixed point changes only the thermal factor: the strain and
+    /// rate factors are taken once, and the iteration stops as soon as T
+    /// repeats to the bit (the iterations left would repeat it, so the
+    /// result is the four iterations' to the bit; with the narrower bracket
+    /// of [`Self::return_map`], the Taylor anvil at 36 × 84 cells to 40 µs
+    /// went from 8.22 to 6.02 s on one thread).
     #[inline]
     fn flow_after(&self, eps0: f64, t0: f64, de: f64, dt: f64, rho: f64) -> (f64, f64) {
         let rate = if dt > 0.0 { de / dt } else { 0.0 };
