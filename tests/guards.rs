@@ -483,6 +483,33 @@ fn a_collapsing_implicit_time_step_names_the_failed_solve() {
     assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
 }
 
+/// A coupled run whose Δt is not wave-limited (implicit pressure and a
+/// quasistatic implicit steel) names the cut that collapsed it, not a wave
+/// speed: the pressurised cylinder without momentum exchange has its
+/// pressure stage halved 100-fold within two steps, and the guard blamed
+/// the steel's sound speed at particle 80 (a limit of 1.1e-5 s that no
+/// step of this mode obeys).
+#[test]
+fn a_collapsing_coupled_implicit_time_step_names_the_cut() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut s = case("pressurized_cylinder_implicit.toml");
+    s.coupling.momentum_exchange = 0.0;
+    s.time.min_dt_fraction = 0.3;
+    let e = run_scene(&s, &opts(tmp.path())).expect_err("stops");
+    let msg = e.to_string();
+    println!("{msg}");
+    let (step, _) = progress_stop(&e);
+    assert!(step >= 1, "{msg}");
+    for part in [
+        "time.min_dt_fraction",
+        "the last Δt cut",
+        "the pressure stage",
+    ] {
+        assert!(msg.contains(part), "`{part}` missing: {msg}");
+    }
+    assert!(!msg.contains("signal speed"), "{msg}");
+}
+
 /// The times of a `.pvd` series.
 fn pvd_times(path: &Path) -> Vec<f64> {
     let text = std::fs::read_to_string(path).expect("pvd");

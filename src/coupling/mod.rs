@@ -327,6 +327,11 @@ pub struct CoupledRun<const D: usize> {
     /// stage failed retryably (e.g. the outer iteration of the implicit
     /// pressure not converging); the run summary counts them as retries.
     pub last_halvings: usize,
+    /// The last Δt cut and the step it happened in (the step count before
+    /// it): a pressure stage that failed retryably and was halved, or an
+    /// implicit field's failed solve. The progress guard names it
+    /// ([`crate::driver::Model::dt_limiter`]).
+    pub last_cut: Option<(u64, crate::mpm::DtCut)>,
     /// The implicit solid solves (`time.mode = "implicit"`), summed over
     /// the steps and fields. Not part of the state.
     pub implicit_totals: ImplicitTotals,
@@ -546,6 +551,7 @@ impl<const D: usize> CoupledRun<D> {
             steps: 0,
             pressure_s: 0.0,
             last_halvings: 0,
+            last_cut: None,
             implicit_totals: ImplicitTotals::default(),
             last_implicit_retries: 0,
             implicit_failed: false,
@@ -845,6 +851,14 @@ impl<const D: usize> CoupledRun<D> {
                             e => e,
                         });
                     }
+                    self.last_cut = Some((
+                        self.steps,
+                        crate::mpm::DtCut {
+                            particle: None,
+                            what: e.to_string(),
+                            dt,
+                        },
+                    ));
                     dt *= cut;
                     self.implicit_totals.step_retries += 1;
                     self.last_implicit_retries += 1;
@@ -1102,6 +1116,14 @@ impl<const D: usize> CoupledRun<D> {
             match ice::stage_pressure(&mut self.fluid, &self.ice, &mut self.ws, *dt, true) {
                 Ok(info) => break Ok(info),
                 Err(e) if first && tries < 20 && e.retry_dt().is_some() => {
+                    self.last_cut = Some((
+                        self.steps,
+                        crate::mpm::DtCut {
+                            particle: None,
+                            what: format!("the pressure stage: {e}"),
+                            dt: *dt,
+                        },
+                    ));
                     *dt *= 0.5;
                     tries += 1;
                     self.set_rigid_now(self.fluid.time + 0.5 * *dt);

@@ -36,8 +36,9 @@ pub enum LimitCause {
         /// The signal speed \[m/s\].
         speed: f64,
     },
-    /// An implicit model's step control: a solve at Δt `dt` failed there
-    /// (Newton did not converge, a particle inverted, ...), and Δt was cut.
+    /// A step control's cut: a step at Δt `dt` failed there (an implicit
+    /// solid's Newton did not converge, a particle inverted, a coupled
+    /// pressure stage failed retryably, ...), and Δt was cut.
     FailedSolve {
         /// The solver's reason.
         what: String,
@@ -65,7 +66,7 @@ impl std::fmt::Display for DtLimiter {
             ),
             LimitCause::FailedSolve { what } => write!(
                 f,
-                "{} of material `{}`: the last Δt cut, after the implicit solve at Δt {:.3e} s failed ({what})",
+                "{} of material `{}`: the last Δt cut, after the step at Δt {:.3e} s failed ({what})",
                 self.site, self.material, self.dt
             ),
             LimitCause::Burn { reactant, mass, inflow } => write!(
