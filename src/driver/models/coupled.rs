@@ -249,15 +249,14 @@ impl<const D: usize> Model for Coupled<D> {
             cell_limiter, particle_limiter, tighter, DtLimiter, LimitCause,
         };
         let run = &self.run;
-        // No wave limit sets Δt where the pressure or a solid is implicit:
-        // there, and after a cut in the step just taken, the last cut
+        // An implicit solid's Newton step control, not a wave limit, sets
+        // Δt: there, and after a cut in the step just taken, the last cut
         // names the cause (the implicit cylinder without exchange blamed
         // a steel particle's sound speed for a Δt the pressure stage had
         // halved 100-fold).
-        let implicit =
-            run.ice.implicit.is_some() || run.fields.iter().any(|f| f.implicit.is_some());
+        let newton = run.fields.iter().any(|f| f.implicit.is_some());
         if let Some((step, cut)) = &run.last_cut {
-            if implicit || step + 1 == run.steps {
+            if newton || step + 1 == run.steps {
                 return Some(DtLimiter {
                     site: "the coupled step".into(),
                     material: run
