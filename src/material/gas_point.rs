@@ -125,7 +125,8 @@ pub enum PointDensity {
     /// otherwise measures only its own history: FLIP lets points crowd and
     /// part without their volumes following, so the carried volumes of an
     /// expanding gas come to exceed the space it fills (issue 16's
-    /// dog-bone: Σ V_p 3.5 times the enclosed area by t = 4 at h = 0.2). An ideal gas's nodal force `(γ − 1) m e ∇S`
+    /// dog-bone: Σ V_p 3.5 times the enclosed area by t = 4 at h = 0.2).
+    /// An ideal gas's nodal force `(γ − 1) m e ∇S`
     /// and energy update do not read ρ; its pressure reading, `q`, the
     /// viscous stress and the time-step limits do. Near a wall, another
     /// material or a free surface the gas's nodes are part-filled and read

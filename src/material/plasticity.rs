@@ -403,9 +403,9 @@ impl J2 {
                     let at_hi = eval(hi);
                     (dp, at_dp.0, hi, at_hi.0, (hi, at_hi.1, at_hi.2))
                 };
-                if fb >= 0.0 || fb.abs() <= tol_g {
-                    // σ_y = 0 at the far end (melted), or Δε̄ₚ is the root.
-                } else {
+                // Else σ_y = 0 at the far end (melted), or that end is the
+                // root.
+                if fb < -tol_g {
                     let mut side = 0i8;
                     for _ in 0..200 {
                         let c = (lo * fb - hi * fa) / (fb - fa);
