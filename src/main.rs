@@ -247,11 +247,39 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             };
             if let Some(b) = &sum.boundary_exchange {
+                // Where the model does not account for momentum (its drift
+                // is n/a), no impulse is shown.
+                let momentum = if sum.momentum_drift.is_nan() {
+                    "n/a".to_string()
+                } else {
+                    format!(
+                        "({:.4e}, {:.4e}, {:.4e})",
+                        b.momentum[0], b.momentum[1], b.momentum[2]
+                    )
+                };
                 writeln!(
                     std::io::stdout(),
-                    "through the boundary: mass {:.4e}, momentum ({:.4e}, {:.4e}, {:.4e}), energy {:.4e} (the drifts are net of it)",
-                    b.mass, b.momentum[0], b.momentum[1], b.momentum[2], b.energy
+                    "through the boundary: mass {:.4e}, momentum {momentum}, energy {:.4e} (the drifts are net of it)",
+                    b.mass, b.energy
                 )?;
+                let sources = [
+                    ("heat sources", b.source_energy),
+                    ("reactions", b.reaction_energy),
+                    ("prescribed motion", b.prescribed_work),
+                    ("damping", b.damping_work),
+                ];
+                if sources.iter().any(|s| s.1 != 0.0) {
+                    let list: Vec<String> = sources
+                        .iter()
+                        .filter(|s| s.1 != 0.0)
+                        .map(|(what, e)| format!("{what} {e:.4e}"))
+                        .collect();
+                    writeln!(
+                        std::io::stdout(),
+                        "energy put in by {} (the energy drift is net of it)",
+                        list.join(", ")
+                    )?;
+                }
                 let g = b.body_momentum;
                 if g.iter().any(|&x| x != 0.0) {
                     writeln!(

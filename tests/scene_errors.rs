@@ -571,6 +571,14 @@ fn coupled_scene_bad_inputs_name_their_keys() {
         (heat("water", disk), "heat_sources[0].material", "not a fluid"),
         (heat("steel", disk), "heat_sources[0].material", "not a fluid"),
         (heat("air", far), "heat_sources[0].geometry", "outside the domain"),
+        // A solid-only scene has nothing to heat (a fluid-only one may).
+        (
+            format!(
+                "{GOOD}\n[[heat_sources]]\nmaterial = \"steel\"\ngeometry = {disk}\npower = 1e9\nend = 1e-3\n"
+            ),
+            "heat_sources",
+            "this scene has none",
+        ),
         (
             format!("{good}\n[coupling]\nmomentum_exchange = -1.0\n"),
             "coupling.momentum_exchange",

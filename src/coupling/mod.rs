@@ -332,6 +332,14 @@ pub struct CoupledRun<const D: usize> {
     /// implicit field's failed solve. The progress guard names it
     /// ([`crate::driver::Model::dt_limiter`]).
     pub last_cut: Option<(u64, crate::mpm::DtCut)>,
+    /// The work the rigid fields' prescribed motion did in the last step,
+    /// apart from the exchange's part (in the ICE workspace's boundary
+    /// exchange): `−Δt U · F` of the cells' pressure force `F` on their
+    /// nodes, which holding them at `U` takes, plus their particles'
+    /// kinetic energy change.
+    pub rigid_work: f64,
+    /// The chemical energy the reactions released in the last step.
+    pub reaction_step_energy: f64,
     /// The implicit solid solves (`time.mode = "implicit"`), summed over
     /// the steps and fields. Not part of the state.
     pub implicit_totals: ImplicitTotals,
@@ -552,6 +560,8 @@ impl<const D: usize> CoupledRun<D> {
             pressure_s: 0.0,
             last_halvings: 0,
             last_cut: None,
+            rigid_work: 0.0,
+            reaction_step_energy: 0.0,
             implicit_totals: ImplicitTotals::default(),
             last_implicit_retries: 0,
             implicit_failed: false,
@@ -1084,6 +1094,14 @@ impl<const D: usize> CoupledRun<D> {
             }
             // Step 13: G2P.
             if let Some(v) = f.rigid_now {
+                // The prescribed motion's work on the field itself.
+                let p = &f.particles;
+                let ke: f64 =
+                    p.v.iter()
+                        .zip(&p.mass)
+                        .map(|(u, &m)| 0.5 * m * (v.norm_squared() - u.norm_squared()))
+                        .sum();
+                self.rigid_work += ke;
                 f.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
                 f.particles.v.par_iter_mut().for_each(|u| *u = v);
             } else if let Some(imp) = f.implicit.as_deref_mut() {
@@ -1220,6 +1238,8 @@ impl<const D: usize> CoupledRun<D> {
         let ff = self.coupling.floor_fraction;
         let phases = phases!(self, dt);
         let nf = self.num_fluids();
+        // This pass's value (a coupling iteration's last pass stands).
+        self.rigid_work = 0.0;
         for (fi, f) in self.fields.iter_mut().enumerate() {
             self.failed_field = Some(fi);
             let r = f.ice_material;
@@ -1279,6 +1299,10 @@ impl<const D: usize> CoupledRun<D> {
             }
             // Steps 7–9 on the field's nodes.
             if let Some(v) = f.rigid_now {
+                // The cells' pressure force on the held field, which its
+                // prescribed motion takes: its work −Δt U · F.
+                let force: SVector<f64, D> = self.node_force.iter().sum();
+                self.rigid_work -= dt * v.dot(&force);
                 let gs = &mut f.gs;
                 for (i, &m) in gs.mass.iter().enumerate() {
                     let u = if m > self.mpm.mass_floor {
@@ -1447,6 +1471,26 @@ impl<const D: usize> CoupledRun<D> {
         (m, e)
     }
 
+    /// What the last step took in from outside the system: the fluids'
+    /// flow through the domain boundary and the face pressures' work there,
+    /// the heat sources' and the reactions' energy, the prescribed motion's
+    /// work (the exchange's part and [`Self::rigid_work`]) and the solids'
+    /// damping (the run summary's account,
+    /// [`crate::ice::BoundaryExchange`]).
+    pub fn energy_in(&self) -> ice::BoundaryExchange {
+        let mut b = self.ws.boundary_exchange();
+        // The boundary faces' pressure impulse acts on the whole mixture,
+        // solids included, and the solids' walls act on their nodes: the
+        // coupled account does not close momentum (its drift is n/a), so
+        // no part of it is reported.
+        b.momentum = [0.0; 3];
+        b.body_momentum = [0.0; 3];
+        b.prescribed_work += self.rigid_work;
+        b.reaction_energy += self.reaction_step_energy;
+        b.damping_work += self.fields.iter().map(|f| f.gs.damping_work()).sum::<f64>();
+        b
+    }
+
     /// Total mass and energy (kinetic + internal + stored and plastic work)
     /// of [`Self::account`]; with [`Self::reaction_totals`]'s energy the
     /// energy balance of a run.
@@ -1531,6 +1575,7 @@ impl<const D: usize> CoupledRun<D> {
         let uniform_t = self.reactant_temperature();
         let mut share = std::mem::take(&mut self.burn_share);
         self.fluid_share(&mut share);
+        self.reaction_step_energy = 0.0;
         for r in &mut self.reactions {
             let product_cv = self.fluid.materials[r.product].eos.specific_heat_cv();
             let pc = &mut self.fluid.cells[r.product];
@@ -1558,6 +1603,7 @@ impl<const D: usize> CoupledRun<D> {
             r.totals.mass += step.mass;
             r.totals.energy += step.energy;
             r.totals.heat += step.heat;
+            self.reaction_step_energy += step.energy;
         }
         self.burn_share = share;
         self.mark_fed_cells();

@@ -261,7 +261,7 @@ impl LoopState {
         let b = x.unwrap_or_default();
         ck.put_f64(
             "loop.exchange",
-            vec![10],
+            vec![14],
             vec![
                 if x.is_some() { 1.0 } else { 0.0 },
                 b.mass,
@@ -273,6 +273,10 @@ impl LoopState {
                 b.body_momentum[1],
                 b.body_momentum[2],
                 b.body_work,
+                b.source_energy,
+                b.prescribed_work,
+                b.damping_work,
+                b.reaction_energy,
             ],
         );
     }
@@ -283,21 +287,26 @@ impl LoopState {
         let s = ck.take_f64("loop.scalars", Some(&[11]))?;
         let c = ck.take_u64("loop.counters", Some(&[4]))?;
         let m = ck.take_f64("loop.initial_materials", Some(&[names.len(), 6]))?;
-        // Checkpoints before the body-force columns hold 6 entries.
+        // Checkpoints before the body-force columns hold 6 entries, before
+        // the source, prescribed-motion, damping and reaction columns 10.
         let mut x = ck.take_f64("loop.exchange", None)?;
-        if x.len() != 6 && x.len() != 10 {
+        if ![6, 10, 14].contains(&x.len()) {
             return Err(CheckpointError::Malformed {
                 what: "array loop.exchange".into(),
-                reason: format!("{} entries, expected 6 or 10", x.len()),
+                reason: format!("{} entries, expected 6, 10 or 14", x.len()),
             });
         }
-        x.resize(10, 0.0);
+        x.resize(14, 0.0);
         let exchange = (x[0] != 0.0).then_some(BoundaryExchange {
             mass: x[1],
             momentum: [x[2], x[3], x[4]],
             energy: x[5],
             body_momentum: [x[6], x[7], x[8]],
             body_work: x[9],
+            source_energy: x[10],
+            prescribed_work: x[11],
+            damping_work: x[12],
+            reaction_energy: x[13],
         });
         let materials = names
             .iter()
@@ -900,11 +909,15 @@ fn summarise<M: Model>(
         .sum::<f64>()
         .sqrt();
     let (e0, e1) = (ls.initial.energies, end.energies);
-    let e_scale = if e0.total().abs() > 0.0 {
-        e0.total().abs()
-    } else {
-        e1.kinetic.max(e1.strain).max(f64::MIN_POSITIVE)
-    };
+    // The largest energy the account holds at the start or the end (a
+    // total, or its kinetic or stored part where a potential cancels the
+    // total): a run that takes in much more energy than it starts with (a
+    // heat source, a piston) is measured against what it holds, not its
+    // small start.
+    let e_scale = [e0, e1]
+        .iter()
+        .flat_map(|e| [e.total(), e.kinetic, e.strain])
+        .fold(f64::MIN_POSITIVE, |s, x| s.max(x.abs()));
     let p_scale = ls.initial.momentum_scale;
     let peak = super::memory::peak_resident_bytes();
     let iterations = desc.iterative.then(|| {
@@ -957,7 +970,7 @@ fn summarise<M: Model>(
         } else {
             dp
         },
-        energy_drift: (e1.total() - b.energy - b.body_work - e0.total()) / e_scale,
+        energy_drift: (e1.total() - b.energy_in() - e0.total()) / e_scale,
         boundary_exchange: ls.exchange,
         initial_energy: e0,
         final_energy: e1,

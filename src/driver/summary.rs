@@ -74,14 +74,21 @@ pub struct Summary {
     /// momentum with the system unaccounted; in an r–z MPM run, of the
     /// axial component only (the hoop force changes the radial one).
     pub momentum_drift: f64,
-    /// (E_end − E_0 − E_in)/|E_0| of kinetic + stored + body-force potential
-    /// energy (relative to the largest end energy if E_0 = 0), `E_in` the
-    /// energy advected in and the boundary faces' pressure work.
+    /// (E_end − E_0 − E_in)/E_scale of kinetic + stored + body-force
+    /// potential energy, `E_scale` the largest of |E_0|, |E_end| and their
+    /// kinetic and stored parts (what the account holds; a run that takes
+    /// in much more than it starts with is measured against that), `E_in`
+    /// the
+    /// energy advected in, the boundary faces' pressure work, and what heat
+    /// sources, prescribed (rigid) motion and damping put in or took out
+    /// ([`crate::ice::BoundaryExchange::energy_in`]).
     pub energy_drift: f64,
     /// What crossed the domain boundary over the run (mass, momentum,
-    /// energy in), where the model accounts for it (ICE fluids; absent
-    /// otherwise). The drifts above are net of it; the raw change of a total
-    /// is its drift plus this.
+    /// energy in) and the energy put in from outside (heat sources,
+    /// reactions, prescribed motion, damping), where the model accounts for
+    /// it (ICE fluids, explicit MPM, coupled MPM-ICE; absent otherwise).
+    /// The drifts above are net of it; the raw change of a total is its
+    /// drift plus this.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub boundary_exchange: Option<crate::ice::BoundaryExchange>,
     /// Energies at the start (kinetic, strain, potential for solids; for

@@ -47,6 +47,15 @@ pub fn stage_advect<const D: usize>(
         &mut ws.exchange,
     );
     super::boundary_exchange::add_gravity(state, params, &ws.vel_l, dt, &mut ws.exchange);
+    super::boundary_exchange::add_heat_sources(state, params, dt, &mut ws.exchange);
+    if !ws.fixed_work.is_empty() {
+        ws.exchange.prescribed_work += state
+            .layout
+            .interior
+            .iter()
+            .map(|&c| ws.fixed_work[c])
+            .sum::<f64>();
+    }
     // Step 12: advection with compatible fluxes.
     for r in 0..nm {
         if params.frame(r) != Frame::Eulerian {

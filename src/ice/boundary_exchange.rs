@@ -24,7 +24,9 @@ use super::state::CellLayout;
 /// Mass, momentum (padded to 3D) and energy that entered the system through
 /// the domain boundary (for ICE, through the boundary faces; for MPM, the
 /// reaction of fixed walls, symmetry planes and fixed membrane ends,
-/// [`crate::mpm::wall_reaction`]), and the momentum the body force added.
+/// [`crate::mpm::wall_reaction`]), the momentum the body force added, and
+/// the energy put in by heat sources, reactions, prescribed motion and
+/// damping.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct BoundaryExchange {
     /// Mass in \[kg\] (per depth in 1D/2D).
@@ -39,6 +41,23 @@ pub struct BoundaryExchange {
     /// energy (ICE: gravity's work `Δt M g·ū`, ū the Lagrangian step's mean
     /// velocity); 0 where its work is in the potential energy (MPM).
     pub body_work: f64,
+    /// Energy the scene's heat sources put into the fluids, `Σ power θ_r V
+    /// Δt` over the cells and the part of each step inside a source's
+    /// window.
+    pub source_energy: f64,
+    /// Work done on the rest of the system by materials held at a
+    /// prescribed velocity (rigid solids of a coupled run): `U · J` per
+    /// step, `J` the impulse that holding them at `U` takes from them (the
+    /// cells' pressure force on their nodes and the exchange's momentum
+    /// transfer), plus their own kinetic energy change.
+    pub prescribed_work: f64,
+    /// Chemical energy the reactions of a coupled run released into their
+    /// products ([`crate::coupling::reaction`]).
+    pub reaction_energy: f64,
+    /// Work of the grid's mass-proportional damping (`mpm.damping`) on the
+    /// solids' nodes, `−Σ α m |v̄|² Δt` with `v̄` the step's time-centred
+    /// nodal velocity: energy the damping takes out (≤ 0).
+    pub damping_work: f64,
 }
 
 impl BoundaryExchange {
@@ -51,6 +70,23 @@ impl BoundaryExchange {
         }
         self.energy += o.energy;
         self.body_work += o.body_work;
+        self.source_energy += o.source_energy;
+        self.prescribed_work += o.prescribed_work;
+        self.damping_work += o.damping_work;
+        self.reaction_energy += o.reaction_energy;
+    }
+
+    /// Every energy that entered the system from outside it: through the
+    /// boundary, by the body force outside the potential energy, by heat
+    /// sources and reactions, by prescribed motion and by damping
+    /// (negative).
+    pub fn energy_in(&self) -> f64 {
+        self.energy
+            + self.body_work
+            + self.source_energy
+            + self.reaction_energy
+            + self.prescribed_work
+            + self.damping_work
     }
 }
 
@@ -145,4 +181,33 @@ pub(super) fn add_gravity<const D: usize>(
         acc.body_momentum[d] += g[d] * mass * dt;
     }
     acc.body_work += g.dot(&mom) * dt;
+}
+
+/// Adds the energy the heat sources put into the Eulerian materials over
+/// the step from `state.time` to `state.time + dt`: `power θ_r V` per cell
+/// over the part of the step inside each source's window, with the volume
+/// fractions the Lagrangian phase used (Guilkey Sec. 3.3's sources,
+/// `super::sources`' `add_heat_sources`).
+pub(super) fn add_heat_sources<const D: usize>(
+    state: &super::IceState<D>,
+    params: &super::IceParams<D>,
+    dt: f64,
+    acc: &mut BoundaryExchange,
+) {
+    let (t0, t1) = (state.time, state.time + dt);
+    let vol = state.layout.cell_volume();
+    for src in &params.heat_sources {
+        let overlap = (t1.min(src.end) - t0.max(src.start)).max(0.0);
+        if overlap <= 0.0 {
+            continue;
+        }
+        let theta = &state.cells[src.material].vol_frac;
+        let sum: f64 = state
+            .layout
+            .interior
+            .iter()
+            .map(|&c| src.power[c] * theta[c])
+            .sum();
+        acc.source_energy += sum * vol * overlap;
+    }
 }

@@ -98,6 +98,7 @@ fn lagrangian_cells<const D: usize, const N: usize>(
             if cons {
                 conservative_energy(&inp, c, stk_e, dke_src, &mut cell);
             }
+            cell.fixed_work = 0.0;
             if let Some(ex) = k_on {
                 momentum_exchange(&inp, &ex.momentum, cons, c, &mut cell);
             }
@@ -143,8 +144,14 @@ fn split_workspace<'a, const D: usize, const N: usize>(
         temp_l,
         e_l,
         v_l,
+        fixed_work,
         ..
     } = ws;
+    let any_fixed = fixed[..nm].iter().any(|&f| f);
+    if any_fixed {
+        // Sized once: a scene's rigid materials do not change.
+        fixed_work.resize(state.layout.len(), 0.0);
+    }
     let inp = LagrangianInputs {
         st: state,
         params,
@@ -159,7 +166,7 @@ fn split_workspace<'a, const D: usize, const N: usize>(
         cv,
         lagr,
         fixed,
-        any_fixed: fixed[..nm].iter().any(|&f| f),
+        any_fixed,
         one_eulerian: lagr[..nm].iter().filter(|&&l| !l).count() == 1,
         n_dyn: nm,
         dt,
@@ -168,7 +175,10 @@ fn split_workspace<'a, const D: usize, const N: usize>(
         t0: state.time,
         t1: state.time + dt,
     };
-    let out = LagrangianOut::new(vel_l, temp_l, e_l, ke, v_l);
+    let mut out = LagrangianOut::new(vel_l, temp_l, e_l, ke, v_l);
+    if any_fixed {
+        out.fixed_work = Out::new(fixed_work);
+    }
     (inp, out)
 }
 
@@ -180,6 +190,9 @@ struct LagrangianOut<'a, const D: usize> {
     e: [Out<'a, f64>; MAX_MATERIALS],
     ke: [Out<'a, f64>; MAX_MATERIALS],
     v: [Out<'a, f64>; MAX_MATERIALS],
+    /// Per cell, the exchange's work of a material held at its prescribed
+    /// velocity (empty without one).
+    fixed_work: Out<'a, f64>,
 }
 
 impl<'a, const D: usize> LagrangianOut<'a, D> {
@@ -197,6 +210,7 @@ impl<'a, const D: usize> LagrangianOut<'a, D> {
             e: [Out::empty(); MAX_MATERIALS],
             ke: [Out::empty(); MAX_MATERIALS],
             v: [Out::empty(); MAX_MATERIALS],
+            fixed_work: Out::empty(),
         };
         for (o, a) in out.vel.iter_mut().zip(vel.iter_mut()) {
             *o = Out::new(a);
@@ -292,6 +306,7 @@ fn momentum_exchange<const D: usize, const N: usize>(
         mass,
         u,
         t,
+        fixed_work,
         ..
     } = cell;
     let ke0: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
@@ -305,27 +320,26 @@ fn momentum_exchange<const D: usize, const N: usize>(
         if inp.any_fixed { &inp.fixed[..nm] } else { &[] },
         &mut u[..nm],
     );
+    // A material held at a prescribed velocity U does work U · (the
+    // momentum the others gain) on the cell (the run's account books it
+    // as put in from outside).
+    if inp.any_fixed {
+        if let Some(s) = (0..nm).find(|&s| inp.fixed[s]) {
+            let gained: SVector<f64, D> = (0..nm)
+                .filter(|&r| !inp.fixed[r])
+                .map(|r| (u[r] - u0[r]) * mass[r])
+                .sum();
+            *fixed_work = u[s].dot(&gained);
+        }
+    }
     if cons {
         // The kinetic energy dissipated by the exchange
-        // becomes heat.
+        // becomes heat: ke0 − ke1 plus the work of a held
+        // material (½ m (U − u0)² ≥ 0 for one fluid locked to it).
         let ke1: f64 = (0..nm).map(|r| 0.5 * mass[r] * u[r].norm_squared()).sum();
-        // A material held at a prescribed velocity U does
-        // work U · (the momentum the others gain) on the
-        // cell: the dissipation is ke0 − ke1 + that work
-        // (½ m (U − u0)² ≥ 0 for one fluid locked to it).
-        let mut work = 0.0;
-        if inp.any_fixed {
-            if let Some(s) = (0..nm).find(|&s| inp.fixed[s]) {
-                let gained: SVector<f64, D> = (0..nm)
-                    .filter(|&r| !inp.fixed[r])
-                    .map(|r| (u[r] - u0[r]) * mass[r])
-                    .sum();
-                work = u[s].dot(&gained);
-            }
-        }
         // Shared by mass (`dissipation_share`), like the dissipation
         // of the total-energy form.
-        let heat = ke0 - ke1 + work;
+        let heat = ke0 - ke1 + *fixed_work;
         for r in 0..nm {
             if inp.lagr[r] {
                 continue;
@@ -395,6 +409,10 @@ fn store_cell<const D: usize, const N: usize>(
 ) -> Result<(), IceError> {
     let st = inp.st;
     let LagrangianCell { u, t, v, .. } = cell;
+    if inp.any_fixed {
+        // SAFETY: cell c is written by this task only.
+        unsafe { out.fixed_work.set(c, cell.fixed_work) };
+    }
     for r in 0..inp.nm() {
         let cv = inp.cv[r];
         if inp.lagr[r] {

@@ -101,6 +101,9 @@ pub(super) struct LagrangianCell<const D: usize> {
     pub(super) heat: [f64; MAX_MATERIALS],
     /// `1/M_r` (Eulerian materials).
     pub(super) inv_m: [f64; MAX_MATERIALS],
+    /// The work a material held at its prescribed velocity `U` does on the
+    /// others in the exchange, `U · (the momentum they gain)`.
+    pub(super) fixed_work: f64,
 }
 
 impl<const D: usize> LagrangianCell<D> {
@@ -116,6 +119,7 @@ impl<const D: usize> LagrangianCell<D> {
             beta: [0.0; MAX_MATERIALS],
             heat: [0.0; MAX_MATERIALS],
             inv_m: [0.0; MAX_MATERIALS],
+            fixed_work: 0.0,
         }
     }
 }

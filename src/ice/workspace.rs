@@ -30,6 +30,10 @@ pub struct IceWorkspace<const D: usize> {
     pub(super) fluxes: AdvectionFluxes<D>,
     /// What crossed the boundary in the last step (Eulerian materials).
     pub(super) exchange: super::BoundaryExchange,
+    /// Per cell, the exchange's work of a material held at its prescribed
+    /// velocity in the last Lagrangian phase (sized only where a scene has
+    /// one).
+    pub(super) fixed_work: Vec<f64>,
     pub(super) new_mass: Vec<Vec<f64>>,
     pub(super) new_vel: Vec<Vec<SVector<f64, D>>>,
     pub(super) new_temp: Vec<Vec<f64>>,
@@ -83,6 +87,7 @@ impl<const D: usize> IceWorkspace<D> {
             v_l: (0..nm).map(|_| s()).collect(),
             fluxes: AdvectionFluxes::new(n),
             exchange: super::BoundaryExchange::default(),
+            fixed_work: Vec::new(),
             new_mass: (0..nm).map(|_| s()).collect(),
             new_vel: (0..nm).map(|_| sv()).collect(),
             new_temp: (0..nm).map(|_| s()).collect(),

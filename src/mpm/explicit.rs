@@ -125,6 +125,11 @@ pub struct GridState<const D: usize> {
     /// Each node's share of the domain as the points sample it
     /// ([`node_volumes`]); empty until a step needs it.
     node_volume: Vec<f64>,
+    /// The work of the mass-proportional damping (`ExplicitParams::damping`)
+    /// in the last grid solve, `−α Δt Σ_i m_i^r |v̄_i|²` with `v̄` the
+    /// step's time-centred nodal velocity and `m^r` the particles' own
+    /// nodal mass ([`GridState::damping_work`]); 0 without damping.
+    damping_work: f64,
 }
 
 impl<const D: usize> GridState<D> {
@@ -141,7 +146,20 @@ impl<const D: usize> GridState<D> {
             gas_mass: Vec::new(),
             gas_density: Vec::new(),
             node_volume: Vec::new(),
+            damping_work: 0.0,
         }
+    }
+
+    /// The work the mass-proportional damping did on the particles in the
+    /// last grid solve (≤ 0; 0 without damping). The damped update
+    /// `vᴸ = (v (1 − αΔt/2) + Δt f/m)/(1 + αΔt/2)` differs from the
+    /// undamped `v + Δt f/m` by `−α Δt v̄`, `v̄ = (v + vᴸ)/2`; its work on
+    /// the nodes is `−α Δt Σ m |v̄|²`, with the real particles' mass on the
+    /// nodes the wall fold doubles ([`WallRecord`]). The particles' FLIP
+    /// update takes it to first order; the run summary books it as energy
+    /// taken out.
+    pub fn damping_work(&self) -> f64 {
+        self.damping_work
     }
 
     /// The impulse the fixed walls and symmetry planes gave the particles
@@ -1259,6 +1277,15 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
     ctx.grid.mirror_ghosts(&mut gs.velocity);
     ctx.grid.mirror_ghosts(&mut gs.velocity_new);
     ctx.grid.mirror_ghosts(&mut gs.accel);
+    gs.damping_work = if alpha > 0.0 {
+        let (v, vl) = (&gs.velocity, &gs.velocity_new);
+        -alpha
+            * dt
+            * gs.walls
+                .real_mass_weighted(&gs.mass, |i| (v[i] + vl[i]) * 0.5)
+    } else {
+        0.0
+    };
 }
 
 /// The stress update of a membrane point (York Sec. 3.2) with unit tangent

@@ -82,6 +82,31 @@ impl<const D: usize> WallRecord<D> {
         }
     }
 
+    /// `Σ_i m_i^r |v(i)|²` over every node, ghosts included, with `m_i^r`
+    /// the particles' own (unfolded) nodal mass where the fold changed it
+    /// (recorded; the folded `mass` elsewhere) and `v(i)` a nodal velocity
+    /// with the ghosts mirrored: the real particles' part of a folded
+    /// grid's `Σ m |v|²` (a node on a symmetry plane holds twice its real
+    /// mass). Summed in node order, so independent of the thread count.
+    pub(crate) fn real_mass_weighted(
+        &self,
+        mass: &[f64],
+        v: impl Fn(usize) -> SVector<f64, D>,
+    ) -> f64 {
+        let mut sum: f64 = mass
+            .iter()
+            .enumerate()
+            .filter(|(_, &m)| m > 0.0)
+            .map(|(i, &m)| m * v(i).norm_squared())
+            .sum();
+        if self.built {
+            for (k, &i) in self.nodes.iter().enumerate() {
+                sum += (self.mass[k] - mass[i]) * v(i).norm_squared();
+            }
+        }
+        sum
+    }
+
     /// The reaction `J` of the walls over a step of `dt` with PIC share
     /// `pic` (module docs), from the recorded fields and the grid's
     /// acceleration `accel` and updated velocity `velocity_new`.

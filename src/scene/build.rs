@@ -960,6 +960,32 @@ pub fn build_fluid_run<const D: usize>(
             convective_predictor: ps.convective_predictor,
         });
     }
+    // Heat sources: the power on the cells whose centre lies in the region.
+    for (i, h) in scene.heat_sources.iter().enumerate() {
+        let material = fluids
+            .iter()
+            .position(|(_, m)| m.name == h.material)
+            .ok_or_else(|| {
+                SceneError::new(
+                    format!("heat_sources[{i}].material"),
+                    "not a fluid material",
+                )
+            })?;
+        let layout = &state.layout;
+        let mut power = vec![0.0; layout.len()];
+        for &c in &layout.interior {
+            let x: Vec<f64> = layout.centre(c).iter().copied().collect();
+            if h.geometry.contains(&x) {
+                power[c] = h.power;
+            }
+        }
+        params.heat_sources.push(crate::ice::HeatSource {
+            material,
+            power,
+            start: h.start,
+            end: h.end,
+        });
+    }
     params
         .validate(&state)
         .map_err(|e| SceneError::new("fluid", e.to_string()))?;
@@ -975,7 +1001,7 @@ pub fn build_coupled_run<const D: usize>(
     scene: &Scene,
 ) -> Result<crate::coupling::CoupledRun<D>, SceneError> {
     let solid_run = build_solid_run::<D>(scene)?;
-    let (state, mut params) = build_fluid_run::<D>(scene)?;
+    let (state, params) = build_fluid_run::<D>(scene)?;
     let cs = &scene.coupling;
     let mut specs = Vec::new();
     // `k`: the material's index among the solid materials (the particles'
@@ -1023,38 +1049,6 @@ pub fn build_coupled_run<const D: usize>(
             "materials",
             "a coupled scene needs at least one solid material",
         ));
-    }
-    // Heat sources: the power on the cells whose centre lies in the region.
-    let fluid_names: Vec<&str> = scene
-        .materials
-        .iter()
-        .filter(|m| m.kind == MaterialKind::Fluid)
-        .map(|m| m.name.as_str())
-        .collect();
-    for (i, h) in scene.heat_sources.iter().enumerate() {
-        let material = fluid_names
-            .iter()
-            .position(|n| *n == h.material)
-            .ok_or_else(|| {
-                SceneError::new(
-                    format!("heat_sources[{i}].material"),
-                    "not a fluid material",
-                )
-            })?;
-        let layout = &state.layout;
-        let mut power = vec![0.0; layout.len()];
-        for &c in &layout.interior {
-            let x: Vec<f64> = layout.centre(c).iter().copied().collect();
-            if h.geometry.contains(&x) {
-                power[c] = h.power;
-            }
-        }
-        params.heat_sources.push(crate::ice::HeatSource {
-            material,
-            power,
-            start: h.start,
-            end: h.end,
-        });
     }
     let coupling = crate::coupling::CouplingParams {
         p_ref: cs.reference_pressure,
@@ -1127,9 +1121,11 @@ pub fn build_coupled_run<const D: usize>(
             .iter()
             .position(|m| m.name == r.reactant)
             .expect("validated: the reactant is a solid material");
-        let product = fluid_names
+        let product = run
+            .fluid
+            .materials
             .iter()
-            .position(|n| *n == r.product)
+            .position(|m| m.name == r.product)
             .expect("validated: the product is a fluid material");
         run.reactions.push(crate::coupling::reaction::Reaction {
             field,

@@ -3284,6 +3284,14 @@ impl Scene {
         for &s in &solids {
             self.validate_solid_field(s)?;
         }
+        self.validate_heat_sources()?;
+        self.validate_reactions()
+    }
+
+    /// `[[heat_sources]]` of a scene with fluid materials: each heats a
+    /// fluid of the scene, with a finite power over a window
+    /// `0 ≤ start < end` and a region that overlaps the grid.
+    fn validate_heat_sources(&self) -> Result<(), SceneError> {
         let (lo, hi) = (&self.grid.lower, &self.grid.upper);
         let dim = self.grid.dim;
         for (i, h) in self.heat_sources.iter().enumerate() {
@@ -3316,7 +3324,7 @@ impl Scene {
                 ));
             }
         }
-        self.validate_reactions()
+        Ok(())
     }
 
     /// `[[reactions]]` of a coupled scene: a deformable solid reactant with
@@ -3646,7 +3654,9 @@ impl Scene {
                     ));
                 }
             }
-            if !self.heat_sources.is_empty() {
+            if has_fluid {
+                self.validate_heat_sources()?;
+            } else if !self.heat_sources.is_empty() {
                 return Err(err(
                     "heat_sources",
                     "heat sources heat fluid materials; this scene has none",

@@ -79,6 +79,9 @@ pub struct SolidRun<const D: usize> {
     pub wall_impulse: SVector<f64, D>,
     /// The impulse of the body force in the last step, `Δt Σ_p m_p b_p`.
     pub body_impulse: SVector<f64, D>,
+    /// The work of the grid's damping in the last step
+    /// ([`GridState::damping_work`]; ≤ 0, 0 without damping).
+    pub damping_work: f64,
     /// Partial sums of the body impulse, one per fixed block of particles
     /// (a sum independent of the thread count).
     body_partial: Vec<SVector<f64, D>>,
@@ -112,6 +115,7 @@ impl<const D: usize> SolidRun<D> {
             scratch: StepScratch::default(),
             wall_impulse: SVector::zeros(),
             body_impulse: SVector::zeros(),
+            damping_work: 0.0,
             body_partial: Vec::new(),
         }
     }
@@ -170,6 +174,7 @@ impl<const D: usize> SolidRun<D> {
             self.steps,
         )?;
         self.wall_impulse = self.grid_state.wall_impulse(dt, self.params.pic_fraction);
+        self.damping_work = self.grid_state.damping_work();
         if !self.membranes.is_empty() {
             let p = &mut self.particles;
             self.wall_impulse += self.membranes.fix_ends(&mut p.x, &p.x0, &mut p.v, &p.mass);

@@ -65,7 +65,7 @@ impl<const D: usize> Model for Coupled<D> {
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
             retries: self.run.last_halvings + self.run.last_implicit_retries,
-            boundary: None,
+            boundary: Some(self.run.energy_in()),
         })
     }
 
@@ -149,9 +149,14 @@ impl<const D: usize> Model for Coupled<D> {
             }
             materials.push(t);
         }
+        // The released chemical energy is an input of the summary's
+        // account (`BoundaryExchange::reaction_energy`), not a negative
+        // potential as in the history's balance.
+        let mut energies = self.run.account().1;
+        energies.potential += self.run.reaction_totals().energy;
         Conserved {
             materials,
-            energies: self.run.account().1,
+            energies,
             momentum_scale: cell_momentum_scale(&run.fluid, 0..run.num_fluids())
                 + run
                     .fields

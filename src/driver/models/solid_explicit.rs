@@ -105,6 +105,7 @@ impl<const D: usize> Model for ExplicitSolid<D> {
             boundary: Some(BoundaryExchange {
                 momentum: pad3(&self.run.wall_impulse),
                 body_momentum: pad3(&self.run.body_impulse),
+                damping_work: self.run.damping_work,
                 ..Default::default()
             }),
             ..Default::default()
