@@ -247,6 +247,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             };
             if let Some(b) = &sum.boundary_exchange {
+                let crossed =
+                    b.mass != 0.0 || b.energy != 0.0 || b.momentum.iter().any(|&x| x != 0.0);
                 // Where the model does not account for momentum (its drift
                 // is n/a), no impulse is shown.
                 let momentum = if sum.momentum_drift.is_nan() {
@@ -257,15 +259,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         b.momentum[0], b.momentum[1], b.momentum[2]
                     )
                 };
-                writeln!(
-                    std::io::stdout(),
-                    "through the boundary: mass {:.4e}, momentum {momentum}, energy {:.4e} (the drifts are net of it)",
-                    b.mass, b.energy
-                )?;
+                if crossed {
+                    writeln!(
+                        std::io::stdout(),
+                        "through the boundary: mass {:.4e}, momentum {momentum}, energy {:.4e} (the drifts are net of it)",
+                        b.mass, b.energy
+                    )?;
+                }
                 let sources = [
                     ("heat sources", b.source_energy),
                     ("reactions", b.reaction_energy),
-                    ("prescribed motion", b.prescribed_work),
+                    ("prescribed motion and loads", b.prescribed_work),
                     ("damping", b.damping_work),
                 ];
                 if sources.iter().any(|s| s.1 != 0.0) {

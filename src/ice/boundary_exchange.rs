@@ -45,11 +45,13 @@ pub struct BoundaryExchange {
     /// Δt` over the cells and the part of each step inside a source's
     /// window.
     pub source_energy: f64,
-    /// Work done on the rest of the system by materials held at a
-    /// prescribed velocity (rigid solids of a coupled run): `U · J` per
-    /// step, `J` the impulse that holding them at `U` takes from them (the
-    /// cells' pressure force on their nodes and the exchange's momentum
-    /// transfer), plus their own kinetic energy change.
+    /// Work of prescribed motion and loads. In a coupled run, of materials
+    /// held at a prescribed velocity (rigid solids): `U · J` per step, `J`
+    /// the impulse that holding them at `U` takes from them (the cells'
+    /// pressure force on their nodes and the exchange's momentum transfer),
+    /// plus their own kinetic energy change. In an implicit solid run, of
+    /// its grips, surface loads and ramped body force
+    /// ([`crate::mpm::StepStats::external_work`]).
     pub prescribed_work: f64,
     /// Chemical energy the reactions of a coupled run released into their
     /// products ([`crate::coupling::reaction`]).

@@ -326,6 +326,10 @@ pub struct StepStats {
     /// Force of each grip of [`ImplicitRun::prescribed`] on the body at the
     /// end of the step (D components, the sum of −R over its fixed DOFs).
     pub reactions: Vec<Vec<f64>>,
+    /// Work the grips, the surface loads and the body force did on the
+    /// particles over the step ([`ImplicitRun::step`]; trapezoidal in the
+    /// load factor).
+    pub external_work: f64,
     /// Seconds in triangular solves / Krylov iterations.
     pub solve_s: f64,
     /// Seconds in the particle update (stress evaluation and G2P).
@@ -445,6 +449,12 @@ pub struct ImplicitRun<const D: usize> {
     pub accel: Vec<SVector<f64, D>>,
     /// Grips: particle sets with a prescribed (ramped) displacement.
     pub prescribed: Vec<PrescribedDisplacement<D>>,
+    /// Force of each grip on the body at the end of the last step (the
+    /// start of the next one's work; empty before the first step).
+    pub grip_reactions: Vec<SVector<f64, D>>,
+    /// The particles' positions at the start of the step (for the work of
+    /// the surface and body loads; empty without such loads).
+    x_start: Vec<SVector<f64, D>>,
     /// The fluid's load in a coupled MPM-ICE step (set by the coupling
     /// before each solve; `None` for a solid alone).
     pub fluid_load: Option<FluidLoad<D>>,
@@ -608,6 +618,8 @@ impl<const D: usize> ImplicitRun<D> {
             last_cut: None,
             accel: vec![SVector::zeros(); np],
             prescribed: Vec::new(),
+            grip_reactions: Vec::new(),
+            x_start: Vec::new(),
             fluid_load: None,
             prescribed_applied: 0.0,
             pending: None,
@@ -641,6 +653,45 @@ impl<const D: usize> ImplicitRun<D> {
         self.prescribed_applied = c.prescribed_applied;
         self.initialised = c.initialised;
         self.cache.full_storage = c.full_storage;
+    }
+
+    /// The work of the grips, the surface loads and the body force on the
+    /// particles over the accepted step `st` from time `t0` (load factor
+    /// `load0`, grips applied to `applied0`), the trapezoidal rule in the
+    /// load: a grip's `½ (R⁰ + R¹) · Δd` over its prescribed components, a
+    /// surface force's `½ (λ⁰ + λ¹) f · Δx_p`, the body force's
+    /// `½ m_p (λ⁰ b⁰ + λ¹ b¹) · Δx_p` (exact for a linear response). Updates
+    /// the grips' start-of-step reactions.
+    fn external_work(&mut self, st: &StepStats, t0: f64, load0: f64, applied0: f64) -> f64 {
+        let load1 = st.load;
+        let mut work = 0.0;
+        self.grip_reactions
+            .resize(self.prescribed.len(), SVector::zeros());
+        for ((grip, r0), r1) in self
+            .prescribed
+            .iter()
+            .zip(self.grip_reactions.iter_mut())
+            .zip(&st.reactions)
+        {
+            let r1 = SVector::<f64, D>::from_fn(|a, _| r1[a]);
+            for a in (0..D).filter(|&a| grip.components[a]) {
+                work += 0.5 * (r0[a] + r1[a]) * grip.displacement[a] * (load1 - applied0);
+            }
+            *r0 = r1;
+        }
+        let x = &self.particles.x;
+        for (&p, f) in self.surface.particle.iter().zip(&self.surface.force) {
+            work += 0.5 * (load0 + load1) * f.dot(&(x[p] - self.x_start[p]));
+        }
+        if let Some(b) = &self.body {
+            let parts = &self.particles;
+            for p in 0..parts.len() {
+                let b0 = b.accel(&parts.x0[p], &self.x_start[p], t0) * load0;
+                let b1 = b.accel(&parts.x0[p], &x[p], st.t) * load1;
+                work += 0.5 * parts.mass[p] * (b0 + b1).dot(&(x[p] - self.x_start[p]));
+            }
+        }
+        work
     }
 
     /// Load factor at time `t`.
@@ -687,6 +738,10 @@ impl<const D: usize> ImplicitRun<D> {
         }
         let mut dt = dt.max(self.params.dt_min);
         let mut retries = 0;
+        let (t0, load0, applied0) = (self.t, self.load_factor(self.t), self.prescribed_applied);
+        if !self.surface.particle.is_empty() || self.body.is_some() {
+            self.x_start.clone_from(&self.particles.x);
+        }
         loop {
             let dt_try = dt.min(self.end - self.t);
             let last = dt_try >= self.end - self.t;
@@ -696,6 +751,7 @@ impl<const D: usize> ImplicitRun<D> {
                     st.wall_s = start.elapsed().as_secs_f64();
                     self.t = if last { self.end } else { self.t + dt_try };
                     st.t = self.t;
+                    st.external_work = self.external_work(&st, t0, load0, applied0);
                     self.steps += 1;
                     if st.newton_iterations <= self.params.easy_newton {
                         dt *= self.params.dt_grow;

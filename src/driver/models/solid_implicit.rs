@@ -56,12 +56,17 @@ impl<const D: usize> Model for ImplicitSolid<D> {
 
     fn step(&mut self, _dt: DtRequest) -> Result<StepStats, Error> {
         let st = self.run.step()?;
+        // The loads' and grips' work is put in from outside (the summary's
+        // energy drift is net of it); momentum is left as it was.
         Ok(StepStats {
             dt: st.dt,
             nonlinear_iterations: st.newton_iterations,
             linear_iterations: st.linear_iterations,
             retries: st.retries,
-            boundary: None,
+            boundary: Some(crate::ice::BoundaryExchange {
+                prescribed_work: st.external_work,
+                ..Default::default()
+            }),
         })
     }
 
@@ -136,6 +141,9 @@ impl<const D: usize> Model for ImplicitSolid<D> {
             vec![3],
             vec![r.steps, c.initialised as u64, c.full_storage as u64],
         );
+        if !r.grip_reactions.is_empty() {
+            put_vectors(ck, "model.grip_reactions", &r.grip_reactions);
+        }
     }
 
     fn load(&mut self, ck: &mut Checkpoint) -> Result<(), CheckpointError> {
@@ -153,6 +161,12 @@ impl<const D: usize> Model for ImplicitSolid<D> {
             initialised: c[1] != 0,
             full_storage: c[2] != 0,
         });
+        // Absent before the first step, and in checkpoints before the
+        // grips' work was booked (their next step then starts from zero).
+        r.grip_reactions = match ck.shape("model.grip_reactions") {
+            Some(_) => take_vectors(ck, "model.grip_reactions", r.prescribed.len())?,
+            None => Vec::new(),
+        };
         Ok(())
     }
 
