@@ -78,15 +78,15 @@ pub struct Summary {
     /// potential energy, `E_scale` the largest of |E_0|, |E_end| and their
     /// kinetic and stored parts (what the account holds; a run that takes
     /// in much more than it starts with is measured against that), `E_in`
-    /// the
-    /// energy advected in, the boundary faces' pressure work, and what heat
-    /// sources, prescribed (rigid) motion and damping put in or took out
-    /// ([`crate::ice::BoundaryExchange::energy_in`]).
+    /// the energy advected in, the boundary faces' pressure work, and what
+    /// heat sources, reactions, prescribed motion and loads, and damping
+    /// put in or took out ([`crate::ice::BoundaryExchange::energy_in`]).
     pub energy_drift: f64,
     /// What crossed the domain boundary over the run (mass, momentum,
     /// energy in) and the energy put in from outside (heat sources,
-    /// reactions, prescribed motion, damping), where the model accounts for
-    /// it (ICE fluids, explicit MPM, coupled MPM-ICE; absent otherwise).
+    /// reactions, prescribed motion and loads, damping), where the model
+    /// accounts for it (ICE fluids, explicit and implicit MPM, coupled
+    /// MPM-ICE, multiphase; absent otherwise).
     /// The drifts above are net of it; the raw change of a total is its
     /// drift plus this.
     #[serde(skip_serializing_if = "Option::is_none")]

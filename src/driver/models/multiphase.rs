@@ -107,7 +107,7 @@ impl<const D: usize> Model for Multiphase<D> {
         Ok(StepStats {
             dt,
             boundary: Some(crate::ice::BoundaryExchange {
-                momentum: crate::driver::model::pad3(&j),
+                momentum: pad3(&j),
                 ..Default::default()
             }),
             ..Default::default()
