@@ -340,6 +340,11 @@ pub struct CoupledRun<const D: usize> {
     pub rigid_work: f64,
     /// The chemical energy the reactions released in the last step.
     pub reaction_step_energy: f64,
+    /// Per field, the momentum the cells gave it in the last step: their
+    /// pressure force `Σ_c F_c Δt` and the exchange's `Σ_c m_c Δu_c`, both
+    /// already in the fluids' account (the face pressures telescope to
+    /// the boundary; the exchange sums to zero in each cell).
+    pub cell_impulse: Vec<SVector<f64, D>>,
     /// The implicit solid solves (`time.mode = "implicit"`), summed over
     /// the steps and fields. Not part of the state.
     pub implicit_totals: ImplicitTotals,
@@ -562,6 +567,7 @@ impl<const D: usize> CoupledRun<D> {
             last_cut: None,
             rigid_work: 0.0,
             reaction_step_energy: 0.0,
+            cell_impulse: Vec::new(),
             implicit_totals: ImplicitTotals::default(),
             last_implicit_retries: 0,
             implicit_failed: false,
@@ -1039,7 +1045,7 @@ impl<const D: usize> CoupledRun<D> {
             dt,
             &self.particle_velocity,
         )?;
-        for f in &mut self.fields {
+        for (fi, f) in self.fields.iter_mut().enumerate() {
             let r = f.ice_material;
             // The field's exchange velocity change, cells → nodes.
             if f.rigid_velocity.is_none() {
@@ -1047,6 +1053,7 @@ impl<const D: usize> CoupledRun<D> {
                 let pv = &self.particle_velocity[r];
                 for &c in &layout.interior {
                     self.cell_vec[c] = ul[c] - pv[c];
+                    self.cell_impulse[fi] += self.cell_vec[c] * self.fluid.cells[r].mass[c];
                 }
                 cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
                 let inv_dt = 1.0 / dt;
@@ -1240,6 +1247,8 @@ impl<const D: usize> CoupledRun<D> {
         let nf = self.num_fluids();
         // This pass's value (a coupling iteration's last pass stands).
         self.rigid_work = 0.0;
+        self.cell_impulse
+            .resize(self.fields.len(), SVector::zeros());
         for (fi, f) in self.fields.iter_mut().enumerate() {
             self.failed_field = Some(fi);
             let r = f.ice_material;
@@ -1293,6 +1302,13 @@ impl<const D: usize> CoupledRun<D> {
                     };
                 }
             }
+            // The cells' force on the field, `Σ_c F_c Δt` (this pass's).
+            self.cell_impulse[fi] = layout
+                .interior
+                .iter()
+                .zip(&f.cell_mass)
+                .map(|(&c, &m)| self.cell_vec[c] * (m * dt))
+                .sum();
             cells_to_nodes(&self.grid, layout, &self.cell_vec, &mut self.node_force);
             for (fi, &m) in self.node_force.iter_mut().zip(&f.gs.mass) {
                 *fi *= m;
@@ -1471,20 +1487,51 @@ impl<const D: usize> CoupledRun<D> {
         (m, e)
     }
 
+    /// Whether the momentum account closes: every solid field explicit and
+    /// deformable, no damping, no gravity, no reaction and a plane grid (a
+    /// held field's impulse, Newmark's update, the damping and gravity on
+    /// the nodes, the burn's transfer and r–z's hoop force are not booked).
+    pub fn momentum_accounted(&self) -> bool {
+        !self.grid.axisymmetric
+            && self
+                .fields
+                .iter()
+                .all(|f| f.rigid_velocity.is_none() && f.implicit.is_none())
+            && self.mpm.damping == 0.0
+            && self.ice.gravity.iter().all(|&g| g == 0.0)
+            && self.reactions.is_empty()
+    }
+
     /// What the last step took in from outside the system: the fluids'
-    /// flow through the domain boundary and the face pressures' work there,
-    /// the heat sources' and the reactions' energy, the prescribed motion's
-    /// work (the exchange's part and [`Self::rigid_work`]) and the solids'
+    /// flow through the domain boundary and the face pressures' impulse
+    /// and work there, the walls' reaction on each solid field, the heat
+    /// sources' and the reactions' energy, the prescribed motion's work
+    /// (the exchange's part and [`Self::rigid_work`]) and the solids'
     /// damping (the run summary's account,
     /// [`crate::ice::BoundaryExchange`]).
+    ///
+    /// Momentum: the cells' pressure forces on all materials, solids
+    /// included, telescope to the boundary faces' impulse (the ICE part),
+    /// and the exchange sums to zero in each cell. A field's particles get
+    /// from the grid its own share of each node's change; less the cells'
+    /// force and exchange on it ([`Self::cell_impulse`]) and its internal
+    /// forces (which sum to zero), what is left is its walls' reaction. Zero
+    /// where [`Self::momentum_accounted`] is false.
     pub fn energy_in(&self) -> ice::BoundaryExchange {
         let mut b = self.ws.boundary_exchange();
-        // The boundary faces' pressure impulse acts on the whole mixture,
-        // solids included, and the solids' walls act on their nodes: the
-        // coupled account does not close momentum (its drift is n/a), so
-        // no part of it is reported.
-        b.momentum = [0.0; 3];
-        b.body_momentum = [0.0; 3];
+        if self.momentum_accounted() {
+            let dt = self.ws.last_dt().unwrap_or(0.0);
+            let pic = self.mpm.pic_fraction;
+            for (f, cell) in self.fields.iter().zip(&self.cell_impulse) {
+                let j = f.gs.particle_momentum_change(dt, pic) - cell;
+                for d in 0..D {
+                    b.momentum[d] += j[d];
+                }
+            }
+        } else {
+            b.momentum = [0.0; 3];
+            b.body_momentum = [0.0; 3];
+        }
         b.prescribed_work += self.rigid_work;
         b.reaction_energy += self.reaction_step_energy;
         b.damping_work += self.fields.iter().map(|f| f.gs.damping_work()).sum::<f64>();

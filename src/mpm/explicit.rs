@@ -162,6 +162,22 @@ impl<const D: usize> GridState<D> {
         self.damping_work
     }
 
+    /// The momentum the last step's G2P (PIC share `pic`) gave the
+    /// particles, from the grid: the particles' own share of every node's
+    /// `m a Δt` (FLIP) or `m vᴸ − p` (PIC), the fold's images left out
+    /// ([`WallRecord`]). A coupled run takes the cells' forces and the
+    /// exchange off it to find the walls' reaction.
+    pub fn particle_momentum_change(&self, dt: f64, pic: f64) -> SVector<f64, D> {
+        self.walls.particle_momentum_change(
+            &self.mass,
+            &self.momentum,
+            &self.accel,
+            &self.velocity_new,
+            dt,
+            pic,
+        )
+    }
+
     /// The impulse the fixed walls and symmetry planes gave the particles
     /// in the last step of `dt` with PIC share `pic`
     /// ([`super::wall_reaction`]): zero without such faces. Valid after a

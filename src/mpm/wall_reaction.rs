@@ -107,6 +107,43 @@ impl<const D: usize> WallRecord<D> {
         sum
     }
 
+    /// The momentum change the G2P update with PIC share `pic` gives the
+    /// particles, from the grid: `Σ_i [(1 − β) Δt m_i^r a_i + β (m_i^r vᴸ_i
+    /// − p_i^r)]` over every node, ghosts included, with the particles'
+    /// own (unfolded) mass and momentum where the fold changed them and the
+    /// folded `mass` and `momentum` elsewhere (module docs). Summed in node
+    /// order.
+    pub(crate) fn particle_momentum_change(
+        &self,
+        mass: &[f64],
+        momentum: &[SVector<f64, D>],
+        accel: &[SVector<f64, D>],
+        velocity_new: &[SVector<f64, D>],
+        dt: f64,
+        pic: f64,
+    ) -> SVector<f64, D> {
+        let change = |m: f64, p: &SVector<f64, D>, i: usize| {
+            accel[i] * ((1.0 - pic) * dt * m) + (velocity_new[i] * m - p) * pic
+        };
+        let mut sum = SVector::<f64, D>::zeros();
+        for (i, (&m, p)) in mass.iter().zip(momentum).enumerate() {
+            if m > 0.0 {
+                sum += change(m, p, i);
+            }
+        }
+        if self.built {
+            for (k, &i) in self.nodes.iter().enumerate() {
+                let folded = if mass[i] > 0.0 {
+                    change(mass[i], &momentum[i], i)
+                } else {
+                    SVector::zeros()
+                };
+                sum += change(self.mass[k], &self.momentum[k], i) - folded;
+            }
+        }
+        sum
+    }
+
     /// The reaction `J` of the walls over a step of `dt` with PIC share
     /// `pic` (module docs), from the recorded fields and the grid's
     /// acceleration `accel` and updated velocity `velocity_new`.

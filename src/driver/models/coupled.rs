@@ -315,9 +315,9 @@ impl<const D: usize> Model for Coupled<D> {
             shape: scene_name(&run.mpm.shape),
             update: scene_name(&run.mpm.scheme),
             iterative: run.ice.implicit.is_some(),
-            // Walls and the pressure at them exchange momentum with the
-            // coupled system.
-            momentum_conserved: false,
+            // The walls' reaction and the boundary faces' impulse are in
+            // the account where it closes (`CoupledRun::momentum_accounted`).
+            momentum_conserved: run.momentum_accounted(),
             axial_momentum_only: false,
             phase_times: run.phase_times(),
             // Implicit solid fields: their Newton solves' time split.
