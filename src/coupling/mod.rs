@@ -1514,9 +1514,16 @@ impl<const D: usize> CoupledRun<D> {
     /// included, telescope to the boundary faces' impulse (the ICE part),
     /// and the exchange sums to zero in each cell. A field's particles get
     /// from the grid its own share of each node's change; less the cells'
-    /// force and exchange on it ([`Self::cell_impulse`]) and its internal
-    /// forces (which sum to zero), what is left is its walls' reaction. Zero
-    /// where [`Self::momentum_accounted`] is false.
+    /// force and exchange on it ([`Self::cell_impulse`]), what is left is
+    /// booked as its walls' reaction (the mirror images' share of the
+    /// nodes on a wall). That remainder is inferred, not computed from the
+    /// wall nodes alone as the solid-only account's
+    /// ([`crate::mpm::wall_reaction`]): it also holds whatever the MPM side
+    /// does not conserve (forces dropped on nodes below the mass floor,
+    /// the cell → node map at a wall), so the drift checks the fluids'
+    /// balance and that the solids take what the cells give, not the MPM
+    /// forces' own balance. Zero where [`Self::momentum_accounted`] is
+    /// false.
     pub fn energy_in(&self) -> ice::BoundaryExchange {
         let mut b = self.ws.boundary_exchange();
         if self.momentum_accounted() {
