@@ -441,9 +441,9 @@ fn a_coupled_runs_flow_through_the_boundary_is_accounted_for() {
 /// pressure force and exchange on the field (which the fluids' account
 /// already holds: the face pressures of all materials telescope to the
 /// boundary, the exchange sums to zero in each cell). Inferred so, it
-/// also absorbs what the MPM forces themselves do not conserve: this
-/// checks the fluids' balance and that the solids take what the cells
-/// give. Two steel blocks
+/// also absorbs what the MPM side does not conserve: this checks the
+/// cells' balance (the fluids' change and the cells' forces on the solids
+/// add up to the boundary impulse), not the MPM forces' own. Two steel blocks
 /// meet in air on a symmetry plane (`cases/two_blocks_in_air.toml`, to
 /// 0.3 ms): the plane gives them and the air 15.0 kg m/s in y (75.8 with a
 /// PIC share 0.3); net of it the momentum drift is 5.1e-16 (7.5e-16).

@@ -1520,10 +1520,11 @@ impl<const D: usize> CoupledRun<D> {
     /// wall nodes alone as the solid-only account's
     /// ([`crate::mpm::wall_reaction`]): it also holds whatever the MPM side
     /// does not conserve (forces dropped on nodes below the mass floor,
-    /// the cell → node map at a wall), so the drift checks the fluids'
-    /// balance and that the solids take what the cells give, not the MPM
-    /// forces' own balance. Zero where [`Self::momentum_accounted`] is
-    /// false.
+    /// the cell → node map at a wall), so the drift checks the cells'
+    /// balance (the fluids' change and the cells' forces on the solids add
+    /// up to the boundary impulse) and G2P's consistency, not whether the
+    /// particles receive what the cells give nor the MPM forces' own
+    /// balance. Zero where [`Self::momentum_accounted`] is false.
     pub fn energy_in(&self) -> ice::BoundaryExchange {
         let mut b = self.ws.boundary_exchange();
         if self.momentum_accounted() {
