@@ -446,7 +446,7 @@ fn a_coupled_runs_flow_through_the_boundary_is_accounted_for() {
 /// add up to the boundary impulse), not the MPM forces' own. Two steel blocks
 /// meet in air on a symmetry plane (`cases/two_blocks_in_air.toml`, to
 /// 0.3 ms): the plane gives them and the air 15.0 kg m/s in y (75.8 with a
-/// PIC share 0.3); net of it the momentum drift is 5.1e-16 (7.5e-16).
+/// PIC share 0.3); net of it the momentum drift is 4.6e-16 (6.9e-16).
 /// Before, coupled runs reported no momentum drift at all.
 #[test]
 fn a_coupled_runs_walls_are_accounted_for() {

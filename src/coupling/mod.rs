@@ -1101,16 +1101,12 @@ impl<const D: usize> CoupledRun<D> {
             }
             // Step 13: G2P.
             if let Some(v) = f.rigid_now {
-                // The prescribed motion's work on the field itself.
-                let p = &f.particles;
-                let ke: f64 =
-                    p.v.iter()
-                        .zip(&p.mass)
-                        .map(|(u, &m)| 0.5 * m * (v.norm_squared() - u.norm_squared()))
-                        .sum();
-                self.rigid_work += ke;
+                // The prescribed motion's work on the field itself: its
+                // kinetic energy change.
+                let ke0 = f.particles.kinetic_energy();
                 f.particles.x.par_iter_mut().for_each(|x| *x += v * dt);
                 f.particles.v.par_iter_mut().for_each(|u| *u = v);
+                self.rigid_work += f.particles.kinetic_energy() - ke0;
             } else if let Some(imp) = f.implicit.as_deref_mut() {
                 // The pending solve to the particles, with the exchange's
                 // velocity change (still in `node_force`).
@@ -1525,7 +1521,7 @@ impl<const D: usize> CoupledRun<D> {
     /// up to the boundary impulse) and G2P's consistency, not whether the
     /// particles receive what the cells give nor the MPM forces' own
     /// balance. Zero where [`Self::momentum_accounted`] is false.
-    pub fn energy_in(&self) -> ice::BoundaryExchange {
+    pub fn step_inputs(&self) -> ice::BoundaryExchange {
         let mut b = self.ws.boundary_exchange();
         if self.momentum_accounted() {
             let dt = self.ws.last_dt().unwrap_or(0.0);

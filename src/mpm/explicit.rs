@@ -1298,7 +1298,7 @@ fn grid_solve<const D: usize>(ctx: &Ctx<'_, D>, gs: &mut GridState<D>) {
         -alpha
             * dt
             * gs.walls
-                .real_mass_weighted(&gs.mass, |i| (v[i] + vl[i]) * 0.5)
+                .real_mass_weighted(&gs.mass, &gs.momentum, |i| (v[i] + vl[i]) * 0.5)
     } else {
         0.0
     };

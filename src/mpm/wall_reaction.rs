@@ -82,37 +82,52 @@ impl<const D: usize> WallRecord<D> {
         }
     }
 
-    /// `Σ_i m_i^r |v(i)|²` over every node, ghosts included, with `m_i^r`
-    /// the particles' own (unfolded) nodal mass where the fold changed it
-    /// (recorded; the folded `mass` elsewhere) and `v(i)` a nodal velocity
-    /// with the ghosts mirrored: the real particles' part of a folded
-    /// grid's `Σ m |v|²` (a node on a symmetry plane holds twice its real
-    /// mass). Summed in node order, so independent of the thread count.
-    pub(crate) fn real_mass_weighted(
+    /// `Σ_i q(m_i^r, p_i^r, i)` over every node, ghosts included, for a
+    /// nodal quantity `q` of a node's mass and momentum (zero at zero
+    /// mass and momentum), with the particles' own (unfolded) mass and
+    /// momentum where the fold changed them (recorded) and the folded
+    /// `mass` and `momentum` elsewhere: the real particles' part of a
+    /// folded grid's `Σ q` (a node on a symmetry plane holds twice its
+    /// real mass). Summed in node order, so independent of the thread
+    /// count.
+    fn real_sum<T>(
         &self,
         mass: &[f64],
-        v: impl Fn(usize) -> SVector<f64, D>,
-    ) -> f64 {
-        let mut sum: f64 = mass
-            .iter()
-            .enumerate()
-            .filter(|(_, &m)| m > 0.0)
-            .map(|(i, &m)| m * v(i).norm_squared())
-            .sum();
+        momentum: &[SVector<f64, D>],
+        zero: T,
+        q: impl Fn(f64, &SVector<f64, D>, usize) -> T,
+    ) -> T
+    where
+        T: Copy + std::ops::Add<Output = T> + std::ops::Sub<Output = T>,
+    {
+        let mut sum = zero;
+        for (i, (&m, p)) in mass.iter().zip(momentum).enumerate() {
+            if m > 0.0 {
+                sum = sum + q(m, p, i);
+            }
+        }
         if self.built {
             for (k, &i) in self.nodes.iter().enumerate() {
-                sum += (self.mass[k] - mass[i]) * v(i).norm_squared();
+                sum = sum + q(self.mass[k], &self.momentum[k], i) - q(mass[i], &momentum[i], i);
             }
         }
         sum
     }
 
+    /// `Σ_i m_i^r |v(i)|²` ([`Self::real_sum`]) for a nodal velocity `v(i)`
+    /// with the ghosts mirrored.
+    pub(crate) fn real_mass_weighted(
+        &self,
+        mass: &[f64],
+        momentum: &[SVector<f64, D>],
+        v: impl Fn(usize) -> SVector<f64, D>,
+    ) -> f64 {
+        self.real_sum(mass, momentum, 0.0, |m, _, i| m * v(i).norm_squared())
+    }
+
     /// The momentum change the G2P update with PIC share `pic` gives the
     /// particles, from the grid: `Σ_i [(1 − β) Δt m_i^r a_i + β (m_i^r vᴸ_i
-    /// − p_i^r)]` over every node, ghosts included, with the particles'
-    /// own (unfolded) mass and momentum where the fold changed them and the
-    /// folded `mass` and `momentum` elsewhere (module docs). Summed in node
-    /// order.
+    /// − p_i^r)]` ([`Self::real_sum`]; module docs).
     pub(crate) fn particle_momentum_change(
         &self,
         mass: &[f64],
@@ -122,26 +137,9 @@ impl<const D: usize> WallRecord<D> {
         dt: f64,
         pic: f64,
     ) -> SVector<f64, D> {
-        let change = |m: f64, p: &SVector<f64, D>, i: usize| {
+        self.real_sum(mass, momentum, SVector::zeros(), |m, p, i| {
             accel[i] * ((1.0 - pic) * dt * m) + (velocity_new[i] * m - p) * pic
-        };
-        let mut sum = SVector::<f64, D>::zeros();
-        for (i, (&m, p)) in mass.iter().zip(momentum).enumerate() {
-            if m > 0.0 {
-                sum += change(m, p, i);
-            }
-        }
-        if self.built {
-            for (k, &i) in self.nodes.iter().enumerate() {
-                let folded = if mass[i] > 0.0 {
-                    change(mass[i], &momentum[i], i)
-                } else {
-                    SVector::zeros()
-                };
-                sum += change(self.mass[k], &self.momentum[k], i) - folded;
-            }
-        }
-        sum
+        })
     }
 
     /// The reaction `J` of the walls over a step of `dt` with PIC share

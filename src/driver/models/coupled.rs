@@ -65,7 +65,7 @@ impl<const D: usize> Model for Coupled<D> {
             nonlinear_iterations: info.outer_iterations,
             linear_iterations: info.linear_iterations,
             retries: self.run.last_halvings + self.run.last_implicit_retries,
-            boundary: Some(self.run.energy_in()),
+            boundary: Some(self.run.step_inputs()),
         })
     }
 
