@@ -93,9 +93,12 @@ fn implicit_cylinder_converges_to_lame_at_large_steps() {
 /// nothing should change the inner gas pressure but the steel's tiny
 /// creep, yet in implicit mode it decays and air reaches into the steel's
 /// cells (air density in the first full steel cell ×7 from 3 to 8 ms at
-/// dx 0.025). Likely (not proven) because each step's pressure stage moves
-/// the steel's faces by Δt² ∇p/ρ_s as if the steel had no stiffness, and
-/// the gas locked to them is advected with them. At dx 0.05, Δt 1e-4 s, P falls from
+/// dx 0.025), because each step's pressure stage moves the steel's faces
+/// by Δt² ∇p/ρ_s as if the steel had no stiffness, and the gas locked to
+/// them is advected with them: an experiment (not on main) that held the
+/// steel's faces at its own velocity in the pressure stage, with the
+/// coupling iteration converged, kept P at 1.9286e7 Pa from 3.2 to 8 ms
+/// (README, issue 20). At dx 0.05, Δt 1e-4 s, P falls from
 /// 1.8746e7 Pa at 3.2 ms to 1.7922e7 at 8 ms (−4.4 %); the explicit case
 /// holds 19.24 MPa at 8 ms.
 /// Asserted: P at 8 ms within 0.5 % of P at 3.2 ms.
