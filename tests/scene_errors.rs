@@ -233,6 +233,14 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
         ),
         (
             edit(
+                "[[materials]]",
+                "[implicit]\nhold_solid_faces = true\n\n[[materials]]",
+            ),
+            "implicit.hold_solid_faces",
+            "dynamic = false",
+        ),
+        (
+            edit(
                 "velocity = [1.0, 0.0]",
                 "velocity = [1.0, 0.0]\ninner_pressure = 1e6",
             ),
@@ -613,6 +621,11 @@ fn coupled_scene_bad_inputs_name_their_keys() {
             format!("{good}\n[coupling]\nsolid_trace_fraction = 1.0\n"),
             "coupling.solid_trace_fraction",
             "[0, 1)",
+        ),
+        (
+            format!("{good}\n[implicit]\nhold_solid_faces = true\n"),
+            "implicit.hold_solid_faces",
+            "time.mode = implicit",
         ),
         (
             format!("{good}\n[coupling]\nrigid_interface = \"exact\"\n"),

@@ -926,6 +926,25 @@ impl<const D: usize> CoupledRun<D> {
         Ok(())
     }
 
+    /// Holds every quasistatic implicit field's face velocities in the
+    /// pressure stage at its cells' velocity, where it fills both cells of
+    /// a face ([`ice::IceParams::held_solids`]; scene
+    /// `implicit.hold_solid_faces`). Without it the pressure stage moves
+    /// the solid's faces by `−Δt ∇p/ρ_s` as if it had no stiffness, and
+    /// the gas the exchange locks to them is advected into and through the
+    /// solid. Call after [`Self::make_implicit`].
+    pub fn hold_solid_faces(&mut self) {
+        for f in &self.fields {
+            if f.implicit.as_ref().is_some_and(|imp| !imp.params.dynamic) {
+                let r = f.ice_material;
+                if self.ice.held_solids.len() <= r {
+                    self.ice.held_solids.resize(r + 1, false);
+                }
+                self.ice.held_solids[r] = true;
+            }
+        }
+    }
+
     /// One step of `dt` (a fixed time step), at most the advective limit
     /// `cfl / max Σ_d |u_d|/h_d` of the cells' velocities (every material,
     /// a rigid one's prescribed velocity too; no sound speed); the pressure

@@ -214,27 +214,24 @@ fn harmonic_mean(a: f64, b: f64) -> f64 {
 /// `v_f` of [`face_specific_volume`] and the conserved weights `θ_f / v_f`
 /// (the face masses).
 ///
-/// `ustar[r][d]` holds material `r`'s face velocities normal to `d`;
-/// `fixed[r]` marks a rigid material whose face velocity is held (its first
-/// `n` entries are read; an empty slice marks none); with `sharp_fixed` a
-/// rigid material's `θ_f` is the smaller of its two cells' instead of the
-/// mean ([`super::IceParams::rigid_faces_sharp`]).
-#[allow(clippy::too_many_arguments)]
+/// `ustar[r][d]` holds material `r`'s face velocities normal to `d`. The
+/// materials that `params` holds at a face
+/// ([`super::IceParams::held_at_face`]: rigid ones, and held solids where
+/// they fill both cells) keep their face velocity there; with
+/// [`super::IceParams::rigid_faces_sharp`] a rigid material's `θ_f` is the
+/// smaller of its two cells' instead of the mean.
 pub fn face_exchange<const D: usize>(
     layout: &CellLayout<D>,
     d: usize,
     k: &[f64],
     dt: f64,
     cells: &[MaterialCells<D>],
-    fixed: &[bool],
-    sharp_fixed: bool,
+    params: &super::IceParams<D>,
     ustar: &mut [[Vec<f64>; D]],
 ) {
-    let fixed = if fixed.iter().take(cells.len()).any(|&f| f) {
-        &fixed[..cells.len()]
-    } else {
-        &[]
-    };
+    let any_held = params.any_held();
+    let rigid = params.rigid_mask();
+    let sharp_fixed = params.rigid_faces_sharp;
     let n = cells.len();
     let s = layout.strides[d];
     let mut outs = [Out::empty(); MAX_MATERIALS];
@@ -246,11 +243,13 @@ pub fn face_exchange<const D: usize>(
         let mut v = [0.0; MAX_MATERIALS];
         let mut w = [0.0; MAX_MATERIALS];
         let mut u = [SVector::<f64, 1>::zeros(); MAX_MATERIALS];
+        let mut held = [false; MAX_MATERIALS];
         for f in row {
             let (l, r) = (f - s, f);
             for m in 0..n {
                 let mc = &cells[m];
-                theta[m] = if sharp_fixed && fixed.get(m) == Some(&true) {
+                held[m] = any_held && params.held_at_face(m, &mc.vol_frac, l, r);
+                theta[m] = if sharp_fixed && rigid[m] {
                     mc.vol_frac[l].min(mc.vol_frac[r])
                 } else {
                     0.5 * (mc.vol_frac[l] + mc.vol_frac[r])
@@ -260,6 +259,11 @@ pub fn face_exchange<const D: usize>(
                 // SAFETY: face f is read and written by this task only.
                 u[m][0] = unsafe { outs[m].get(f) };
             }
+            let fixed: &[bool] = if held[..n].contains(&true) {
+                &held[..n]
+            } else {
+                &[]
+            };
             exchange_momentum_fixed(k, dt, &theta[..n], &v[..n], &w[..n], fixed, &mut u[..n]);
             for m in 0..n {
                 // SAFETY: as above.

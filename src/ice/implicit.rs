@@ -278,15 +278,7 @@ fn outer_iteration<const D: usize>(
         prev = res;
         if outer == 0 {
             // The matrix, once per step.
-            let r = assemble_matrix(
-                state,
-                ws,
-                &mut iw.system,
-                dt,
-                fdt,
-                k_mom,
-                &params.rigid_mask(),
-            );
+            let r = assemble_matrix(state, ws, &mut iw.system, dt, fdt, k_mom, params);
             if let Err(e) = r {
                 let retryable = !matches!(e, SolverError::Singular { .. });
                 return Err(fail(
@@ -358,8 +350,9 @@ fn outer_failure(sp: &SemiImplicit, outer: usize, res: f64, prev: f64) -> Option
 /// documentation): face coefficients `Δt Δt_f A/Δx Σ_r θ̂_r,f v̂_r,f` with
 /// the upwind `θ̂` from the exchanged face velocities and `v̂ = E v` (the
 /// face exchange with coefficients `k_mom` applied to the face specific
-/// volumes), `V Σθκ` on the diagonal. A `rigid` material's face velocity
-/// does not answer Δp (`v = 0`) and the exchange holds it, as in
+/// volumes), `V Σθκ` on the diagonal. A material held at a face
+/// ([`IceParams::held_at_face`]: rigid, or a held solid it fills on both
+/// sides) does not answer Δp there (`v = 0`) and the exchange holds it, as in
 /// [`correct_face_velocities`] and `face_exchange`: the matrix is then the
 /// Jacobian of the residual that the outer iteration reduces. (It was
 /// not: with a cap of 20 outer iterations and free Δt growth, the
@@ -373,7 +366,7 @@ fn assemble_matrix<const D: usize>(
     dt: f64,
     fdt: f64,
     k_mom: Option<&[f64]>,
-    rigid: &[bool; MAX_MATERIALS],
+    params: &IceParams<D>,
 ) -> Result<(), SolverError> {
     let layout = &state.layout;
     let nm = state.num_materials();
@@ -383,12 +376,7 @@ fn assemble_matrix<const D: usize>(
     let stk = &ws.sum_theta_kappa;
     let interior = &layout.interior;
     let scale: [f64; D] = std::array::from_fn(|d| dt * fdt * vol / (layout.h[d] * layout.h[d]));
-    // The exchange's held materials (none: the plain exchange).
-    let fixed = if rigid[..nm].contains(&true) {
-        &rigid[..nm]
-    } else {
-        &[][..]
-    };
+    let any_held = params.any_held();
     system.assemble(
         |f, d| {
             let l = f - layout.strides[d];
@@ -396,14 +384,22 @@ fn assemble_matrix<const D: usize>(
             let mut v = [0.0; MAX_MATERIALS];
             let mut w = [0.0; MAX_MATERIALS];
             let mut vv = [SVector::<f64, 1>::zeros(); MAX_MATERIALS];
+            let mut held = [false; MAX_MATERIALS];
             for m in 0..nm {
                 let mc = &cells[m];
                 theta[m] = 0.5 * (mc.vol_frac[l] + mc.vol_frac[f]);
                 v[m] = face_specific_volume(mc.mass[l], mc.sp_vol[l], mc.mass[f], mc.sp_vol[f]);
                 w[m] = theta[m] / v[m];
-                // A rigid material's face velocity does not answer Δp.
-                vv[m][0] = if rigid[m] { 0.0 } else { v[m] };
+                // A held material's face velocity does not answer Δp.
+                held[m] = any_held && params.held_at_face(m, &mc.vol_frac, l, f);
+                vv[m][0] = if held[m] { 0.0 } else { v[m] };
             }
+            // The exchange's held materials (none: the plain exchange).
+            let fixed: &[bool] = if held[..nm].contains(&true) {
+                &held[..nm]
+            } else {
+                &[]
+            };
             if let Some(k) = k_mom {
                 // ... and the exchange holds it (as `face_exchange` does).
                 exchange_momentum_fixed(
@@ -427,7 +423,11 @@ fn assemble_matrix<const D: usize>(
                 } else {
                     theta[m]
                 };
-                sum += th * vv[m][0];
+                // A held material's pull leaves another `v − v β/(1 + β)`,
+                // which rounds to −1 ulp once β passes 1e16 (a gas trace of
+                // specific volume 1e5 m³/kg in a held solid's cell): not a
+                // negative mobility.
+                sum += th * vv[m][0].max(0.0);
             }
             scale[d] * sum
         },
@@ -436,9 +436,10 @@ fn assemble_matrix<const D: usize>(
 }
 
 /// Face velocities from their pre-exchange values with the accumulated
-/// pressure increment, `u* = u*_pre − Δt_f v_f ∇Δp` (zero at walls; a rigid
-/// material, [`Frame::Rigid`], keeps its prescribed `u*_pre`), then the
-/// face exchange with coefficients `k_mom` again (rigid materials held).
+/// pressure increment, `u* = u*_pre − Δt_f v_f ∇Δp` (zero at walls; a
+/// material held at a face, [`IceParams::held_at_face`], keeps its `u*_pre`
+/// there), then the face exchange with coefficients `k_mom` again (held
+/// materials held).
 fn correct_face_velocities<const D: usize>(
     state: &IceState<D>,
     params: &IceParams<D>,
@@ -453,21 +454,21 @@ fn correct_face_velocities<const D: usize>(
     let nm = state.num_materials();
     for r in 0..nm {
         let mc = &state.cells[r];
-        // A rigid material keeps its prescribed face velocity.
-        let fdt = if params.frame(r) == Frame::Rigid {
-            0.0
-        } else {
-            fdt
-        };
+        // A rigid material keeps its prescribed face velocity, a held
+        // solid its held one where it fills both cells.
+        let rigid = params.frame(r) == Frame::Rigid;
+        let held_solid = params.held_solids.get(r) == Some(&true);
         for d in 0..D {
             let s = layout.strides[d];
             let inv_h = 1.0 / layout.h[d];
             let pre = &iw.ustar_pre[r][d];
             let dp = &iw.dp;
-            let (sv, ms) = (&mc.sp_vol, &mc.mass);
+            let (sv, ms, th) = (&mc.sp_vol, &mc.mass, &mc.vol_frac);
             let out = Out::new(&mut ws.ustar[r][d]);
             par_face_rows(layout, d, |row| {
                 for f in row {
+                    let held = rigid || (held_solid && params.held_at_face(r, th, f - s, f));
+                    let fdt = if held { 0.0 } else { fdt };
                     let vf = face_specific_volume(ms[f - s], sv[f - s], ms[f], sv[f]);
                     let u = pre[f] - fdt * vf * (dp[f] - dp[f - s]) * inv_h;
                     // SAFETY: each face is written by one task only.
@@ -479,16 +480,7 @@ fn correct_face_velocities<const D: usize>(
     }
     if let Some(k) = k_mom {
         for d in 0..D {
-            face_exchange(
-                layout,
-                d,
-                k,
-                dt,
-                &state.cells,
-                &params.rigid_mask(),
-                params.rigid_faces_sharp,
-                &mut ws.ustar,
-            );
+            face_exchange(layout, d, k, dt, &state.cells, params, &mut ws.ustar);
         }
     }
 }

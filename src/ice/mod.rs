@@ -74,7 +74,9 @@ pub use equilibration::EquilibrationSettings;
 pub use exchange::ExchangeCoefficients;
 pub use implicit_params::{pressure_mg_options, LinearSolver, SemiImplicit};
 pub use lagrangian::stage_lagrangian;
-pub use params::{EnergyForm, Frame, HeatSource, IceParams, TimeIntegration, ISOTHERMAL_FRACTION};
+pub use params::{
+    EnergyForm, Frame, HeatSource, IceParams, TimeIntegration, HELD_FACE_FILL, ISOTHERMAL_FRACTION,
+};
 pub use pressure::{equilibrate, stage_pressure};
 pub use setups::{periodic_vortex, periodic_vortex_exact, shock_tube};
 pub use state::{CellLayout, IceState, MaterialCells, MaterialInit, NGHOST};

@@ -343,8 +343,7 @@ pub fn stage_pressure<const D: usize>(
                 &ex.momentum,
                 dt,
                 &state.cells,
-                &params.rigid_mask(),
-                params.rigid_faces_sharp,
+                params,
                 &mut ws.ustar,
             );
         }
@@ -471,7 +470,8 @@ fn mixture_sound_speed<const D: usize>(
 /// (Guilkey Eq. 28, [`face_velocities`]) into `ws.ustar`, zero at walls,
 /// from the cell velocities (or the predicted ones with `use_pred`). A
 /// rigid material's face velocity is the average of its prescribed cell
-/// velocities (no pressure acceleration).
+/// velocities (no pressure acceleration), and so is a held solid's
+/// ([`IceParams::held_solids`]) at the faces it fills on both sides.
 fn material_face_velocities<const D: usize>(
     state: &IceState<D>,
     params: &IceParams<D>,
@@ -527,6 +527,36 @@ fn material_face_velocities<const D: usize>(
                 },
                 out,
             );
+            zero_wall_faces(layout, bcs, d, out);
+            if rigid || params.held_solids.get(r) != Some(&true) {
+                continue;
+            }
+            // A held solid: where it fills both cells, the average of its
+            // cell velocities (as a rigid material's), computed into the θ
+            // flux buffer, which `volume_fluxes` fills afterwards.
+            let held = &mut ws.theta_flux[d];
+            face_velocities(
+                layout,
+                d,
+                &mc.mass,
+                vel_in,
+                &mc.sp_vol,
+                &state.p_eq,
+                0.0,
+                0.0,
+                params.face_reconstruction,
+                0.0,
+                None,
+                None,
+                held,
+            );
+            let out = &mut ws.ustar[r][d];
+            let s = layout.strides[d];
+            for f in s..out.len() {
+                if params.held_at_face(r, &mc.vol_frac, f - s, f) {
+                    out[f] = held[f];
+                }
+            }
             zero_wall_faces(layout, bcs, d, out);
         }
     }

@@ -1092,6 +1092,9 @@ pub fn build_coupled_run<const D: usize>(
         params.dt_max = params.dt_max.min(dt);
         run.make_implicit(params, dt)
             .map_err(|e| SceneError::new("implicit", e.to_string()))?;
+        if scene.implicit.hold_solid_faces {
+            run.hold_solid_faces();
+        }
         let ci = &scene.implicit.coupling;
         run.iteration = CouplingIteration {
             max_iterations: ci.max_iterations,

@@ -1471,6 +1471,13 @@ pub struct ImplicitSpec {
     /// iterations reuse its factorisation (default `false`: full Newton).
     #[serde(default)]
     pub modified_newton: bool,
+    /// Coupled scenes with a quasistatic solid (`dynamic = false`): the
+    /// pressure stage holds the solid's face velocities at its cells'
+    /// velocity where it fills both cells of a face, instead of moving them
+    /// by `−Δt ∇p/ρ_s` (default `false`: Guilkey's step, whose gas leaks
+    /// into and through the solid at large steps).
+    #[serde(default)]
+    pub hold_solid_faces: bool,
     /// Loads (gravity, pressures) ramp linearly to full over this time
     /// (default: applied at once).
     pub load_ramp: Option<f64>,
@@ -1591,6 +1598,7 @@ impl Default for ImplicitSpec {
             tolerance_energy: default_tol_energy(),
             max_newton_iterations: default_max_newton(),
             modified_newton: false,
+            hold_solid_faces: false,
             load_ramp: None,
             dt_max: None,
             max_cell_fraction: None,
@@ -3669,6 +3677,25 @@ impl Scene {
                      fluid materials) only",
                 ));
             }
+        }
+        if self.implicit.hold_solid_faces
+            && !(has_solid && has_fluid && t.mode == Mode::Implicit && !self.implicit.dynamic)
+        {
+            return Err(err(
+                "implicit.hold_solid_faces",
+                format!(
+                    "holds a quasistatic solid's faces in the pressure stage: a coupled scene \
+                     (solids and fluids) with time.mode = implicit and implicit.dynamic = false \
+                     only (got time.mode = {}, dynamic = {}, {}); allowed here: false",
+                    t.mode.name(),
+                    self.implicit.dynamic,
+                    if has_solid && has_fluid {
+                        "coupled"
+                    } else {
+                        "not coupled"
+                    }
+                ),
+            ));
         }
         match (t.mode, has_solid) {
             (Mode::SemiImplicit, true) if !has_fluid => {

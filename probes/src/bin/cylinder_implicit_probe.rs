@@ -7,7 +7,8 @@
 //! `implicit.coupling.max_iterations` (the coupling iteration), `RELAX=constant`
 //! and `OMEGA=w` its relaxation, `TOL=t` its tolerance; `DYNAMIC=1` makes the
 //! steel Newmark instead of quasistatic; `MODIFIED=1` / `MODIFIED=0` sets
-//! `implicit.modified_newton`; `END=t` sets `time.end`; `HISTORY=1` prints
+//! `implicit.modified_newton`; `HOLD=1` sets `implicit.hold_solid_faces`;
+//! `END=t` sets `time.end`; `HISTORY=1` prints
 //! P and Eq. 43 after every step.
 
 use mpmice::diagnostics::coupled::run_cylinder_history;
@@ -36,6 +37,9 @@ fn main() -> anyhow::Result<()> {
             }
             if let Ok(e) = std::env::var("END") {
                 sc.time.end = e.parse()?;
+            }
+            if std::env::var("HOLD").is_ok_and(|h| h == "1") {
+                sc.implicit.hold_solid_faces = true;
             }
             if let Ok(m) = std::env::var("MODIFIED") {
                 sc.implicit.modified_newton = m == "1";
