@@ -491,73 +491,60 @@ fn material_face_velocities<const D: usize>(
             &mc.velocity
         };
         let rigid = params.frame(r) == Frame::Rigid;
+        let held_solid = params.held_solids.get(r) == Some(&true);
         for d in 0..D {
-            let out = &mut ws.ustar[r][d];
-            face_velocities(
-                layout,
-                d,
-                &mc.mass,
-                vel_in,
-                &mc.sp_vol,
-                &state.p_eq,
-                if rigid { 0.0 } else { fdt },
-                if rigid {
-                    0.0
-                } else {
-                    params.gravity[d] * dt / fdt
-                },
-                params.face_reconstruction,
-                if rigid || predictor_on {
-                    0.0
-                } else {
-                    params.face_smooth_factor * dt
-                },
-                if predictor_on && !rigid {
-                    Some(FacePredictor {
-                        tau: 0.5 * dt,
-                        bulk: &ws.bulk[..],
-                        velocity_convection: !params.lagrangian_remap,
-                    })
-                } else {
-                    None
-                },
-                match params.acoustic_jump {
-                    Some(lambda) if !rigid => Some((lambda, &ws.sound[..])),
-                    _ => None,
-                },
-                out,
-            );
-            zero_wall_faces(layout, bcs, d, out);
-            if rigid || params.held_solids.get(r) != Some(&true) {
-                continue;
-            }
-            // A held solid: where it fills both cells, the average of its
-            // cell velocities (as a rigid material's), computed into the θ
-            // flux buffer, which `volume_fluxes` fills afterwards.
-            let held = &mut ws.theta_flux[d];
-            face_velocities(
-                layout,
-                d,
-                &mc.mass,
-                vel_in,
-                &mc.sp_vol,
-                &state.p_eq,
-                0.0,
-                0.0,
-                params.face_reconstruction,
-                0.0,
-                None,
-                None,
-                held,
-            );
-            let out = &mut ws.ustar[r][d];
-            let s = layout.strides[d];
-            for f in s..out.len() {
-                if params.held_at_face(r, &mc.vol_frac, f - s, f) {
-                    out[f] = held[f];
+            // `held`: the average of the cell velocities, no pressure
+            // acceleration (a rigid material's, a held solid's).
+            let pass = |held: bool, out: &mut [f64]| {
+                face_velocities(
+                    layout,
+                    d,
+                    &mc.mass,
+                    vel_in,
+                    &mc.sp_vol,
+                    &state.p_eq,
+                    if held { 0.0 } else { fdt },
+                    if held {
+                        0.0
+                    } else {
+                        params.gravity[d] * dt / fdt
+                    },
+                    params.face_reconstruction,
+                    if held || predictor_on {
+                        0.0
+                    } else {
+                        params.face_smooth_factor * dt
+                    },
+                    if predictor_on && !held {
+                        Some(FacePredictor {
+                            tau: 0.5 * dt,
+                            bulk: &ws.bulk[..],
+                            velocity_convection: !params.lagrangian_remap,
+                        })
+                    } else {
+                        None
+                    },
+                    match params.acoustic_jump {
+                        Some(lambda) if !held => Some((lambda, &ws.sound[..])),
+                        _ => None,
+                    },
+                    out,
+                );
+                zero_wall_faces(layout, bcs, d, out);
+            };
+            pass(rigid, &mut ws.ustar[r][d]);
+            if held_solid {
+                // Held where it fills both cells: computed into the θ flux
+                // buffer, which `volume_fluxes` fills afterwards.
+                pass(true, &mut ws.theta_flux[d]);
+                let (out, held) = (&mut ws.ustar[r][d], &ws.theta_flux[d]);
+                let s = layout.strides[d];
+                for f in s..out.len() {
+                    if params.held_at_face(r, &mc.vol_frac, f - s, f) {
+                        out[f] = held[f];
+                    }
                 }
             }
-            zero_wall_faces(layout, bcs, d, out);
         }
     }
 }
