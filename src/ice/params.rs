@@ -208,10 +208,11 @@ pub enum Frame {
 /// across the wall at Δt 1e-4 s) and the gas locked to them was advected
 /// into and through the wall: P fell 4.4 % from 3.2 to 8 ms (dx 0.05).
 /// Held at faces with both cells at ≥ 1 % steel, P stays at 1.9286e7 Pa;
-/// at ≥ 20 % / 50 % it still fell 1.5 % / 3.1 % from 3.1 to 8 ms (this
-/// threshold made a variable for the test); held at every face (the
-/// traces' too) the run went unstable at 2.6 ms, from the air trapped in
-/// the steel's outer surface cells.
+/// at ≥ 20 % / 50 % it still fell 1.5 % / 3.1 % from 3.1 to 8 ms (the
+/// threshold made a variable in a temporary build); held at every face
+/// (the traces' too) the run went unstable at 2.6 ms, starting at the
+/// steel's outer surface, where outside air was trapped and compressed in
+/// its surface cells.
 pub const HELD_FACE_FILL: f64 = 0.01;
 
 /// An internal-energy source: `power` W per m³ of the material (flat cell
