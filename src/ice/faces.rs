@@ -216,7 +216,7 @@ fn harmonic_mean(a: f64, b: f64) -> f64 {
 ///
 /// `ustar[r][d]` holds material `r`'s face velocities normal to `d`. The
 /// materials that `params` holds at a face
-/// ([`super::IceParams::held_at_face`]: rigid ones, and held solids where
+/// ([`super::params::HeldFaces`]: rigid ones, and held solids where
 /// they fill both cells) keep their face velocity there; with
 /// [`super::IceParams::rigid_faces_sharp`] a rigid material's `θ_f` is the
 /// smaller of its two cells' instead of the mean.
@@ -229,7 +229,8 @@ pub fn face_exchange<const D: usize>(
     params: &super::IceParams<D>,
     ustar: &mut [[Vec<f64>; D]],
 ) {
-    let any_held = params.any_held();
+    let hold = params.held_faces();
+    let any_held = hold.any();
     let rigid = params.rigid_mask();
     let sharp_fixed = params.rigid_faces_sharp;
     let n = cells.len();
@@ -248,7 +249,7 @@ pub fn face_exchange<const D: usize>(
             let (l, r) = (f - s, f);
             for m in 0..n {
                 let mc = &cells[m];
-                held[m] = any_held && params.held_at_face(m, &mc.vol_frac, l, r);
+                held[m] = any_held && hold.at(m, &mc.vol_frac, l, r);
                 theta[m] = if sharp_fixed && rigid[m] {
                     mc.vol_frac[l].min(mc.vol_frac[r])
                 } else {

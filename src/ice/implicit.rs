@@ -46,7 +46,7 @@ use super::equilibration::min_pressure_all;
 use super::exchange::exchange_momentum_fixed;
 use super::faces::{face_exchange, face_specific_volume};
 use super::par::{max_rows, nan_max, par_face_rows, Out};
-use super::params::{cell_shock_sensor, Frame, IceParams};
+use super::params::{cell_shock_sensor, IceParams};
 use super::pressure_system::{ImplicitWorkspace, PressureSystem};
 use super::state::{CellLayout, IceState};
 use super::volume_flux::volume_fluxes;
@@ -351,7 +351,7 @@ fn outer_failure(sp: &SemiImplicit, outer: usize, res: f64, prev: f64) -> Option
 /// the upwind `θ̂` from the exchanged face velocities and `v̂ = E v` (the
 /// face exchange with coefficients `k_mom` applied to the face specific
 /// volumes), `V Σθκ` on the diagonal. A material held at a face
-/// ([`IceParams::held_at_face`]: rigid, or a held solid it fills on both
+/// ([`super::params::HeldFaces`]: rigid, or a held solid it fills on both
 /// sides) does not answer Δp there (`v = 0`) and the exchange holds it, as in
 /// [`correct_face_velocities`] and `face_exchange`: the matrix is then the
 /// Jacobian of the residual that the outer iteration reduces. (It was
@@ -376,7 +376,8 @@ fn assemble_matrix<const D: usize>(
     let stk = &ws.sum_theta_kappa;
     let interior = &layout.interior;
     let scale: [f64; D] = std::array::from_fn(|d| dt * fdt * vol / (layout.h[d] * layout.h[d]));
-    let any_held = params.any_held();
+    let hold = params.held_faces();
+    let any_held = hold.any();
     system.assemble(
         |f, d| {
             let l = f - layout.strides[d];
@@ -391,7 +392,7 @@ fn assemble_matrix<const D: usize>(
                 v[m] = face_specific_volume(mc.mass[l], mc.sp_vol[l], mc.mass[f], mc.sp_vol[f]);
                 w[m] = theta[m] / v[m];
                 // A held material's face velocity does not answer Δp.
-                held[m] = any_held && params.held_at_face(m, &mc.vol_frac, l, f);
+                held[m] = any_held && hold.at(m, &mc.vol_frac, l, f);
                 vv[m][0] = if held[m] { 0.0 } else { v[m] };
             }
             // The exchange's held materials (none: the plain exchange).
@@ -437,7 +438,7 @@ fn assemble_matrix<const D: usize>(
 
 /// Face velocities from their pre-exchange values with the accumulated
 /// pressure increment, `u* = u*_pre − Δt_f v_f ∇Δp` (zero at walls; a
-/// material held at a face, [`IceParams::held_at_face`], keeps its `u*_pre`
+/// material held at a face, [`super::params::HeldFaces`], keeps its `u*_pre`
 /// there), then the face exchange with coefficients `k_mom` again (held
 /// materials held).
 fn correct_face_velocities<const D: usize>(
@@ -452,12 +453,11 @@ fn correct_face_velocities<const D: usize>(
     let layout = &state.layout;
     let bcs = &params.boundaries;
     let nm = state.num_materials();
+    // A rigid material keeps its prescribed face velocity, a held solid its
+    // held one where it fills both cells.
+    let hold = params.held_faces();
     for r in 0..nm {
         let mc = &state.cells[r];
-        // A rigid material keeps its prescribed face velocity, a held
-        // solid its held one where it fills both cells.
-        let rigid = params.frame(r) == Frame::Rigid;
-        let held_solid = params.held_solids.get(r) == Some(&true);
         for d in 0..D {
             let s = layout.strides[d];
             let inv_h = 1.0 / layout.h[d];
@@ -467,8 +467,7 @@ fn correct_face_velocities<const D: usize>(
             let out = Out::new(&mut ws.ustar[r][d]);
             par_face_rows(layout, d, |row| {
                 for f in row {
-                    let held = rigid || (held_solid && params.held_at_face(r, th, f - s, f));
-                    let fdt = if held { 0.0 } else { fdt };
+                    let fdt = if hold.at(r, th, f - s, f) { 0.0 } else { fdt };
                     let vf = face_specific_volume(ms[f - s], sv[f - s], ms[f], sv[f]);
                     let u = pre[f] - fdt * vf * (dp[f] - dp[f - s]) * inv_h;
                     // SAFETY: each face is written by one task only.

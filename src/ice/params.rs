@@ -160,7 +160,7 @@ pub struct IceParams<const D: usize> {
     /// of their cells' velocities, without the pressure gradient's
     /// acceleration, at every face where both cells hold at least
     /// [`HELD_FACE_FILL`] of them: a quasistatic implicit solid, whose
-    /// velocity its stress sets, not `−Δt ∇p/ρ` (see [`Self::held_at_face`]).
+    /// velocity its stress sets, not `−Δt ∇p/ρ` (see [`HeldFaces`]).
     pub held_solids: Vec<bool>,
     /// Volume fraction below which a material of a mixed cell keeps its
     /// temperature through the flow work of the Lagrangian phase
@@ -214,6 +214,30 @@ pub enum Frame {
 /// steel's outer surface, where outside air was trapped and compressed in
 /// its surface cells.
 pub const HELD_FACE_FILL: f64 = 0.01;
+
+/// Per material, whether the pressure stage holds its face velocity:
+/// always for a rigid material, and for a [`IceParams::held_solids`] one
+/// where both cells of the face hold at least [`HELD_FACE_FILL`] of it
+/// ([`IceParams::held_faces`]).
+#[derive(Debug, Clone, Copy)]
+pub struct HeldFaces {
+    rigid: [bool; MAX_MATERIALS],
+    solid: [bool; MAX_MATERIALS],
+}
+
+impl HeldFaces {
+    /// Whether any material may be held.
+    pub fn any(&self) -> bool {
+        self.rigid.contains(&true) || self.solid.contains(&true)
+    }
+
+    /// Whether material `r` (volume fractions `theta`) is held at the face
+    /// between cells `l` and `f`.
+    #[inline]
+    pub fn at(&self, r: usize, theta: &[f64], l: usize, f: usize) -> bool {
+        self.rigid[r] || (self.solid[r] && theta[l].min(theta[f]) >= HELD_FACE_FILL)
+    }
+}
 
 /// An internal-energy source: `power` W per m³ of the material (flat cell
 /// index, zero outside the region; a cell receives `power θ_r V`) added to
@@ -365,22 +389,17 @@ impl<const D: usize> IceParams<D> {
         m
     }
 
-    /// Whether the pressure stage holds material `r`'s velocity at the face
-    /// between cells `l` and `f` (`theta`: its volume fractions): always for
-    /// a rigid material, and for a [`Self::held_solids`] one where both
-    /// cells hold at least [`HELD_FACE_FILL`] of it.
-    #[inline]
-    pub fn held_at_face(&self, r: usize, theta: &[f64], l: usize, f: usize) -> bool {
-        match self.frame(r) {
-            Frame::Rigid => true,
-            _ => self.held_solids.get(r) == Some(&true) && theta[l].min(theta[f]) >= HELD_FACE_FILL,
+    /// Which materials the pressure stage holds at a face
+    /// ([`HeldFaces::at`]), per material once, for the face loops.
+    pub fn held_faces(&self) -> HeldFaces {
+        let mut solid = [false; MAX_MATERIALS];
+        for (r, &h) in self.held_solids.iter().enumerate().take(MAX_MATERIALS) {
+            solid[r] = h;
         }
-    }
-
-    /// Whether any material's face velocity may be held (rigid or
-    /// [`Self::held_solids`]).
-    pub fn any_held(&self) -> bool {
-        self.frames.contains(&Frame::Rigid) || self.held_solids.contains(&true)
+        HeldFaces {
+            rigid: self.rigid_mask(),
+            solid,
+        }
     }
 
     /// The high-resolution variant of the same ICE step (an improvement of

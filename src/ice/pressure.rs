@@ -483,6 +483,7 @@ fn material_face_velocities<const D: usize>(
     let layout = &state.layout;
     let bcs = &params.boundaries;
     let predictor_on = params.face_predictor && params.face_reconstruction.is_some();
+    let hold = params.held_faces();
     for r in 0..state.num_materials() {
         let mc = &state.cells[r];
         let vel_in = if use_pred {
@@ -540,7 +541,7 @@ fn material_face_velocities<const D: usize>(
                 let (out, held) = (&mut ws.ustar[r][d], &ws.theta_flux[d]);
                 let s = layout.strides[d];
                 for f in s..out.len() {
-                    if params.held_at_face(r, &mc.vol_frac, f - s, f) {
+                    if hold.at(r, &mc.vol_frac, f - s, f) {
                         out[f] = held[f];
                     }
                 }
