@@ -264,7 +264,7 @@ fn plastic_grip_scene_matches_the_closed_form() {
                         (p.plastic_strain.get(i).copied().unwrap_or(0.0) - eb).abs()
                             / eb.max(1e-300),
                     )
-                    .max((p.work[i] - work_exact).abs() / work_exact);
+                    .max((p.work_of(i) - work_exact).abs() / work_exact);
             }
         }
         let last = run.stats.last().unwrap();

@@ -218,7 +218,7 @@ fn with_the_gap_check_the_contact_starts_when_the_block_touches_the_membrane() {
         text = text.replace("upper = [0.1, 0.1, 0.1] }", "upper = [0.1, 0.1, 0.125] }");
         let mut m = model(&text);
         let mass = m.solid.run.particles.total_mass();
-        let half = m.solid.run.particles.half_size[0][2];
+        let half = m.solid.run.particles.half_size.get(0)[2];
         let mut first: Option<(f64, f64)> = None;
         // Before contact: the block's largest departure from −2 m/s; after:
         // the deepest a particle's lower face reaches below the membrane's upper surface

@@ -9,12 +9,15 @@ use std::path::Path;
 use std::process::Command;
 
 /// `(particles, peak resident bytes)` of `bench/block_1m.toml` on a
-/// `cells`² grid.
-fn peak(cells: usize) -> (f64, f64) {
+/// `cells`² grid, the watchdog's last good state kept as `last_good` says
+/// (`time.last_good`).
+fn peak(cells: usize, last_good: &str) -> (f64, f64) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("memory-{cells}-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("memory-{cells}-{last_good}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let set = format!("grid.cells=[{cells},{cells}]");
+    let keep = format!("time.last_good=\"{last_good}\"");
     let out = Command::new(env!("CARGO_BIN_EXE_mpmice"))
         .args([
             "run",
@@ -22,6 +25,8 @@ fn peak(cells: usize) -> (f64, f64) {
             "--quiet",
             "--set",
             &set,
+            "--set",
+            &keep,
             "--out",
         ])
         .arg(&dir)
@@ -45,36 +50,47 @@ fn peak(cells: usize) -> (f64, f64) {
 
 /// The memory one more particle costs, measured between a 40² and a 320²
 /// run (4 096 and 262 144 particles), stays within what the design keeps:
-/// its arrays (F and σ in 5 entries each, 4 vectors, 5 scalars and a u16
-/// material: 186 B; an elastic run tracks no temperature, plastic strain or
-/// damage), the step's scratch (40 B), its share of the grid (88 B a node,
-/// 0.39 nodes a particle: 35 B) and the last good state (192 B): 453 B (a
-/// snapshot reads every particle field, positions included, in place).
-/// Before issue 24's changes (the snapshot reading the fields in place, the
-/// tensors stored in the plane, the optional arrays) the 1M-particle bench
-/// took 995 B a particle.
+/// its arrays (F and σ in 5 entries each, 3 vectors, 3 scalars, a 4-byte
+/// half-size index and a 2-byte material: 158 B; an elastic neo-Hookean run
+/// keeps no stress work, temperature, plastic strain or damage), the step's
+/// scratch (40 B) and its share of the grid (88 B a node, 0.39 nodes a
+/// particle: 35 B): 233 B; with the last good state in memory another
+/// 176 B (its arrays as a checkpoint stores them: the half-sizes as
+/// vectors, the material as a u64): 409 B. A snapshot reads every particle
+/// and grid field in place. Before issue 24's changes (the snapshot reading
+/// the fields in place, the tensors stored in the plane, the optional
+/// arrays, the last good state on disk) the 1M-particle bench took 995 B a
+/// particle.
 #[test]
 fn a_particle_costs_what_its_arrays_and_the_last_good_state_take() {
     if !Path::new("/proc/self/status").exists() {
         return; // the peak is read from /proc
     }
-    let (n0, b0) = peak(40);
-    let (n1, b1) = peak(320);
-    let marginal = (b1 - b0) / (n1 - n0);
-    println!("{n0} particles: {b0} B; {n1}: {b1} B; {marginal:.1} B a particle");
-    // Measured 436.9 B a particle.
-    assert!(marginal < 453.0 * 1.05, "{marginal} B a particle");
-    // The scene's estimate (`check`) bounds what the run took beyond the
-    // small run (the program).
-    let est = {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/block_1m.toml");
-        let mut s = mpmice::scene::load(&path).expect("scene");
-        s.grid.cells = vec![320, 320];
-        mpmice::driver::MemoryEstimate::of(&s).total()
-    };
-    assert!(
-        b1 - b0 < est,
-        "{} B beyond the program, estimate {est}",
-        b1 - b0
-    );
+    for (last_good, design) in [("memory", 409.0), ("disk", 233.0)] {
+        let (n0, b0) = peak(40, last_good);
+        let (n1, b1) = peak(320, last_good);
+        let marginal = (b1 - b0) / (n1 - n0);
+        println!("last good state in {last_good}: {n0} particles: {b0} B; {n1}: {b1} B; {marginal:.1} B a particle");
+        assert!(
+            marginal < design * 1.05,
+            "{last_good}: {marginal} B a particle"
+        );
+        // The scene's estimate (`check`) bounds what the run took beyond
+        // the small run (the program).
+        let est = {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/block_1m.toml");
+            let mut s = mpmice::scene::load(&path).expect("scene");
+            s.grid.cells = vec![320, 320];
+            s.time.last_good = match last_good {
+                "memory" => mpmice::scene::LastGood::Memory,
+                _ => mpmice::scene::LastGood::Disk,
+            };
+            mpmice::driver::MemoryEstimate::of(&s).total()
+        };
+        assert!(
+            b1 - b0 < est,
+            "{last_good}: {} B beyond the program, estimate {est}",
+            b1 - b0
+        );
+    }
 }

@@ -160,7 +160,7 @@ fn all_finite(run: &MultiphaseRun<2>) -> bool {
                 && p.v[i].iter().all(|c| c.is_finite())
                 && p.stress.get(i).iter().all(|c| c.is_finite())
                 && p.vol[i].is_finite()
-                && p.work[i].is_finite()
+                && p.work_of(i).is_finite()
         })
     });
     let nodes = run.gas_pressure.iter().all(|q| q.is_finite())

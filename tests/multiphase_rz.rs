@@ -212,7 +212,7 @@ pressure = 1.0e5
     let p = &run.phases[cu].particles;
     let (mut top, mut bottom) = (f64::MIN, f64::MAX);
     for i in 0..p.len() {
-        let a = p.f.get(i)[(1, 1)] * p.half_size[i][1];
+        let a = p.f.get(i)[(1, 1)] * p.half_size.get(i)[1];
         top = top.max(p.x[i][1] + a);
         bottom = bottom.min(p.x[i][1] - a);
     }

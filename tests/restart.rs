@@ -515,6 +515,55 @@ fn the_watchdog_stops_a_nan_and_keeps_the_last_checked_state() {
             mpmice::output::checkpoint::Checkpoint::read(checkpoint, None).expect("readable");
         let v = ck.take_f64("particles.v", None).expect("velocities");
         assert!(v.iter().all(|x| x.is_finite()), "the saved state is good");
+        // The last good state kept on disk instead (`time.last_good`, what a
+        // large run does): the same checkpoint file for file, the same last
+        // snapshot, and no working copy left behind.
+        let mut on_disk = s.clone();
+        on_disk.time.last_good = mpmice::scene::LastGood::Disk;
+        let mut m = Poisoned {
+            inner: mpmice::driver::models::ExplicitSolid {
+                run: mpmice::scene::build_solid_run::<2>(&on_disk).expect("build"),
+            },
+            at_step,
+        };
+        let disk_dir = tmp.path().join(format!("at{at_step}_{interval}_disk"));
+        let err2 =
+            mpmice::driver::run_model(&mut m, &on_disk, &opts(&disk_dir), 2).expect_err("stops");
+        let Error::Stopped {
+            checkpoint: ck2, ..
+        } = &err2
+        else {
+            panic!("{err2}");
+        };
+        let files = |d: &std::path::Path| {
+            let mut v: Vec<_> = std::fs::read_dir(d)
+                .expect("dir")
+                .map(|e| e.expect("entry").file_name())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(files(checkpoint), files(ck2));
+        for f in files(checkpoint) {
+            assert!(
+                std::fs::read(checkpoint.join(&f)).expect("a")
+                    == std::fs::read(ck2.join(&f)).expect("b"),
+                "{f:?} differs"
+            );
+        }
+        let last_snapshot = |d: &std::path::Path| {
+            let mut csv: Vec<_> = files(d)
+                .into_iter()
+                .filter(|f| f.to_string_lossy().starts_with("particles_"))
+                .collect();
+            csv.sort();
+            std::fs::read(d.join(csv.last().expect("a snapshot"))).expect("snapshot")
+        };
+        assert!(
+            last_snapshot(&dir) == last_snapshot(&disk_dir),
+            "the restored snapshot"
+        );
+        assert!(!disk_dir.join(mpmice::driver::LAST_GOOD_DIR).exists());
     }
 }
 

@@ -98,6 +98,11 @@ fn each_bad_input_names_its_key_and_the_allowed_values() {
         ),
         (edit("end = 0.1\n", ""), "time", "missing field `end`"),
         (
+            edit("cfl = 0.5", "cfl = 0.5\nlast_good = \"ram\""),
+            "time.last_good",
+            "`auto`, `memory`, `disk`",
+        ),
+        (
             edit(
                 "poisson_ratio = 0.3",
                 "poisson_ratio = 0.3\nmin_pressure = 0.0",

@@ -204,7 +204,7 @@ impl MembraneContactStep {
                         let f = p.f.get(q);
                         half = (
                             q,
-                            SVector::from_fn(|d, _| p.half_size[q][d] * f[(d, d)].abs()),
+                            SVector::from_fn(|d, _| p.half_size.get(q)[d] * f[(d, d)].abs()),
                         );
                     }
                     contact.add_surface_point(i, &p.x[q], &half.1);

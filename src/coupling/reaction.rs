@@ -582,7 +582,7 @@ pub fn burn<const D: usize>(
         let stored = share
             * particles.vol0[p]
             * materials[particles.material[p] as usize]
-                .strain_energy_density(&particles.f.get(p), particles.work[p]);
+                .strain_energy_density(&particles.f.get(p), particles.work_of(p));
         let de = dm * (e_in + 0.5 * v.norm_squared()) + stored;
         let g = &mut s.given[c];
         g.mass += dm;

@@ -115,7 +115,7 @@ pub fn box_cell_mass<const D: usize>(
     for ((x, l), &m) in particles
         .x
         .iter()
-        .zip(&particles.half_size)
+        .zip(particles.half_size.iter())
         .zip(&particles.mass)
     {
         let mut first = [0isize; D];

@@ -529,7 +529,7 @@ pub fn run_gas_loaded(lame: &Lame, n: usize) -> Result<LameMeasured> {
         .map(|i| 0.5 * p.mass[i] * p.v[i].norm_squared())
         .sum();
     let strain: f64 = wall()
-        .map(|i| p.vol0[i] * run.materials[0].strain_energy_density(&p.f.get(i), p.work[i]))
+        .map(|i| p.vol0[i] * run.materials[0].strain_energy_density(&p.f.get(i), p.work_of(i)))
         .sum();
     let mut m = lame.errors(p, lame.cell_size(n));
     m.kinetic_ratio = kinetic / strain.abs().max(f64::MIN_POSITIVE);

@@ -120,6 +120,7 @@ const GAS_GAMMA: f64 = 1.4;
 /// ρ_ref e = p/(γ − 1) per unit reference volume).
 fn gas_point_at_rest<const D: usize>(p: &mut Particles<D>) {
     let k = p.len() - 1;
+    p.track_work();
     p.work[k] = GAS_P0 / (GAS_GAMMA - 1.0);
     p.stress.set(k, &(nalgebra::Matrix3::identity() * -GAS_P0));
 }

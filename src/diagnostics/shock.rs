@@ -283,7 +283,7 @@ velocity = [{v}, 0.0]
         for i in 0..pt.len() {
             if pt.x0[i][1] < h / 3.0 {
                 let rho = pt.mass[i] / pt.vol[i];
-                let e = pt.work[i] * pt.vol0[i] / pt.mass[i];
+                let e = pt.work_of(i) * pt.vol0[i] / pt.mass[i];
                 row.push((pt.x[i][0], gas.pressure(rho, e)));
             }
         }

@@ -142,12 +142,12 @@ pub fn run(base: &Scene, n: usize, speed: f64, end: f64) -> Result<TaylorMeasure
     let (mut max_eps, mut max_d, mut failed) = (0.0f64, 0.0f64, 0);
     for i in 0..p.len() {
         let m = &run.materials[p.material[i] as usize];
-        let az = p.f.get(i)[(1, 1)] * p.half_size[i][1];
-        let ar = p.f.get(i)[(0, 0)] * p.half_size[i][0];
+        let az = p.f.get(i)[(1, 1)] * p.half_size.get(i)[1];
+        let ar = p.f.get(i)[(0, 0)] * p.half_size.get(i)[0];
         top = top.max(p.x[i][1] + az);
         bottom = bottom.min(p.x[i][1] - az);
         rmax = rmax.max(p.x[i][0] + ar);
-        if p.x0[i][1] < 2.0 * p.half_size[i][1] {
+        if p.x0[i][1] < 2.0 * p.half_size.get(i)[1] {
             rfoot = rfoot.max(p.x[i][0] + ar);
         }
         let k = m.elastic.bulk();

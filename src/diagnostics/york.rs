@@ -205,7 +205,7 @@ pub fn run_york_sod(s: &YorkSod) -> Result<YorkSodRun> {
     for i in 0..p.len() {
         let x = p.x[i][0];
         let rho = p.mass[i] / p.vol[i];
-        let e = p.work[i] * p.vol0[i] / p.mass[i];
+        let e = p.work_of(i) * p.vol0[i] / p.mass[i];
         rho_lo = rho_lo.min(rho);
         rho_hi = rho_hi.max(rho);
         e_lo = e_lo.min(e);

@@ -90,7 +90,7 @@ pub fn revolution_measures(
         let s = p.stress.get(i);
         s_sum += m * (s[(0, 0)] + s[(1, 1)]);
         h_sum += m * s[(2, 2)];
-        strain += p.vol0[i] * p.work[i];
+        strain += p.vol0[i] * p.work_of(i);
     }
     let volume = volume_of_revolution(&poly);
     let mut out = RevolutionMeasures {
@@ -105,13 +105,13 @@ pub fn revolution_measures(
     for i in 0..p.len() {
         if let Some(g) = run.materials[p.material[i] as usize].gas() {
             let rho = p.mass[i] / p.vol[i];
-            let e = p.work[i] * p.vol0[i] / p.mass[i];
+            let e = p.work_of(i) * p.vol0[i] / p.mass[i];
             let pi = g.pressure(rho, e);
             psum += pi;
             pv += pi * p.vol[i];
             out.gas_points += 1;
             out.gas_volume += p.vol[i];
-            out.gas_internal += p.work[i] * p.vol0[i];
+            out.gas_internal += p.work_of(i) * p.vol0[i];
             if inside_polygon(&p.x[i], &poly) {
                 out.gas_volume_inside += p.vol[i];
             } else {
@@ -530,7 +530,7 @@ fn material_totals(run: &SolidRun<2>, m: usize) -> (f64, f64, f64, f64, f64) {
     let (mut ke, mut se, mut mass, mut mv, mut mz) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for i in (0..p.len()).filter(|&i| p.material[i] as usize == m) {
         ke += 0.5 * p.mass[i] * p.v[i].norm_squared();
-        se += p.vol0[i] * run.materials[m].strain_energy_density(&p.f.get(i), p.work[i]);
+        se += p.vol0[i] * run.materials[m].strain_energy_density(&p.f.get(i), p.work_of(i));
         mass += p.mass[i];
         mv += p.mass[i] * p.v[i][1];
         mz += p.mass[i] * p.x[i][1];

@@ -105,7 +105,7 @@ pub fn membrane_measures(run: &SolidRun<2>, center: [f64; 2]) -> MembraneMeasure
     for i in 0..p.len() {
         if let Some(g) = run.materials[p.material[i] as usize].gas() {
             let rho = p.mass[i] / p.vol[i];
-            let e = p.work[i] * p.vol0[i] / p.mass[i];
+            let e = p.work_of(i) * p.vol0[i] / p.mass[i];
             let pi = g.pressure(rho, e);
             psum += pi;
             pv += pi * p.vol[i];
@@ -394,9 +394,9 @@ fn energy_split(run: &SolidRun<2>) -> (f64, f64, f64) {
     for i in 0..p.len() {
         let m = &run.materials[p.material[i] as usize];
         if m.gas().is_some() {
-            internal += p.vol0[i] * p.work[i];
+            internal += p.vol0[i] * p.work_of(i);
         } else {
-            strain += p.vol0[i] * p.work[i];
+            strain += p.vol0[i] * p.work_of(i);
         }
     }
     (p.kinetic_energy(), internal, strain)

@@ -6,7 +6,7 @@
 //! it, so that no scene reaches the OOM killer or an allocation abort.
 
 use crate::error::SceneError;
-use crate::scene::{Geometry, MaterialKind, Mode, Scene};
+use crate::scene::{Geometry, LastGood, MaterialKind, Mode, Scene, LAST_GOOD_MEMORY_LIMIT};
 
 /// Bytes of one f64.
 const F64: f64 = 8.0;
@@ -105,16 +105,16 @@ impl MemoryEstimate {
             0.0
         };
         // One particle's arrays: F and σ (3, 5 or 9 stored entries each in
-        // 1D, 2D, 3D), 4 vectors, 6 scalars (temperature and plastic strain
-        // counted whether a run tracks them or not; the id is stored only
-        // once particles are removed or split, not counted) and a 2-byte
-        // material index.
+        // 1D, 2D, 3D), 3 vectors, 6 scalars (work, temperature and plastic
+        // strain counted whether a run tracks them or not; the id is stored
+        // only once particles are removed or split, not counted), a 4-byte
+        // half-size index and a 2-byte material index.
         let tensor = match dim {
             1 => 3.0,
             2 => 5.0,
             _ => 9.0,
         };
-        let state = 2.0 * tensor + 4.0 * dimf + 6.25;
+        let state = 2.0 * tensor + 3.0 * dimf + 6.75;
         // The arrays and the step's scratch (offsets and half-widths: two
         // vectors; the bins: one value); in implicit mode also the weights,
         // gradients, node indices and signs of the 3^dim support nodes and
@@ -142,10 +142,20 @@ impl MemoryEstimate {
         // particle fields in place; a run of several solid fields or phases
         // joins them into one copy first (the arrays and about 36 field
         // values); cells: about 12 values a material and cell.
+        // The copy is on disk, and not counted, without the watchdog, with
+        // `time.last_good = "disk"`, and with `"auto"` above
+        // [`LAST_GOOD_MEMORY_LIMIT`].
         let joined = scene.multiphase.is_some() || (fluids > 0.0 && solids > 1.0);
         let snapshot = if joined { state + 36.0 } else { 0.0 };
-        let mut run_bytes = particles * F64 * (state + 0.75 + snapshot)
+        let last_good = particles * F64 * (state + 0.75)
             + padded * materials_in_cells * F64 * (6.0 + dimf + 12.0);
+        let in_memory = scene.time.watchdog_interval > 0
+            && match scene.time.last_good {
+                LastGood::Memory => true,
+                LastGood::Disk => false,
+                LastGood::Auto => last_good <= LAST_GOOD_MEMORY_LIMIT as f64,
+            };
+        let mut run_bytes = particles * F64 * snapshot + if in_memory { last_good } else { 0.0 };
         if scene.time.mode == Mode::Implicit {
             // Rows of the Newton matrix: dim DOFs a node, coupled to the 5^dim
             // nodes of two overlapping quadratic supports; matrix, triplets,

@@ -19,7 +19,9 @@ pub mod summary;
 pub use limiter::{DtLimiter, LimitCause};
 pub use memory::MemoryEstimate;
 pub use model::{CoupledIterations, DtRequest, FieldIterations, Model, StepStats};
-pub use run_loop::{preflight, run_model, scene_hash, Preflight, RunOptions, MAX_RETRIES};
+pub use run_loop::{
+    preflight, run_model, scene_hash, Preflight, RunOptions, LAST_GOOD_DIR, MAX_RETRIES,
+};
 pub use summary::{IterationStats, Summary};
 
 use crate::error::{Error, Result};

@@ -140,6 +140,7 @@ pub fn scene_hash(scene: &Scene) -> String {
     s.time.end = 0.0;
     s.time.max_steps = None;
     s.time.watchdog_interval = 0;
+    s.time.last_good = crate::scene::LastGood::Auto;
     s.time.min_dt_fraction = crate::scene::DEFAULT_MIN_DT_FRACTION;
     s.time.max_projected_steps = crate::scene::DEFAULT_MAX_PROJECTED_STEPS;
     // A scene always serialises (plain data); an error would hash as empty.
@@ -357,7 +358,7 @@ fn capture<M: Model>(
     ls: &LoopState,
     out: &Outputs,
     reuse: Option<Checkpoint>,
-) -> Checkpoint {
+) -> Result<Checkpoint> {
     let mut ck = match reuse {
         Some(mut ck) => {
             ck.recycle(&model.kind(), hash, model.steps(), model.time());
@@ -372,7 +373,43 @@ fn capture<M: Model>(
         (out.history.len() / out.history_width()).into(),
     );
     ck.set_meta("snapshots", out.snapshots().into());
-    ck
+    ck.seal()?;
+    Ok(ck)
+}
+
+/// The folder, inside the output folder, of a last good state kept on disk
+/// (`time.last_good`); removed when the run ends.
+pub const LAST_GOOD_DIR: &str = ".last_good";
+
+/// An empty last good state, streamed to `dir/.last_good` where
+/// `time.last_good` (and for `auto` the size of the model's state) asks
+/// for it; `None`: captured in memory.
+fn last_good_store<M: Model>(
+    model: &M,
+    scene: &Scene,
+    dir: &Path,
+    hash: &str,
+) -> Result<Option<Checkpoint>> {
+    use crate::scene::{LastGood, LAST_GOOD_MEMORY_LIMIT};
+    let on_disk = match scene.time.last_good {
+        LastGood::Memory => false,
+        LastGood::Disk => true,
+        LastGood::Auto => {
+            let mut size = Checkpoint::measuring();
+            model.save(&mut size);
+            size.measured_bytes() > LAST_GOOD_MEMORY_LIMIT
+        }
+    };
+    Ok(match on_disk {
+        true => Some(Checkpoint::streaming(
+            &dir.join(LAST_GOOD_DIR),
+            &model.kind(),
+            hash,
+            model.steps(),
+            model.time(),
+        )?),
+        false => None,
+    })
 }
 
 /// Writes a captured state as `DIR/checkpoints/step_NNNNNNNNNN`, with the
@@ -568,9 +605,21 @@ struct Run {
     out: Outputs,
     ls: LoopState,
     last_good: Option<Checkpoint>,
+    /// The folder of a last good state kept on disk, removed at the end.
+    last_good_dir: Option<PathBuf>,
     written: Vec<PathBuf>,
     /// Warnings given (the Δt drop, once).
     warnings: Vec<String>,
+}
+
+impl Drop for Run {
+    /// Removes a last good state kept on disk: it is a working copy, not an
+    /// output (a failure has written it as a checkpoint by now).
+    fn drop(&mut self) {
+        if let Some(dir) = &self.last_good_dir {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
 }
 
 impl Run {
@@ -591,13 +640,33 @@ impl Run {
                 ls
             }
         };
-        let last_good = (cad.watchdog > 0).then(|| capture(model, &hash, &ls, &out, None));
+        let last_good = match cad.watchdog > 0 {
+            true => {
+                let store = last_good_store(model, scene, &dir, &hash)?;
+                let on_disk = store
+                    .as_ref()
+                    .and_then(|c| c.stream_dir().map(Path::to_path_buf));
+                match capture(model, &hash, &ls, &out, store) {
+                    Ok(ck) => Some(ck),
+                    Err(e) => {
+                        if let Some(d) = on_disk {
+                            let _ = std::fs::remove_dir_all(d);
+                        }
+                        return Err(e);
+                    }
+                }
+            }
+            false => None,
+        };
         Ok(Self {
             cad,
             hash,
             dir,
             out,
             ls,
+            last_good_dir: last_good
+                .as_ref()
+                .and_then(|ck| ck.stream_dir().map(Path::to_path_buf)),
             last_good,
             written: Vec::new(),
             warnings: Vec::new(),
@@ -727,10 +796,10 @@ impl Run {
         }
         if keep {
             let reuse = self.last_good.take();
-            self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out, reuse));
+            self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out, reuse)?);
         }
         if checkpoint_due {
-            let ck = capture(model, &self.hash, &self.ls, &self.out, None);
+            let ck = capture(model, &self.hash, &self.ls, &self.out, None)?;
             self.written
                 .push(write_checkpoint(ck, &self.out, &self.dir)?);
             prune(&mut self.written, self.cad.keep)?;
@@ -763,7 +832,7 @@ impl Run {
                 match model.watchdog() {
                     None => Some((
                         e,
-                        Some(capture(model, &self.hash, &self.ls, &self.out, None)),
+                        Some(capture(model, &self.hash, &self.ls, &self.out, None)?),
                     )),
                     Some(v) => Some((
                         Error::Watchdog {
@@ -781,10 +850,10 @@ impl Run {
         let failed = saved.is_some() && !interrupted;
         // After a failure: back to the last good state, if there is one.
         let good = match &saved {
-            Some((_, Some(ck))) if failed => {
-                let mut ck = ck.clone();
-                model.load(&mut ck).is_ok()
-            }
+            Some((_, Some(ck))) if failed => ck
+                .to_memory()
+                .and_then(|mut ck| model.load(&mut ck))
+                .is_ok(),
             _ => !failed,
         };
         if !interrupted && good {
@@ -804,7 +873,7 @@ impl Run {
             return Ok(Some(e));
         };
         let (step, time) = (ck.step(), ck.time());
-        let path = write_checkpoint(ck, &self.out, &self.dir)?;
+        let path = write_checkpoint(ck.into_memory()?, &self.out, &self.dir)?;
         self.written.push(path.clone());
         Ok(Some(Error::Stopped {
             cause: Box::new(e),

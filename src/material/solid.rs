@@ -455,7 +455,16 @@ impl SolidMaterial {
         Some(s.ret.plastic_work)
     }
 
-    /// Strain energy per unit reference volume.
+    /// Whether a particle of this material keeps its stress work
+    /// ([`crate::mpm::Particles::work`]): every model but neo-Hookean, whose
+    /// energy is a function of F and whose update leaves the work alone.
+    pub fn reads_work(&self) -> bool {
+        !matches!(self.model, SolidModel::NeoHookean)
+    }
+
+    /// Strain energy per unit reference volume: the accumulated `work` for
+    /// the models that keep it ([`SolidMaterial::reads_work`]), the
+    /// neo-Hookean energy of `f` otherwise.
     #[inline]
     pub fn strain_energy_density(&self, f: &Matrix3<f64>, work: f64) -> f64 {
         match self.model {

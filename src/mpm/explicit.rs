@@ -272,7 +272,7 @@ pub fn particle_dt_limit<const D: usize>(
         mass: particles.mass[p],
         vol: particles.vol[p],
         vol0: particles.vol0[p],
-        work: particles.work[p],
+        work: particles.work_of(p),
         stress: &particles.stress.get(p),
         speed: particles.v[p].norm(),
     };
@@ -298,7 +298,7 @@ pub fn gas_sound_speed_max<const D: usize>(
         .map(|p| match materials[particles.material[p] as usize].gas() {
             Some(g) => {
                 let rho = particles.mass[p] / particles.vol[p];
-                let e = particles.work[p] * particles.vol0[p] / particles.mass[p];
+                let e = particles.work_of(p) * particles.vol0[p] / particles.mass[p];
                 g.sound_speed(rho, e)
             }
             None => 0.0,
@@ -979,12 +979,9 @@ fn prepare<const D: usize>(
         let inv_h = ctx.grid.inv_h;
         scratch.lp.resize(particles.len(), SVector::zeros());
         let f = &particles.f;
-        scratch
-            .lp
-            .par_iter_mut()
-            .zip(particles.half_size.par_iter())
-            .enumerate()
-            .for_each(|(p, (lp, l0))| *lp = gimp_half_width(l0, &f.get(p), &inv_h));
+        scratch.lp.par_iter_mut().enumerate().for_each(|(p, lp)| {
+            *lp = gimp_half_width(&particles.half_size.get(p), &f.get(p), &inv_h)
+        });
     } else {
         scratch.lp.clear();
     }
@@ -1105,7 +1102,7 @@ fn p2g<
             // seeding are fixed; the lattice is the first reading point's.
             let half = (0..particles.len())
                 .find(|&p| ctx.materials[particles.material[p] as usize].reads_grid_density())
-                .map_or_else(|| grid.h * 0.25, |p| particles.half_size[p]);
+                .map_or_else(|| grid.h * 0.25, |p| particles.half_size.get(p));
             gs.node_volume = node_volumes(grid, kernel, &half);
             gs.gas_mass = vec![0.0; gs.mass.len()];
             gs.gas_density = vec![0.0; gs.mass.len()];
@@ -1426,6 +1423,8 @@ fn g2p<
         particles.track_plastic_strain();
         particles.track_temperature();
     }
+    particles.track_work_for(ctx.materials);
+    let tracks_work = !particles.work.is_empty();
     {
         let mass = &particles.mass;
         let eps_p = SharedMut::new(&mut particles.plastic_strain);
@@ -1524,8 +1523,14 @@ fn g2p<
                     }
                 }
                 // SAFETY: as above.
-                let (fp, mut sp, wp, vp_vol) =
-                    unsafe { (fgrad.get(p), stress.get(p), work.get(p), vol.get(p)) };
+                // A material that does not read the work (neo-Hookean)
+                // leaves it alone: untracked, the update gets a spare.
+                let mut spare = 0.0;
+                let (fp, mut sp, vp_vol) = unsafe { (fgrad.get(p), stress.get(p), vol.get(p)) };
+                let wp = match tracks_work {
+                    true => unsafe { work.get(p) },
+                    false => &mut spare,
+                };
                 if has_membrane {
                     if let Some(m) = ctx.materials[mat[p] as usize].membrane() {
                         // r–z: a membrane point is a ring of radius r > 0

@@ -718,6 +718,8 @@ impl<const D: usize> ImplicitRun<D> {
     /// Newton fails at the smallest allowed Δt.
     pub fn step(&mut self) -> Result<StepStats> {
         let start = Instant::now();
+        // The work of the models that keep it (sized once; after a load too).
+        self.particles.track_work_for(&self.materials);
         if self.params.dynamic && !self.initialised {
             self.initial_acceleration()?;
         }
@@ -1195,7 +1197,7 @@ impl<const D: usize> ImplicitRun<D> {
                 // step's rule); ignored by the other kernels.
                 let f = &parts.f.get(p);
                 let lp = SVector::<f64, D>::from_fn(|d, _| {
-                    (parts.half_size[p][d] * f[(d, d)].abs() * grid.inv_h[d]).min(0.5)
+                    (parts.half_size.get(p)[d] * f[(d, d)].abs() * grid.inv_h[d]).min(0.5)
                 });
                 match shape {
                     ShapeKind::Linear => stencil::<D, 2, _>(grid, LinearHat, &xi, &lp, nd, wd, gd),
@@ -1617,7 +1619,7 @@ impl<const D: usize> ImplicitRun<D> {
                     damage: 0.0,
                     damage_increment: 0.0,
                 };
-                let mut w = parts.work[p];
+                let mut w = parts.work_of(p);
                 let mut a = assembling.then(|| [[Matrix3::zeros(); 3]; 3]);
                 let rho0 = parts.mass[p] / parts.vol0[p];
                 if mat

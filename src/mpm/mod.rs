@@ -18,5 +18,5 @@ pub use implicit::{
     DtCut, FluidLoad, ImplicitCarried, ImplicitParams, ImplicitRun, LinearSolver, StepStats,
     SurfaceLoad,
 };
-pub use particles::Particles;
+pub use particles::{HalfSizes, Particles};
 pub use tensors::{SharedTensors, Tensors};

@@ -20,14 +20,20 @@ pub struct Particles<const D: usize> {
     pub vol0: Vec<f64>,
     /// Current volume V_p = J V_p⁰.
     pub vol: Vec<f64>,
-    /// Initial half-size per direction (physical units), for GIMP.
-    pub half_size: Vec<SVector<f64, D>>,
+    /// Initial half-size per direction (physical units): the particle
+    /// domain of GIMP and CPDI-like kernels, contact and the rigid volume.
+    pub half_size: HalfSizes<D>,
     /// Deformation gradient F (3×3; plane strain / uniaxial strain in 2D/1D,
     /// stored without the entries those keep zero).
     pub f: Tensors<D>,
     /// Cauchy stress σ (3×3, stored as [`Particles::f`]).
     pub stress: Tensors<D>,
-    /// Accumulated stress work per unit reference volume (rate models).
+    /// Accumulated stress work per unit reference volume (rate models,
+    /// Hencky, membranes; a gas point's ρ_ref e): empty unless a run's
+    /// materials read it ([`SolidMaterial::reads_work`]; every model but
+    /// neo-Hookean, whose energy is a function of F), then one per particle
+    /// ([`Particles::track_work`]; read it with [`Particles::work_of`]).
+    /// An elastic neo-Hookean run saves 8 bytes a particle (issue 24).
     pub work: Vec<f64>,
     /// Index into the scene's solid materials.
     pub material: Vec<u16>,
@@ -93,9 +99,9 @@ impl<const D: usize> Particles<D> {
         self.half_size.push(half_size);
         self.f.push(&Matrix3::identity());
         self.stress.push(&Matrix3::zeros());
-        self.work.push(0.0);
         self.material.push(material);
         for (v, value) in [
+            (&mut self.work, 0.0),
             (&mut self.temperature, Self::INITIAL_TEMPERATURE),
             (&mut self.plastic_strain, 0.0),
             (&mut self.damage, 0.0),
@@ -147,9 +153,9 @@ impl<const D: usize> Particles<D> {
         op(&mut self.half_size);
         op(&mut self.f);
         op(&mut self.stress);
-        op(&mut self.work);
         op(&mut self.material);
         for v in [
+            &mut self.work,
             &mut self.temperature,
             &mut self.plastic_strain,
             &mut self.damage,
@@ -171,6 +177,27 @@ impl<const D: usize> Particles<D> {
             self.temperature
                 .resize(self.len(), Self::INITIAL_TEMPERATURE);
         }
+    }
+
+    /// Sizes [`Particles::work`] to one entry per particle (new entries 0);
+    /// a no-op when it is sized already.
+    pub fn track_work(&mut self) {
+        if self.work.len() != self.len() {
+            self.work.resize(self.len(), 0.0);
+        }
+    }
+
+    /// Sizes [`Particles::work`] where one of `materials` reads it.
+    pub fn track_work_for(&mut self, materials: &[SolidMaterial]) {
+        if materials.iter().any(SolidMaterial::reads_work) {
+            self.track_work();
+        }
+    }
+
+    /// Stress work of particle `p` (tracked or not: 0 where not).
+    #[inline]
+    pub fn work_of(&self, p: usize) -> f64 {
+        self.work.get(p).copied().unwrap_or(0.0)
     }
 
     /// Sizes [`Particles::plastic_strain`] to one entry per particle (new
@@ -249,10 +276,9 @@ impl<const D: usize> Particles<D> {
         self.mass.push(other.mass[p]);
         self.vol0.push(other.vol0[p]);
         self.vol.push(other.vol[p]);
-        self.half_size.push(other.half_size[p]);
+        self.half_size.push(other.half_size.get(p));
         self.f.push(&other.f.get(p));
         self.stress.push(&other.stress.get(p));
-        self.work.push(other.work[p]);
         self.material.push(other.material[p]);
         let before = self.len() - 1;
         for (v, src, untracked) in [
@@ -262,6 +288,7 @@ impl<const D: usize> Particles<D> {
                 Self::INITIAL_TEMPERATURE,
             ),
             (&mut self.plastic_strain, &other.plastic_strain, 0.0),
+            (&mut self.work, &other.work, 0.0),
             (&mut self.damage, &other.damage, 0.0),
         ] {
             // Keep each optional array empty or full: size it before the
@@ -313,7 +340,7 @@ impl<const D: usize> Particles<D> {
             .map(|p| {
                 self.vol0[p]
                     * materials[self.material[p] as usize]
-                        .strain_energy_density(&self.f.get(p), self.work[p])
+                        .strain_energy_density(&self.f.get(p), self.work_of(p))
             })
             .sum()
     }
@@ -429,5 +456,92 @@ mod tests {
         let copy = q.select(|_| true);
         assert!(q.id.is_empty() && copy.id.is_empty());
         assert_eq!(ids(&copy), [0, 1, 2]);
+    }
+}
+
+/// The particles' initial half-sizes, stored as a short table of the
+/// distinct values and a 4-byte index per particle: a scene seeds each
+/// object at one spacing, so a run has a handful of distinct sizes, and
+/// the table saves 12 bytes a particle in 2D, 20 in 3D (issue 24). Read
+/// with [`HalfSizes::get`]; the values are kept bit for bit.
+#[derive(Debug, Clone, Default)]
+pub struct HalfSizes<const D: usize> {
+    /// The distinct values, in the order first pushed.
+    table: Vec<SVector<f64, D>>,
+    /// Each particle's entry of `table`.
+    index: Vec<u32>,
+}
+
+impl<const D: usize> HalfSizes<D> {
+    /// How many table entries [`HalfSizes::push`] searches for an equal
+    /// value before adding one: a scene with sizes that vary particle by
+    /// particle pays a growing table, never a quadratic search.
+    const SEARCH: usize = 64;
+
+    /// The half-sizes of `values`, in order.
+    pub fn from_values(values: impl IntoIterator<Item = SVector<f64, D>>) -> Self {
+        let mut h = Self::default();
+        for v in values {
+            h.push(v);
+        }
+        h
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+
+    /// Half-size of particle `p`.
+    #[inline]
+    pub fn get(&self, p: usize) -> SVector<f64, D> {
+        self.table[self.index[p] as usize]
+    }
+
+    /// Appends a particle's half-size.
+    pub fn push(&mut self, v: SVector<f64, D>) {
+        let same = |t: &SVector<f64, D>| {
+            t.iter()
+                .zip(v.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        let last = self.index.last().map(|&i| i as usize);
+        let found = match last {
+            Some(i) if same(&self.table[i]) => Some(i),
+            _ => self
+                .table
+                .iter()
+                .rev()
+                .take(Self::SEARCH)
+                .position(same)
+                .map(|k| self.table.len() - 1 - k),
+        };
+        let i = found.unwrap_or_else(|| {
+            self.table.push(v);
+            self.table.len() - 1
+        });
+        self.index.push(i as u32);
+    }
+
+    /// Every particle's half-size, in order.
+    pub fn iter(&self) -> impl Iterator<Item = SVector<f64, D>> + '_ {
+        self.index.iter().map(|&i| self.table[i as usize])
+    }
+}
+
+impl<const D: usize> ParticleArray for HalfSizes<D> {
+    fn reserve_exact(&mut self, n: usize) {
+        self.index.reserve_exact(n);
+    }
+    fn shrink_to_fit(&mut self) {
+        self.index.shrink_to_fit();
+    }
+    fn retain_by(&mut self, keep: &[bool]) {
+        self.index.retain_by(keep);
     }
 }

@@ -177,7 +177,7 @@ fn compressibility<const D: usize>(m: &SolidMaterial, p: &Particles<D>, i: usize
     match m.gas() {
         Some(g) => {
             let rho = p.mass[i] / p.vol[i];
-            let e = p.work[i] * p.vol0[i] / p.mass[i];
+            let e = p.work_of(i) * p.vol0[i] / p.mass[i];
             let c = g.sound_speed(rho, e);
             1.0 / (rho * c * c)
         }

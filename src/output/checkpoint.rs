@@ -92,16 +92,21 @@ pub enum ArrayData {
     U64(Vec<u64>),
 }
 
-/// An element type of checkpoint arrays: how its values sit in
-/// [`ArrayData`].
-trait Element: Sized {
+/// An element type of checkpoint arrays (`f64`, `u64`): its dtype and how
+/// its values sit in [`ArrayData`].
+pub trait Element: Copy + npyz::Serialize {
+    /// The dtype written for this type.
+    const DTYPE: Dtype;
     /// The values of `data` if they are of this type.
     fn buffer(data: &mut ArrayData) -> Option<&mut Vec<Self>>;
     /// Wraps values of this type.
     fn wrap(v: Vec<Self>) -> ArrayData;
+    /// The value as stored in a `.npy` file (little-endian).
+    fn le_bytes(self) -> [u8; 8];
 }
 
 impl Element for f64 {
+    const DTYPE: Dtype = Dtype::F64;
     fn buffer(data: &mut ArrayData) -> Option<&mut Vec<f64>> {
         match data {
             ArrayData::F64(v) => Some(v),
@@ -111,9 +116,13 @@ impl Element for f64 {
     fn wrap(v: Vec<f64>) -> ArrayData {
         ArrayData::F64(v)
     }
+    fn le_bytes(self) -> [u8; 8] {
+        self.to_le_bytes()
+    }
 }
 
 impl Element for u64 {
+    const DTYPE: Dtype = Dtype::U64;
     fn buffer(data: &mut ArrayData) -> Option<&mut Vec<u64>> {
         match data {
             ArrayData::U64(v) => Some(v),
@@ -122,6 +131,9 @@ impl Element for u64 {
     }
     fn wrap(v: Vec<u64>) -> ArrayData {
         ArrayData::U64(v)
+    }
+    fn le_bytes(self) -> [u8; 8] {
+        self.to_le_bytes()
     }
 }
 
@@ -485,6 +497,199 @@ pub struct Checkpoint {
     meta: Map<String, Value>,
     /// Folder this checkpoint was read from (for messages).
     source: Option<PathBuf>,
+    /// Where the arrays go as they are put.
+    store: Store,
+}
+
+/// Where a checkpoint's arrays go as they are put.
+#[derive(Debug, Clone, Default)]
+enum Store {
+    /// Kept in memory, in `Checkpoint::arrays`.
+    #[default]
+    Memory,
+    /// Written to their files as they are put ([`Checkpoint::streaming`]).
+    Stream(Box<Stream>),
+    /// Only their size in bytes summed ([`Checkpoint::measuring`]).
+    Measure(u64),
+}
+
+/// A checkpoint streamed to a folder: the arrays written so far (dtype,
+/// shape, file size) and the first error met (reported by
+/// [`Checkpoint::seal`]). The folder is a working copy for the run that
+/// wrote it: no manifest, no checksums (hashing a large state took longer
+/// than writing it); [`Checkpoint::to_memory`] reads it back from these
+/// entries.
+#[derive(Debug, Clone)]
+struct Stream {
+    dir: PathBuf,
+    entries: BTreeMap<String, (Dtype, Vec<usize>, u64)>,
+    error: Option<(PathBuf, io::ErrorKind, String)>,
+    /// The write buffer, kept between arrays and captures.
+    buf: Vec<u8>,
+}
+
+impl Stream {
+    /// Writes the array `name` of `shape` as its `.npy` file, its values from
+    /// `fill`; records its entry, or the error.
+    fn write<T: Element>(
+        &mut self,
+        name: &str,
+        shape: Vec<usize>,
+        fill: impl FnOnce(&mut ArrayFill<'_, T>),
+    ) {
+        if self.error.is_some() {
+            return;
+        }
+        let path = self.dir.join(npy_file_name(name));
+        match stream_array(&path, &shape, &mut self.buf, fill) {
+            Ok(bytes) => {
+                self.entries
+                    .insert(name.to_string(), (T::DTYPE, shape, bytes));
+            }
+            Err(e) => self.error = Some((path, e.kind(), e.to_string())),
+        }
+    }
+}
+
+/// Writes one array's `.npy` file at `path` from `fill`, without holding its
+/// values, byte for byte as [`Checkpoint::write`] does; returns its size.
+fn stream_array<T: Element>(
+    path: &Path,
+    shape: &[usize],
+    buf: &mut Vec<u8>,
+    fill: impl FnOnce(&mut ArrayFill<'_, T>),
+) -> io::Result<u64> {
+    // The header as the `.npy` writer makes it; the values follow as they
+    // are stored, little-endian.
+    buf.clear();
+    drop(super::npy::begin::<T, _>(
+        &mut *buf,
+        T::DTYPE.npy_descr(),
+        shape,
+    )?);
+    let header = buf.len() as u64;
+    let mut target = ArrayFill(FillTarget::File(FileFill {
+        // Opened without truncating: the next capture overwrites a file of
+        // the same size in place, which took a fifth of the time of
+        // truncating it and writing it anew.
+        file: fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)?,
+        buf,
+        count: 0,
+        error: None,
+        _values: std::marker::PhantomData,
+    }));
+    fill(&mut target);
+    let FillTarget::File(mut f) = target.0 else {
+        unreachable!("a streamed fill writes to its file");
+    };
+    if let Some(e) = f.error.take() {
+        return Err(e);
+    }
+    if element_count(shape) != Some(f.count) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "shape {shape:?} does not match the {} values given",
+                f.count
+            ),
+        ));
+    }
+    f.drain();
+    if let Some(e) = f.error {
+        return Err(e);
+    }
+    let bytes = header + 8 * f.count as u64;
+    f.file.set_len(bytes)?;
+    Ok(bytes)
+}
+
+/// Where a [`Checkpoint::put_f64_with`] fill puts an array's values, in C
+/// order: the checkpoint's buffer for the array, or the array's `.npy` file
+/// when the checkpoint is streamed ([`Checkpoint::streaming`]), so that a
+/// streamed state never holds a copy of an array.
+pub struct ArrayFill<'a, T: Element>(FillTarget<'a, T>);
+
+enum FillTarget<'a, T: Element> {
+    Buffer(&'a mut Vec<T>),
+    File(FileFill<'a, T>),
+}
+
+/// An array being written to its file: the values given and the first error.
+struct FileFill<'a, T: Element> {
+    file: fs::File,
+    /// The bytes not written yet (the stream's buffer, kept between arrays
+    /// and captures).
+    buf: &'a mut Vec<u8>,
+    count: usize,
+    error: Option<io::Error>,
+    _values: std::marker::PhantomData<T>,
+}
+
+impl<T: Element> FileFill<'_, T> {
+    /// Bytes gathered before a write: values serialised into one buffer
+    /// and written in large pieces run at the page cache's speed (one
+    /// buffered write a value took three times as long).
+    const CHUNK: usize = 1 << 18;
+
+    /// Writes the gathered bytes (unless an error came first).
+    fn drain(&mut self) {
+        if self.error.is_none() {
+            if let Err(e) = io::Write::write_all(&mut self.file, self.buf) {
+                self.error = Some(e);
+            }
+        }
+        self.buf.clear();
+    }
+}
+
+impl<T: Element> ArrayFill<'_, T> {
+    /// Appends `values`.
+    pub fn extend_from_slice(&mut self, values: &[T]) {
+        match &mut self.0 {
+            FillTarget::Buffer(b) => b.extend_from_slice(values),
+            FillTarget::File(f) => {
+                // A chunk at a time, into room made once (a tight loop).
+                for chunk in values.chunks(FileFill::<T>::CHUNK / 8) {
+                    let start = f.buf.len();
+                    f.buf.resize(start + 8 * chunk.len(), 0);
+                    for (b, v) in f.buf[start..].chunks_exact_mut(8).zip(chunk) {
+                        b.copy_from_slice(&v.le_bytes());
+                    }
+                    f.count += chunk.len();
+                    if f.buf.len() >= FileFill::<T>::CHUNK {
+                        f.drain();
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl<T: Element> Extend<T> for ArrayFill<'_, T> {
+    fn extend<I: IntoIterator<Item = T>>(&mut self, values: I) {
+        match &mut self.0 {
+            FillTarget::Buffer(b) => b.extend(values),
+            FillTarget::File(f) => {
+                for v in values {
+                    f.count += 1;
+                    f.buf.extend_from_slice(&v.le_bytes());
+                    if f.buf.len() >= FileFill::<T>::CHUNK {
+                        f.drain();
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl<'v, T: Element> Extend<&'v T> for ArrayFill<'_, T> {
+    fn extend<I: IntoIterator<Item = &'v T>>(&mut self, values: I) {
+        self.extend(values.into_iter().copied());
+    }
 }
 
 impl Checkpoint {
@@ -498,6 +703,114 @@ impl Checkpoint {
             arrays: BTreeMap::new(),
             meta: Map::new(),
             source: None,
+            store: Store::Memory,
+        }
+    }
+
+    /// An empty checkpoint of `model` at `step` and `time` whose arrays are
+    /// written to `<dir>/<name>.npy` as they are put and not kept in memory:
+    /// a state saved this way costs no memory beyond a file buffer. `dir`
+    /// is created if needed; files of the same names are overwritten, in
+    /// place. Unlike [`Checkpoint::write`] nothing is atomic and no manifest
+    /// is written: the folder is this checkpoint's working copy, not a
+    /// checkpoint folder. Finish it with [`Checkpoint::seal`], read it back
+    /// with [`Checkpoint::to_memory`].
+    ///
+    /// # Errors
+    /// [`CheckpointError::Io`] if `dir` cannot be created.
+    pub fn streaming(
+        dir: &Path,
+        model: &str,
+        scene_hash: &str,
+        step: u64,
+        time: f64,
+    ) -> Result<Self, CheckpointError> {
+        fs::create_dir_all(dir).map_err(io_err(dir))?;
+        let mut ck = Self::new(model, scene_hash, step, time);
+        ck.store = Store::Stream(Box::new(Stream {
+            dir: dir.to_path_buf(),
+            entries: BTreeMap::new(),
+            error: None,
+            buf: Vec::new(),
+        }));
+        Ok(ck)
+    }
+
+    /// An empty checkpoint that keeps nothing and only sums the bytes of the
+    /// arrays put into it ([`Checkpoint::measured_bytes`]): the size of a
+    /// state, without copying it.
+    pub fn measuring() -> Self {
+        let mut ck = Self::new("", "", 0, 0.0);
+        ck.store = Store::Measure(0);
+        ck
+    }
+
+    /// The bytes of the arrays put into a [`Checkpoint::measuring`]
+    /// checkpoint (0 for the others).
+    pub fn measured_bytes(&self) -> u64 {
+        match self.store {
+            Store::Measure(b) => b,
+            _ => 0,
+        }
+    }
+
+    /// The folder of a [`Checkpoint::streaming`] checkpoint.
+    pub fn stream_dir(&self) -> Option<&Path> {
+        match &self.store {
+            Store::Stream(s) => Some(&s.dir),
+            _ => None,
+        }
+    }
+
+    /// Ends a streamed checkpoint: reports the first error met while its
+    /// arrays were written. Nothing to do for the others.
+    ///
+    /// # Errors
+    /// [`CheckpointError::Io`] naming the file that could not be written,
+    /// or whose fill gave another number of values than its shape.
+    pub fn seal(&self) -> Result<(), CheckpointError> {
+        match &self.store {
+            Store::Stream(s) => match &s.error {
+                Some((path, kind, message)) => Err(CheckpointError::Io {
+                    path: path.clone(),
+                    source: io::Error::new(*kind, message.clone()),
+                }),
+                None => Ok(()),
+            },
+            _ => Ok(()),
+        }
+    }
+
+    /// This checkpoint with its arrays in memory: a copy of itself, or for
+    /// a streamed one its files read back (each file's size, dtype and
+    /// shape checked, as [`Checkpoint::read`] does; there is no checksum).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Truncated`], [`CheckpointError::Array`],
+    /// [`CheckpointError::Io`].
+    pub fn to_memory(&self) -> Result<Self, CheckpointError> {
+        let Store::Stream(s) = &self.store else {
+            return Ok(self.clone());
+        };
+        let mut ck = Self::new(&self.model, &self.scene_hash, self.step, self.time);
+        ck.meta = self.meta.clone();
+        for (name, (dtype, shape, bytes)) in &s.entries {
+            let path = s.dir.join(npy_file_name(name));
+            let data = read_npy(&path, *bytes, None, *dtype, shape)?;
+            ck.arrays.insert(name.clone(), (shape.clone(), data));
+        }
+        Ok(ck)
+    }
+
+    /// [`Checkpoint::to_memory`], without a copy when the arrays are in
+    /// memory already.
+    ///
+    /// # Errors
+    /// Those of [`Checkpoint::read`].
+    pub fn into_memory(self) -> Result<Self, CheckpointError> {
+        match self.store {
+            Store::Stream(_) => self.to_memory(),
+            _ => Ok(self),
         }
     }
 
@@ -517,6 +830,14 @@ impl Checkpoint {
         self.step = step;
         self.time = time;
         self.meta.clear();
+        match &mut self.store {
+            Store::Memory => {}
+            Store::Stream(s) => {
+                s.entries.clear();
+                s.error = None;
+            }
+            Store::Measure(b) => *b = 0,
+        }
         self.source = None;
     }
 
@@ -527,7 +848,7 @@ impl Checkpoint {
         &mut self,
         name: &str,
         shape: Vec<usize>,
-        fill: impl FnOnce(&mut Vec<f64>),
+        fill: impl FnOnce(&mut ArrayFill<'_, f64>),
     ) {
         self.put_with(name, shape, fill);
     }
@@ -537,7 +858,7 @@ impl Checkpoint {
         &mut self,
         name: &str,
         shape: Vec<usize>,
-        fill: impl FnOnce(&mut Vec<u64>),
+        fill: impl FnOnce(&mut ArrayFill<'_, u64>),
     ) {
         self.put_with(name, shape, fill);
     }
@@ -546,19 +867,28 @@ impl Checkpoint {
         &mut self,
         name: &str,
         shape: Vec<usize>,
-        fill: impl FnOnce(&mut Vec<T>),
+        fill: impl FnOnce(&mut ArrayFill<'_, T>),
     ) {
+        match &mut self.store {
+            Store::Memory => {}
+            Store::Stream(s) => return s.write(name, shape, fill),
+            Store::Measure(b) => {
+                let n = element_count(&shape).unwrap_or(usize::MAX);
+                *b = b.saturating_add((n as u64).saturating_mul(8));
+                return;
+            }
+        }
         if let Some((s, data)) = self.arrays.get_mut(name) {
             if let Some(buf) = T::buffer(data) {
                 buf.clear();
-                fill(buf);
+                fill(&mut ArrayFill(FillTarget::Buffer(buf)));
                 debug_assert_eq!(element_count(&shape), Some(buf.len()), "`{name}`");
                 *s = shape;
                 return;
             }
         }
         let mut buf = Vec::new();
-        fill(&mut buf);
+        fill(&mut ArrayFill(FillTarget::Buffer(&mut buf)));
         self.put(name, shape, T::wrap(buf));
     }
 
@@ -578,6 +908,19 @@ impl Checkpoint {
     }
 
     fn put(&mut self, name: &str, shape: Vec<usize>, data: ArrayData) {
+        match &mut self.store {
+            Store::Memory => {}
+            Store::Stream(s) => {
+                return match &data {
+                    ArrayData::F64(v) => s.write(name, shape, |f| f.extend_from_slice(v)),
+                    ArrayData::U64(v) => s.write(name, shape, |f| f.extend_from_slice(v)),
+                };
+            }
+            Store::Measure(b) => {
+                *b = b.saturating_add(data.len() as u64 * 8);
+                return;
+            }
+        }
         debug_assert!(
             check_name(name).is_ok(),
             "bad checkpoint array name `{name}`"
@@ -750,6 +1093,17 @@ impl Checkpoint {
     /// [`CheckpointError::Io`] for file-system errors. On error nothing is
     /// left under `dir` and the temporary folder is removed.
     pub fn write(&self, dir: &Path) -> Result<(), CheckpointError> {
+        if !matches!(self.store, Store::Memory) {
+            // Its arrays are not here: a streamed checkpoint is read back
+            // first ([`Checkpoint::to_memory`]).
+            return Err(CheckpointError::Io {
+                path: dir.to_path_buf(),
+                source: io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "a streamed or measuring checkpoint cannot be written as a folder",
+                ),
+            });
+        }
         let name = dir.file_name().ok_or_else(|| CheckpointError::Io {
             path: dir.to_path_buf(),
             source: io::Error::new(
@@ -921,40 +1275,60 @@ impl Checkpoint {
             arrays,
             meta: manifest.meta,
             source: Some(dir.to_path_buf()),
+            store: Store::Memory,
         })
     }
 }
 
 /// Reads one array file and checks size, checksum, dtype, order and shape.
 fn read_array(dir: &Path, entry: &ArrayEntry) -> Result<ArrayData, CheckpointError> {
-    let path = dir.join(&entry.file);
+    read_npy(
+        &dir.join(&entry.file),
+        entry.bytes,
+        Some(&entry.checksum),
+        entry.dtype,
+        &entry.shape,
+    )
+}
+
+/// Reads the `.npy` file `path` and checks its size, its checksum (where
+/// one is given), dtype, order and shape.
+fn read_npy(
+    path: &Path,
+    expected_bytes: u64,
+    checksum: Option<&str>,
+    dtype: Dtype,
+    shape: &[usize],
+) -> Result<ArrayData, CheckpointError> {
+    let path = path.to_path_buf();
     // The size first, so a wrong size never reads a huge file.
     let size = fs::metadata(&path).map_err(io_err(&path))?.len();
-    if size != entry.bytes {
+    if size != expected_bytes {
         return Err(CheckpointError::Truncated {
             file: path,
-            expected: entry.bytes,
+            expected: expected_bytes,
             found: size,
         });
     }
     let bytes = fs::read(&path).map_err(io_err(&path))?;
-    if bytes.len() as u64 != entry.bytes {
+    if bytes.len() as u64 != expected_bytes {
         return Err(CheckpointError::Truncated {
             file: path,
-            expected: entry.bytes,
+            expected: expected_bytes,
             found: bytes.len() as u64,
         });
     }
-    let found = content_hash(&bytes);
-    if found != entry.checksum {
-        return Err(CheckpointError::Checksum {
-            file: path,
-            expected: entry.checksum.clone(),
-            found,
-        });
+    if let Some(expected) = checksum {
+        let found = content_hash(&bytes);
+        if found != expected {
+            return Err(CheckpointError::Checksum {
+                file: path,
+                expected: expected.to_string(),
+                found,
+            });
+        }
     }
-    decode_npy(&bytes, entry.dtype, &entry.shape)
-        .map_err(|reason| CheckpointError::Array { file: path, reason })
+    decode_npy(&bytes, dtype, shape).map_err(|reason| CheckpointError::Array { file: path, reason })
 }
 
 /// Encodes `data` of `shape` as a complete `.npy` file in memory.
@@ -1771,5 +2145,133 @@ mod tests {
             )
         );
         fs::remove_dir_all(&root).expect("cleanup");
+    }
+
+    /// The sample's arrays and meta put into `ck`, half of them through
+    /// the fill closures the run loop's capture uses.
+    fn put_sample(ck: &mut Checkpoint) {
+        let (mem, _) = sample();
+        for (name, (shape, data)) in &mem.arrays {
+            match data {
+                ArrayData::F64(v) if name.contains('.') => {
+                    ck.put_f64_with(name, shape.clone(), |f| {
+                        for x in v {
+                            f.extend([*x]);
+                        }
+                    })
+                }
+                ArrayData::U64(v) if name.contains('.') => {
+                    ck.put_u64_with(name, shape.clone(), |f| f.extend(v))
+                }
+                _ => ck.put(name, shape.clone(), data.clone()),
+            }
+        }
+        for (k, v) in mem.meta_map() {
+            ck.set_meta(k, v.clone());
+        }
+    }
+
+    #[test]
+    fn a_streamed_checkpoint_is_the_written_one_file_for_file() {
+        let root = test_dir("streamed");
+        let (written, stream_dir) = (root.join("written"), root.join("streamed"));
+        sample().0.write(&written).expect("write");
+        let (model, step, time) = ("explicit_solid<2>", 120, 0.1 + 0.2);
+        let mut ck = Checkpoint::streaming(&stream_dir, model, SCENE, step, time).expect("open");
+        put_sample(&mut ck);
+        ck.seal().expect("seal");
+        assert!(
+            ck.arrays.is_empty(),
+            "a streamed checkpoint keeps no arrays"
+        );
+        // The same array files, byte for byte; no manifest.
+        let mut files = entries(&written);
+        files.retain(|f| f != MANIFEST_FILE);
+        assert_eq!(files, entries(&stream_dir));
+        for f in &files {
+            let a = fs::read(written.join(f)).expect("written file");
+            let b = fs::read(stream_dir.join(f)).expect("streamed file");
+            assert!(a == b, "{f} differs");
+        }
+        // Read back, it equals the sample bit for bit.
+        let back = ck.to_memory().expect("read back");
+        let (orig, _) = sample();
+        assert_eq!(back.arrays.len(), orig.arrays.len());
+        assert_eq!(back.meta_map(), orig.meta_map());
+        assert_eq!(
+            (back.step(), back.time(), back.model()),
+            (step, time, model)
+        );
+        for (name, (shape, data)) in &orig.arrays {
+            let (s2, d2) = &back.arrays[name];
+            assert_eq!(shape, s2, "{name}");
+            match (data, d2) {
+                (ArrayData::F64(a), ArrayData::F64(b)) => assert_eq!(bits(a), bits(b), "{name}"),
+                (a, b) => assert_eq!(a, b, "{name}"),
+            }
+        }
+        // Recycled and put again, it reads back as the new state.
+        ck.recycle(model, SCENE, step + 1, time);
+        put_sample(&mut ck);
+        ck.seal().expect("seal again");
+        assert_eq!(ck.to_memory().expect("read").step(), step + 1);
+        // Files are overwritten in place: a shorter array leaves no tail.
+        ck.recycle(model, SCENE, step + 2, time);
+        ck.put_f64_with("particles.mass", vec![2], |f| {
+            f.extend_from_slice(&[1.5, -2.0])
+        });
+        ck.seal().expect("seal a shorter state");
+        let mut back = ck.to_memory().expect("read the shorter state");
+        assert_eq!(
+            back.take_f64("particles.mass", Some(&[2])).expect("mass"),
+            [1.5, -2.0]
+        );
+        assert!(back.names().next().is_none(), "only the array put last");
+        // It cannot be written as a folder of its own.
+        assert!(ck.write(&root.join("again")).is_err());
+        fs::remove_dir_all(&root).expect("cleanup");
+    }
+
+    #[test]
+    fn a_streamed_checkpoint_reports_the_file_it_could_not_write() {
+        let root = test_dir("streamed_error");
+        let dir = root.join("state");
+        let mut ck = Checkpoint::streaming(&dir, "m", SCENE, 1, 1.0).expect("open");
+        fs::remove_dir_all(&dir).expect("remove");
+        ck.put_f64_with("a.b", vec![2], |f| f.extend_from_slice(&[1.0, 2.0]));
+        match ck.seal() {
+            Err(CheckpointError::Io { path, .. }) => assert_eq!(path, dir.join("a.b.npy")),
+            other => panic!("{other:?}"),
+        }
+        // A file cut short is found on reading back.
+        fs::create_dir_all(&dir).expect("mkdir");
+        ck.recycle("m", SCENE, 2, 2.0);
+        ck.put_f64_with("a.b", vec![2], |f| f.extend_from_slice(&[1.0, 2.0]));
+        ck.seal().expect("seal");
+        let file = dir.join("a.b.npy");
+        let bytes = fs::read(&file).expect("read");
+        fs::write(&file, &bytes[..bytes.len() - 8]).expect("cut");
+        assert!(matches!(
+            ck.to_memory(),
+            Err(CheckpointError::Truncated { .. })
+        ));
+        // A fill that gives fewer values than its shape is an error too.
+        ck.recycle("m", SCENE, 3, 3.0);
+        ck.put_f64_with("short", vec![3], |f| f.extend_from_slice(&[1.0]));
+        let e = ck.seal().expect_err("short array");
+        assert!(e.to_string().contains("does not match the 1 values"), "{e}");
+        fs::remove_dir_all(&root).expect("cleanup");
+    }
+
+    #[test]
+    fn a_measuring_checkpoint_counts_bytes_and_keeps_nothing() {
+        let mut ck = Checkpoint::measuring();
+        put_sample(&mut ck);
+        let (orig, _) = sample();
+        let expected: usize = orig.arrays.values().map(|(_, d)| d.len() * 8).sum();
+        assert_eq!(ck.measured_bytes(), expected as u64);
+        assert!(ck.arrays.is_empty());
+        ck.recycle("m", SCENE, 0, 0.0);
+        assert_eq!(ck.measured_bytes(), 0);
     }
 }

@@ -317,6 +317,7 @@ fn fill_objects<const D: usize>(
                 s[(0, 0)] = s0;
                 s[(2, 2)] = s0_3;
                 particles.stress.set(p, &s);
+                particles.track_work();
                 particles.work[p] = law.energy_of([s0, s0_3]);
             }
             if let Some(q) = (before..particles.len()).find(|&q| {
@@ -356,6 +357,7 @@ fn fill_objects<const D: usize>(
             );
             if gas.is_some() || obj.pressure.is_some() {
                 let p = particles.len() - 1;
+                particles.track_work();
                 particles.work[p] = gas_work;
                 particles.stress.set(p, &gas_stress);
             }

@@ -208,6 +208,30 @@ impl Mode {
     }
 }
 
+/// Where the watchdog's last good state is kept (`time.last_good`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LastGood {
+    /// In memory up to [`LAST_GOOD_MEMORY_LIMIT`] bytes of state, on disk
+    /// above.
+    #[default]
+    Auto,
+    /// Always in memory: the fastest, at the cost of a copy of the state.
+    Memory,
+    /// Always on disk, in the output folder's `.last_good/`.
+    Disk,
+}
+
+impl LastGood {
+    fn is_auto(&self) -> bool {
+        *self == LastGood::Auto
+    }
+}
+
+/// The size of state above which `time.last_good = "auto"` keeps the last
+/// good state on disk: 64 MiB, about 350 000 2D particles.
+pub const LAST_GOOD_MEMORY_LIMIT: u64 = 64 << 20;
+
 /// Time integration.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -230,6 +254,12 @@ pub struct TimeSpec {
     /// failure writes as a checkpoint. 0 turns the watchdog off.
     #[serde(default = "default_watchdog_interval")]
     pub watchdog_interval: u64,
+    /// Where the watchdog keeps the last good state: in memory, or written
+    /// to the output folder's `.last_good/` (removed when the run ends) so
+    /// that a large run does not hold a second copy of its state. Default
+    /// `auto`: on disk once the state passes [`LAST_GOOD_MEMORY_LIMIT`].
+    #[serde(default, skip_serializing_if = "LastGood::is_auto")]
+    pub last_good: LastGood,
     /// The run stops when a step's Δt falls below this fraction of the
     /// largest Δt of the run so far (0 < fraction < 1; default 1e-6); a drop
     /// by 100× warns once.

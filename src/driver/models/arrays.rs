@@ -12,7 +12,7 @@ use crate::driver::outputs::per_depth;
 use crate::ice::{IceState, MaterialCells};
 use crate::material::eos::EquationOfState;
 use crate::material::SolidMaterial;
-use crate::mpm::{Particles, Tensors};
+use crate::mpm::{HalfSizes, Particles, Tensors};
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 
 /// Stores `D`-vectors as an `[n, D]` array.
@@ -112,15 +112,19 @@ pub fn save_particles<const D: usize>(ck: &mut Checkpoint, prefix: &str, p: &Par
     put_scalars(ck, &n("mass"), &p.mass);
     put_scalars(ck, &n("vol0"), &p.vol0);
     put_scalars(ck, &n("vol"), &p.vol);
-    put_vectors(ck, &n("half_size"), &p.half_size);
+    ck.put_f64_with(&n("half_size"), vec![p.len(), D], |buf| {
+        for h in p.half_size.iter() {
+            buf.extend_from_slice(h.as_slice());
+        }
+    });
     put_tensors(ck, &n("f"), &p.f);
     put_tensors(ck, &n("stress"), &p.stress);
-    put_scalars(ck, &n("work"), &p.work);
     ck.put_u64_with(&n("material"), vec![p.len()], |buf| {
         buf.extend(p.material.iter().map(|&m| m as u64));
     });
     // The optional arrays, where a run tracks them.
     for (name, v) in [
+        ("work", &p.work),
         ("temperature", &p.temperature),
         ("plastic_strain", &p.plastic_strain),
         ("damage", &p.damage),
@@ -165,10 +169,11 @@ pub fn load_particles<const D: usize>(
         mass: take_scalars(ck, &n("mass"), len)?,
         vol0: take_scalars(ck, &n("vol0"), len)?,
         vol: take_scalars(ck, &n("vol"), len)?,
-        half_size: take_vectors(ck, &n("half_size"), len)?,
+        half_size: HalfSizes::from_values(take_vectors(ck, &n("half_size"), len)?),
         f: take_tensors(ck, &n("f"), len)?,
         stress: take_tensors(ck, &n("stress"), len)?,
-        work: take_scalars(ck, &n("work"), len)?,
+        // Stored by every checkpoint before the work became optional.
+        work: optional(ck, "work")?,
         material: material.into_iter().map(|m| m as u16).collect(),
         // Each present when the run had started to track it.
         temperature: optional(ck, "temperature")?,
@@ -293,7 +298,7 @@ pub fn gas_point_fields<'a, const D: usize>(
     }
     let n = p.len();
     let rho = move |i: usize| p.mass[i] / p.vol[i];
-    let e = move |i: usize| p.work[i] * p.vol0[i] / p.mass[i];
+    let e = move |i: usize| p.work_of(i) * p.vol0[i] / p.mass[i];
     // (p, q) of particle i.
     let pq = move |i: usize| {
         let s = p.stress.get(i);
@@ -380,9 +385,9 @@ fn particle_violation<const D: usize>(
     if materials
         .get(p.material[i] as usize)
         .is_some_and(|m| m.gas().is_some())
-        && !(p.work[i].is_finite() && p.work[i] > 0.0)
+        && !(p.work_of(i).is_finite() && p.work_of(i) > 0.0)
     {
-        return Some(("internal_energy", p.work[i] * p.vol0[i] / p.mass[i], POS));
+        return Some(("internal_energy", p.work_of(i) * p.vol0[i] / p.mass[i], POS));
     }
     None
 }
@@ -715,7 +720,7 @@ pub fn particle_material_totals<const D: usize>(
         t.mass += p.mass[i];
         mom += p.v[i] * p.mass[i];
         t.kinetic += 0.5 * p.mass[i] * p.v[i].norm_squared();
-        t.internal += p.vol0[i] * materials[k].strain_energy_density(&p.f.get(i), p.work[i]);
+        t.internal += p.vol0[i] * materials[k].strain_energy_density(&p.f.get(i), p.work_of(i));
     }
     t.momentum = pad3(&mom);
     t
