@@ -412,6 +412,28 @@ fn last_good_store<M: Model>(
     })
 }
 
+/// An empty checkpoint of the model's current state streamed into a
+/// temporary folder beside `DIR/checkpoints/step_NNNNNNNNNN`, which
+/// [`write_checkpoint`] renames into place: a checkpoint costs no copy of
+/// the state in memory.
+fn checkpoint_store<M: Model>(model: &M, hash: &str, dir: &Path) -> Result<Checkpoint> {
+    let tmp = dir.join("checkpoints").join(format!(
+        ".step_{:010}.tmp-{}",
+        model.steps(),
+        std::process::id()
+    ));
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    }
+    Ok(Checkpoint::streaming_folder(
+        &tmp,
+        &model.kind(),
+        hash,
+        model.steps(),
+        model.time(),
+    )?)
+}
+
 /// Writes a captured state as `DIR/checkpoints/step_NNNNNNNNNN`, with the
 /// history and snapshot times as they were at its capture; returns the
 /// folder.
@@ -799,7 +821,8 @@ impl Run {
             self.last_good = Some(capture(model, &self.hash, &self.ls, &self.out, reuse)?);
         }
         if checkpoint_due {
-            let ck = capture(model, &self.hash, &self.ls, &self.out, None)?;
+            let store = checkpoint_store(model, &self.hash, &self.dir)?;
+            let ck = capture(model, &self.hash, &self.ls, &self.out, Some(store))?;
             self.written
                 .push(write_checkpoint(ck, &self.out, &self.dir)?);
             prune(&mut self.written, self.cad.keep)?;
@@ -830,10 +853,11 @@ impl Run {
             // step: that state is the one to keep if it passes the watchdog.
             Some(e @ (Error::Interrupted { .. } | Error::Progress { .. })) => {
                 match model.watchdog() {
-                    None => Some((
-                        e,
-                        Some(capture(model, &self.hash, &self.ls, &self.out, None)?),
-                    )),
+                    None => {
+                        let store = checkpoint_store(model, &self.hash, &self.dir)?;
+                        let ck = capture(model, &self.hash, &self.ls, &self.out, Some(store))?;
+                        Some((e, Some(ck)))
+                    }
                     Some(v) => Some((
                         Error::Watchdog {
                             step: model.steps(),
@@ -873,7 +897,7 @@ impl Run {
             return Ok(Some(e));
         };
         let (step, time) = (ck.step(), ck.time());
-        let path = write_checkpoint(ck.into_memory()?, &self.out, &self.dir)?;
+        let path = write_checkpoint(ck.into_writable()?, &self.out, &self.dir)?;
         self.written.push(path.clone());
         Ok(Some(Error::Stopped {
             cause: Box::new(e),

@@ -352,13 +352,24 @@ fn data_bytes(shape: &[usize]) -> Option<usize> {
 /// Stable across platforms and Rust versions; used for the array checksums
 /// and, by the run loop, for the scene hash.
 pub fn content_hash(bytes: &[u8]) -> String {
-    const OFFSET_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
+    hash_string(fnv1a(FNV_OFFSET_BASIS, bytes))
+}
+
+/// The 64-bit FNV-1a offset basis: the hash of no bytes.
+const FNV_OFFSET_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// FNV-1a of `bytes`, continued from the hash `h` of the bytes before them.
+fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
     const PRIME: u64 = 0x0000_0100_0000_01b3;
-    let mut h = OFFSET_BASIS;
     for &b in bytes {
         h ^= u64::from(b);
         h = h.wrapping_mul(PRIME);
     }
+    h
+}
+
+/// A hash as a manifest writes it.
+fn hash_string(h: u64) -> String {
     format!("{HASH_PREFIX}{h:016x}")
 }
 
@@ -514,15 +525,18 @@ enum Store {
 }
 
 /// A checkpoint streamed to a folder: the arrays written so far (dtype,
-/// shape, file size) and the first error met (reported by
-/// [`Checkpoint::seal`]). The folder is a working copy for the run that
-/// wrote it: no manifest, no checksums (hashing a large state took longer
-/// than writing it); [`Checkpoint::to_memory`] reads it back from these
-/// entries.
+/// shape, file size and, for a checkpoint folder, checksum) and the first
+/// error met (reported by [`Checkpoint::seal`]). A working copy
+/// ([`Checkpoint::streaming`]) has no manifest and no checksums (hashing a
+/// large state took longer than writing it); [`Checkpoint::to_memory`]
+/// reads it back from these entries. A checkpoint folder
+/// ([`Checkpoint::streaming_folder`]) gets its manifest when written.
 #[derive(Debug, Clone)]
 struct Stream {
     dir: PathBuf,
-    entries: BTreeMap<String, (Dtype, Vec<usize>, u64)>,
+    /// Whether the files are hashed (a checkpoint folder).
+    checksums: bool,
+    entries: BTreeMap<String, (Dtype, Vec<usize>, u64, Option<u64>)>,
     error: Option<(PathBuf, io::ErrorKind, String)>,
     /// The write buffer, kept between arrays and captures.
     buf: Vec<u8>,
@@ -541,10 +555,10 @@ impl Stream {
             return;
         }
         let path = self.dir.join(npy_file_name(name));
-        match stream_array(&path, &shape, &mut self.buf, fill) {
-            Ok(bytes) => {
+        match stream_array(&path, &shape, &mut self.buf, self.checksums, fill) {
+            Ok((bytes, hash)) => {
                 self.entries
-                    .insert(name.to_string(), (T::DTYPE, shape, bytes));
+                    .insert(name.to_string(), (T::DTYPE, shape, bytes, hash));
             }
             Err(e) => self.error = Some((path, e.kind(), e.to_string())),
         }
@@ -552,13 +566,15 @@ impl Stream {
 }
 
 /// Writes one array's `.npy` file at `path` from `fill`, without holding its
-/// values, byte for byte as [`Checkpoint::write`] does; returns its size.
+/// values, byte for byte as [`Checkpoint::write`] does; returns its size
+/// and, where asked, its FNV-1a hash.
 fn stream_array<T: Element>(
     path: &Path,
     shape: &[usize],
     buf: &mut Vec<u8>,
+    checksum: bool,
     fill: impl FnOnce(&mut ArrayFill<'_, T>),
-) -> io::Result<u64> {
+) -> io::Result<(u64, Option<u64>)> {
     // The header as the `.npy` writer makes it; the values follow as they
     // are stored, little-endian.
     buf.clear();
@@ -578,6 +594,7 @@ fn stream_array<T: Element>(
             .truncate(false)
             .open(path)?,
         buf,
+        hash: checksum.then_some(FNV_OFFSET_BASIS),
         count: 0,
         error: None,
         _values: std::marker::PhantomData,
@@ -604,7 +621,7 @@ fn stream_array<T: Element>(
     }
     let bytes = header + 8 * f.count as u64;
     f.file.set_len(bytes)?;
-    Ok(bytes)
+    Ok((bytes, f.hash))
 }
 
 /// Where a [`Checkpoint::put_f64_with`] fill puts an array's values, in C
@@ -624,6 +641,8 @@ struct FileFill<'a, T: Element> {
     /// The bytes not written yet (the stream's buffer, kept between arrays
     /// and captures).
     buf: &'a mut Vec<u8>,
+    /// FNV-1a of the bytes written so far, where the file is hashed.
+    hash: Option<u64>,
     count: usize,
     error: Option<io::Error>,
     _values: std::marker::PhantomData<T>,
@@ -637,6 +656,9 @@ impl<T: Element> FileFill<'_, T> {
 
     /// Writes the gathered bytes (unless an error came first).
     fn drain(&mut self) {
+        if let Some(h) = &mut self.hash {
+            *h = fnv1a(*h, self.buf);
+        }
         if self.error.is_none() {
             if let Err(e) = io::Write::write_all(&mut self.file, self.buf) {
                 self.error = Some(e);
@@ -725,10 +747,42 @@ impl Checkpoint {
         step: u64,
         time: f64,
     ) -> Result<Self, CheckpointError> {
+        Self::stream_to(dir, false, model, scene_hash, step, time)
+    }
+
+    /// An empty checkpoint streamed, as [`Checkpoint::streaming`], into the
+    /// folder `tmp`, its files hashed as they are written, so that
+    /// [`Checkpoint::write`] makes it the checkpoint folder `dir` by adding
+    /// the manifest and renaming `tmp` to `dir`: a checkpoint of a large
+    /// state written without a copy of it in memory, and atomic as any
+    /// other. `tmp` should be a fresh sibling of the folders it will be
+    /// written as (a rename does not cross file systems).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Io`] if `tmp` cannot be created.
+    pub fn streaming_folder(
+        tmp: &Path,
+        model: &str,
+        scene_hash: &str,
+        step: u64,
+        time: f64,
+    ) -> Result<Self, CheckpointError> {
+        Self::stream_to(tmp, true, model, scene_hash, step, time)
+    }
+
+    fn stream_to(
+        dir: &Path,
+        checksums: bool,
+        model: &str,
+        scene_hash: &str,
+        step: u64,
+        time: f64,
+    ) -> Result<Self, CheckpointError> {
         fs::create_dir_all(dir).map_err(io_err(dir))?;
         let mut ck = Self::new(model, scene_hash, step, time);
         ck.store = Store::Stream(Box::new(Stream {
             dir: dir.to_path_buf(),
+            checksums,
             entries: BTreeMap::new(),
             error: None,
             buf: Vec::new(),
@@ -794,22 +848,23 @@ impl Checkpoint {
         };
         let mut ck = Self::new(&self.model, &self.scene_hash, self.step, self.time);
         ck.meta = self.meta.clone();
-        for (name, (dtype, shape, bytes)) in &s.entries {
+        for (name, (dtype, shape, bytes, hash)) in &s.entries {
             let path = s.dir.join(npy_file_name(name));
-            let data = read_npy(&path, *bytes, None, *dtype, shape)?;
+            let sum = hash.map(hash_string);
+            let data = read_npy(&path, *bytes, sum.as_deref(), *dtype, shape)?;
             ck.arrays.insert(name.clone(), (shape.clone(), data));
         }
         Ok(ck)
     }
 
-    /// [`Checkpoint::to_memory`], without a copy when the arrays are in
-    /// memory already.
+    /// This checkpoint ready for [`Checkpoint::write`]: itself, or a
+    /// working copy ([`Checkpoint::streaming`]) read back into memory.
     ///
     /// # Errors
-    /// Those of [`Checkpoint::read`].
-    pub fn into_memory(self) -> Result<Self, CheckpointError> {
-        match self.store {
-            Store::Stream(_) => self.to_memory(),
+    /// Those of [`Checkpoint::to_memory`].
+    pub fn into_writable(self) -> Result<Self, CheckpointError> {
+        match &self.store {
+            Store::Stream(s) if !s.checksums => self.to_memory(),
             _ => Ok(self),
         }
     }
@@ -1093,16 +1148,20 @@ impl Checkpoint {
     /// [`CheckpointError::Io`] for file-system errors. On error nothing is
     /// left under `dir` and the temporary folder is removed.
     pub fn write(&self, dir: &Path) -> Result<(), CheckpointError> {
-        if !matches!(self.store, Store::Memory) {
-            // Its arrays are not here: a streamed checkpoint is read back
-            // first ([`Checkpoint::to_memory`]).
-            return Err(CheckpointError::Io {
-                path: dir.to_path_buf(),
-                source: io::Error::new(
-                    io::ErrorKind::InvalidInput,
-                    "a streamed or measuring checkpoint cannot be written as a folder",
-                ),
-            });
+        match &self.store {
+            Store::Memory => {}
+            Store::Stream(s) if s.checksums => return self.write_stream(s, dir),
+            // Its arrays are not here, or not hashed: a working copy is read
+            // back first ([`Checkpoint::to_memory`]).
+            _ => {
+                return Err(CheckpointError::Io {
+                    path: dir.to_path_buf(),
+                    source: io::Error::new(
+                        io::ErrorKind::InvalidInput,
+                        "a working copy or a measuring checkpoint cannot be written as a folder",
+                    ),
+                })
+            }
         }
         let name = dir.file_name().ok_or_else(|| CheckpointError::Io {
             path: dir.to_path_buf(),
@@ -1159,6 +1218,38 @@ impl Checkpoint {
         Ok(())
     }
 
+    /// [`Checkpoint::write`] of a [`Checkpoint::streaming_folder`]: its
+    /// manifest into its folder, then the folder renamed to `dir`; on error
+    /// the folder is removed.
+    fn write_stream(&self, s: &Stream, dir: &Path) -> Result<(), CheckpointError> {
+        let result = (|| {
+            if dir.symlink_metadata().is_ok() {
+                return Err(CheckpointError::Exists {
+                    dir: dir.to_path_buf(),
+                });
+            }
+            self.seal()?;
+            let entries = s
+                .entries
+                .iter()
+                .map(|(name, (dtype, shape, bytes, hash))| ArrayEntry {
+                    name: name.clone(),
+                    file: npy_file_name(name),
+                    dtype: *dtype,
+                    shape: shape.clone(),
+                    bytes: *bytes,
+                    checksum: hash.map(hash_string).unwrap_or_default(),
+                })
+                .collect();
+            self.write_manifest(dir, &s.dir, entries)?;
+            fs::rename(&s.dir, dir).map_err(io_err(dir))
+        })();
+        if result.is_err() {
+            let _ = fs::remove_dir_all(&s.dir);
+        }
+        result
+    }
+
     /// Writes the arrays and then the manifest into `tmp` (`dir` names files
     /// in messages).
     fn write_files(&self, dir: &Path, tmp: &Path) -> Result<(), CheckpointError> {
@@ -1180,6 +1271,17 @@ impl Checkpoint {
                 checksum: content_hash(&bytes),
             });
         }
+        self.write_manifest(dir, tmp, entries)
+    }
+
+    /// Writes the manifest of `entries` with this checkpoint's header and
+    /// meta into the folder `tmp` (`dir` names it in messages).
+    fn write_manifest(
+        &self,
+        dir: &Path,
+        tmp: &Path,
+        entries: Vec<ArrayEntry>,
+    ) -> Result<(), CheckpointError> {
         let manifest = Manifest {
             format_version: FORMAT_VERSION,
             scene_hash: self.scene_hash.clone(),
@@ -2229,6 +2331,35 @@ mod tests {
         assert!(back.names().next().is_none(), "only the array put last");
         // It cannot be written as a folder of its own.
         assert!(ck.write(&root.join("again")).is_err());
+        fs::remove_dir_all(&root).expect("cleanup");
+    }
+
+    #[test]
+    fn a_streamed_checkpoint_folder_is_the_written_one_byte_for_byte() {
+        let root = test_dir("streamed_folder");
+        let written = root.join("written");
+        sample().0.write(&written).expect("write");
+        let (tmp, dir) = (root.join(".tmp"), root.join("streamed"));
+        let mut ck = Checkpoint::streaming_folder(&tmp, "explicit_solid<2>", SCENE, 120, 0.1 + 0.2)
+            .expect("open");
+        put_sample(&mut ck);
+        ck.write(&dir).expect("write the streamed folder");
+        assert!(!tmp.exists(), "renamed into place");
+        assert_eq!(entries(&written), entries(&dir));
+        for f in entries(&written) {
+            let a = fs::read(written.join(&f)).expect("a");
+            let b = fs::read(dir.join(&f)).expect("b");
+            assert!(a == b, "{f} differs");
+        }
+        Checkpoint::read(&dir, Some(SCENE)).expect("reads and checks");
+        // Onto an existing folder: refused, and the temporary folder goes.
+        let mut again = Checkpoint::streaming_folder(&tmp, "m", SCENE, 1, 1.0).expect("open again");
+        put_sample(&mut again);
+        assert!(matches!(
+            again.write(&dir),
+            Err(CheckpointError::Exists { .. })
+        ));
+        assert!(!tmp.exists());
         fs::remove_dir_all(&root).expect("cleanup");
     }
 
