@@ -104,17 +104,17 @@ impl MemoryEstimate {
         } else {
             0.0
         };
-        // One particle's arrays: F and σ (3, 5 or 9 stored entries each in
-        // 1D, 2D, 3D), 3 vectors, 6 scalars (work, temperature and plastic
+        // One particle's arrays: F (3, 5 or 9 stored entries in 1D, 2D,
+        // 3D) and the symmetric σ (3, 4 or 6), 3 vectors, 6 scalars (work, temperature and plastic
         // strain counted whether a run tracks them or not; the id is stored
         // only once particles are removed or split, not counted), a 4-byte
         // half-size index and a 2-byte material index.
-        let tensor = match dim {
-            1 => 3.0,
-            2 => 5.0,
-            _ => 9.0,
+        let tensors = match dim {
+            1 => 6.0,
+            2 => 9.0,
+            _ => 15.0,
         };
-        let state = 2.0 * tensor + 3.0 * dimf + 6.75;
+        let state = tensors + 3.0 * dimf + 6.75;
         // The arrays and the step's scratch (offsets and half-widths: two
         // vectors; the bins: one value); in implicit mode also the weights,
         // gradients, node indices and signs of the 3^dim support nodes and

@@ -152,7 +152,7 @@ impl<'a> Values<'a> {
     }
 
     /// A tensor field read from `m` (row-major) as it is written.
-    pub fn tensors<const D: usize>(t: &'a crate::mpm::Tensors<D>) -> Self {
+    pub fn tensors<const D: usize, const SYM: bool>(t: &'a crate::mpm::Tensors<D, SYM>) -> Self {
         Self::computed(t.len(), 9, move |i, o| {
             let m = t.get(i);
             for (k, x) in o[..9].iter_mut().enumerate() {

@@ -19,7 +19,7 @@ pub mod quad_mesh;
 
 use nalgebra::SVector;
 
-use crate::mpm::Tensors;
+use crate::mpm::Stresses;
 
 /// The particles of one membrane: `first .. first + count`, in order along
 /// the contour.
@@ -103,7 +103,7 @@ impl<const D: usize> Membranes<D> {
     pub fn update_frames(
         &mut self,
         x: &[SVector<f64, D>],
-        stress: &mut Tensors<D>,
+        stress: &mut Stresses<D>,
     ) -> Result<(), usize> {
         for c in &self.chains {
             for k in 0..c.count {

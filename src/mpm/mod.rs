@@ -19,4 +19,4 @@ pub use implicit::{
     SurfaceLoad,
 };
 pub use particles::{HalfSizes, Particles};
-pub use tensors::{SharedTensors, Tensors};
+pub use tensors::{SharedTensors, Stresses, Tensors};

@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix3, SVector};
 
-use super::tensors::Tensors;
+use super::tensors::{Stresses, Tensors};
 use crate::material::SolidMaterial;
 
 /// Material points of every solid material in a scene.
@@ -26,8 +26,9 @@ pub struct Particles<const D: usize> {
     /// Deformation gradient F (3×3; plane strain / uniaxial strain in 2D/1D,
     /// stored without the entries those keep zero).
     pub f: Tensors<D>,
-    /// Cauchy stress σ (3×3, stored as [`Particles::f`]).
-    pub stress: Tensors<D>,
+    /// Cauchy stress σ (3×3, symmetric: stored as [`Particles::f`] without
+    /// the lower triangle).
+    pub stress: Stresses<D>,
     /// Accumulated stress work per unit reference volume (rate models,
     /// Hencky, membranes; a gas point's ρ_ref e): empty unless a run's
     /// materials read it ([`SolidMaterial::reads_work`]; every model but
@@ -380,7 +381,7 @@ impl<T> ParticleArray for Vec<T> {
     }
 }
 
-impl<const D: usize> ParticleArray for Tensors<D> {
+impl<const D: usize, const SYM: bool> ParticleArray for Tensors<D, SYM> {
     fn reserve_exact(&mut self, n: usize) {
         self.values_mut().reserve_exact(n * Self::STRIDE);
     }

@@ -12,7 +12,7 @@ use crate::driver::outputs::per_depth;
 use crate::ice::{IceState, MaterialCells};
 use crate::material::eos::EquationOfState;
 use crate::material::SolidMaterial;
-use crate::mpm::{HalfSizes, Particles, Tensors};
+use crate::mpm::{HalfSizes, Particles, Stresses, Tensors};
 use crate::output::checkpoint::{Checkpoint, CheckpointError};
 
 /// Stores `D`-vectors as an `[n, D]` array.
@@ -40,20 +40,26 @@ pub fn take_vectors<const D: usize>(
 /// Stores particle tensors as an `[n, k]` array of their stored entries,
 /// `k` = [`Tensors::STRIDE`] in the order of [`Tensors::ENTRIES`] (1D: xx,
 /// yy, zz; 2D: xx, xy, yx, yy, zz; 3D: all nine, row-major).
-pub fn put_tensors<const D: usize>(ck: &mut Checkpoint, name: &str, t: &Tensors<D>) {
-    ck.put_f64_with(name, vec![t.len(), Tensors::<D>::STRIDE], |buf| {
+pub fn put_tensors<const D: usize, const SYM: bool>(
+    ck: &mut Checkpoint,
+    name: &str,
+    t: &Tensors<D, SYM>,
+) {
+    ck.put_f64_with(name, vec![t.len(), Tensors::<D, SYM>::STRIDE], |buf| {
         buf.extend_from_slice(t.values())
     });
 }
 
 /// Reads `n` tensors saved by [`put_tensors`], or saved as full `[n, 3, 3]`
 /// row-major matrices (checkpoints before the packed layout), whose entries
-/// the dimension does not keep must then be zero.
-pub fn take_tensors<const D: usize>(
+/// the dimension does not keep must then be zero. Symmetric tensors (the
+/// stress) also load from the general packed layout (checkpoints before
+/// the stress kept only its upper triangle), as their symmetric parts.
+pub fn take_tensors<const D: usize, const SYM: bool>(
     ck: &mut Checkpoint,
     name: &str,
     n: usize,
-) -> Result<Tensors<D>, CheckpointError> {
+) -> Result<Tensors<D, SYM>, CheckpointError> {
     let malformed = |reason: String| CheckpointError::Malformed {
         what: name.to_string(),
         reason,
@@ -66,7 +72,13 @@ pub fn take_tensors<const D: usize>(
             ))
         });
     }
-    let data = ck.take_f64(name, Some(&[n, Tensors::<D>::STRIDE]))?;
+    if SYM && ck.shape(name) == Some(&[n, Tensors::<D>::STRIDE][..]) {
+        let general = take_tensors::<D, false>(ck, name, n)?;
+        let m: Vec<_> = general.iter().collect();
+        return Tensors::try_from_matrices(&m)
+            .map_err(|p| malformed(format!("particle {p}: not a {D}D tensor")));
+    }
+    let data = ck.take_f64(name, Some(&[n, Tensors::<D, SYM>::STRIDE]))?;
     Tensors::from_values(data).ok_or_else(|| malformed("not whole tensors".to_string()))
 }
 
@@ -406,7 +418,7 @@ fn particles_pass<const D: usize>(p: &Particles<D>, materials: &[SolidMaterial])
             ok & (j > 0.0) & (j <= f64::MAX)
         });
         // The entries a dimension keeps zero are not stored.
-        let k = Tensors::<D>::STRIDE;
+        let k = Stresses::<D>::STRIDE;
         let stress_ok = p.stress.values()[k * r.start..k * r.end]
             .iter()
             .fold(true, |o, &x| o & (x.abs() <= f64::MAX));
@@ -779,7 +791,10 @@ mod tests {
         let mut ck = Checkpoint::new("test", "", 0, 0.0);
         put_tensors(&mut ck, "f", &t);
         assert_eq!(ck.shape("f"), Some(&[2, 5][..]));
-        assert_eq!(take_tensors::<2>(&mut ck, "f", 2).expect("packed"), t);
+        assert_eq!(
+            take_tensors::<2, false>(&mut ck, "f", 2).expect("packed"),
+            t
+        );
         let full = |m: &[Matrix3<f64>], ck: &mut Checkpoint| {
             ck.put_f64_with("f", vec![m.len(), 3, 3], |buf| {
                 for a in m {
@@ -788,12 +803,29 @@ mod tests {
             })
         };
         full(&[Matrix3::identity(), plane], &mut ck);
-        assert_eq!(take_tensors::<2>(&mut ck, "f", 2).expect("full"), t);
+        assert_eq!(take_tensors::<2, false>(&mut ck, "f", 2).expect("full"), t);
         let mut bent = plane;
         bent[(0, 2)] = 1e-3;
         full(&[plane, bent], &mut ck);
-        let err = take_tensors::<2>(&mut ck, "f", 2).expect_err("out of plane");
+        let err = take_tensors::<2, false>(&mut ck, "f", 2).expect_err("out of plane");
         assert!(err.to_string().contains("particle 1"), "{err}");
+        // A stress saved in the general packed layout (before the stress
+        // kept its upper triangle) loads as its symmetric part: to the bit
+        // when it was symmetric.
+        let sigma = Matrix3::new(2.0, -0.5, 0.0, -0.5, 1.0, 0.0, 0.0, 0.0, 0.25);
+        let mut skew = sigma;
+        skew[(1, 0)] = -0.25;
+        let general = Tensors::<2>::try_from_matrices(&[sigma, skew]).expect("2D");
+        put_tensors(&mut ck, "stress", &general);
+        let s = take_tensors::<2, true>(&mut ck, "stress", 2).expect("general layout");
+        assert_eq!(s.get(0), sigma);
+        assert_eq!((s.get(1)[(0, 1)], s.get(1)[(1, 0)]), (-0.375, -0.375));
+        put_tensors(&mut ck, "stress", &s);
+        assert_eq!(ck.shape("stress"), Some(&[2, 4][..]));
+        assert_eq!(
+            take_tensors::<2, true>(&mut ck, "stress", 2).expect("upper"),
+            s
+        );
     }
 
     /// Ids in creation order are neither stored nor checkpointed; ids
