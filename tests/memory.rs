@@ -53,10 +53,11 @@ fn peak(cells: usize, last_good: &str) -> (f64, f64) {
 /// its arrays (F in 5 entries, the symmetric σ in 4, 3 vectors, 3 scalars,
 /// a 4-byte half-size index and a 2-byte material: 150 B; an elastic neo-Hookean run
 /// keeps no stress work, temperature, plastic strain or damage), the step's
-/// scratch (40 B) and its share of the grid (88 B a node, 0.39 nodes a
-/// particle: 35 B): 225 B; with the last good state in memory another
-/// 168 B (its arrays as a checkpoint stores them: the half-sizes as
-/// vectors, the material as a u64): 393 B. A snapshot reads every particle
+/// scratch (offsets and half-widths, 32 B, and the bins' 4-byte order) and
+/// its share of the grid (72 B a node, the force and the acceleration
+/// sharing one array; 0.39 nodes a particle: 28 B): 214 B; with the last
+/// good state in memory another 168 B (its arrays as a checkpoint stores
+/// them: the half-sizes as vectors, the material as a u64): 382 B. A snapshot reads every particle
 /// and grid field in place. Before issue 24's changes (the snapshot reading
 /// the fields in place, the tensors stored in the plane, the stress's upper
 /// triangle, the optional arrays, the last good state on disk) the 1M-particle bench took 995 B a
@@ -66,7 +67,7 @@ fn a_particle_costs_what_its_arrays_and_the_last_good_state_take() {
     if !Path::new("/proc/self/status").exists() {
         return; // the peak is read from /proc
     }
-    for (last_good, design) in [("memory", 393.0), ("disk", 225.0)] {
+    for (last_good, design) in [("memory", 382.0), ("disk", 214.0)] {
         let (n0, b0) = peak(40, last_good);
         let (n1, b1) = peak(320, last_good);
         let marginal = (b1 - b0) / (n1 - n0);

@@ -91,8 +91,9 @@ impl MemoryEstimate {
             object_particles.push(object_particles_of(scene, o));
         }
         let particles = object_particles.iter().fold(0.0, |a, b| a + b);
-        // Node fields: mass, momentum, force, velocity, new velocity,
-        // acceleration, normals and scratch; gas points reading the grid's
+        // Node fields: mass, momentum, velocity, new velocity, the force
+        // that the grid solve turns into the acceleration (one array),
+        // normals and scratch; gas points reading the grid's
         // density add their nodal mass, density and the nodes' volumes.
         let grid_density = scene
             .materials
@@ -100,15 +101,16 @@ impl MemoryEstimate {
             .any(|m| m.point_density == Some(crate::material::PointDensity::Grid));
         let density_fields = if grid_density { 3.0 } else { 0.0 };
         let grid_bytes = if has_particles {
-            particle_fields * nodes * F64 * (4.0 + 6.0 * dimf + density_fields)
+            particle_fields * nodes * F64 * (4.0 + 5.0 * dimf + density_fields)
         } else {
             0.0
         };
         // One particle's arrays: F (3, 5 or 9 stored entries in 1D, 2D,
-        // 3D) and the symmetric σ (3, 4 or 6), 3 vectors, 6 scalars (work, temperature and plastic
-        // strain counted whether a run tracks them or not; the id is stored
-        // only once particles are removed or split, not counted), a 4-byte
-        // half-size index and a 2-byte material index.
+        // 3D) and the symmetric σ (3, 4 or 6), 3 vectors, 6 scalars (work,
+        // temperature and plastic strain counted whether a run tracks them
+        // or not; the id is stored only once particles are removed or
+        // split, not counted), a 4-byte half-size index and a 2-byte
+        // material index.
         let tensors = match dim {
             1 => 6.0,
             2 => 9.0,
@@ -116,10 +118,10 @@ impl MemoryEstimate {
         };
         let state = tensors + 3.0 * dimf + 6.75;
         // The arrays and the step's scratch (offsets and half-widths: two
-        // vectors; the bins: one value); in implicit mode also the weights,
+        // vectors; the bins: a 4-byte index); in implicit mode also the weights,
         // gradients, node indices and signs of the 3^dim support nodes and
         // the Newton step's per-particle F increment, stress and J.
-        let mut per_particle = state + 2.0 * dimf + 1.0;
+        let mut per_particle = state + 2.0 * dimf + 0.5;
         if scene.time.mode == Mode::Implicit {
             per_particle += 3f64.powi(dim as i32) * (2.0 + 2.0 * dimf) + 2.0 * 9.0 + 1.0;
         }
