@@ -24,10 +24,12 @@
 //! * Red–black Gauss–Seidel (optionally SOR) smoothing; pre-smoothing sweeps
 //!   red then black, post-smoothing black then red, so a cycle with
 //!   `pre_smooth == post_smooth` is a symmetric positive definite
-//!   preconditioner for [`crate::pcg`]. The two colours of a sweep are fused
-//!   into one pass over memory (the second colour trails by one row/plane).
+//!   preconditioner for [`crate::pcg`]. All the sweeps of a smoothing step
+//!   are fused into one pass over memory (each half-sweep trails the one
+//!   before by one row/plane, see `rb_sweeps`), with the same result to
+//!   the bit as separate sweeps.
 //! * Large levels run on the threads of the calling rayon pool, with results
-//!   identical to the bit to one thread's (see `rb_sweep_blocks`,
+//!   identical to the bit to one thread's (see `rb_sweeps_blocks`,
 //!   `restrict_residual`).
 //!
 //! Measured (see `tests/multigrid.rs` and `examples/mg_factors.rs`): V(3,3)
@@ -55,7 +57,8 @@
 //! planes in 3D) would let the second colour of the first row read the
 //! first colour of the last row before it is updated, so along a periodic
 //! outermost axis the last row's (plane's) first colour is updated before
-//! the fused loop (see `rb_sweep`): the order stays exactly red–black.
+//! the fused loop, and the sweeps along such an axis are done one at a
+//! time (see `rb_sweep_periodic`): the order stays exactly red–black.
 //!
 //! Red–black ordering needs an **even** number of cells along a periodic
 //! axis: with an odd count, cells `0` and `n − 1` have the same colour but
@@ -748,7 +751,7 @@ struct Cells {
     len: usize,
 }
 
-// SAFETY: the callers (`rb_sweep`, `rb_sweep_blocks`) give every element to
+// SAFETY: the callers (`rb_sweeps`, `rb_sweeps_blocks`) give every element to
 // at most one writing task at a time, and no task reads an element another
 // task writes in the same phase (red–black independence).
 unsafe impl Send for Cells {}
@@ -977,22 +980,86 @@ fn parallel(lv: &Level) -> bool {
     lv.cells() >= PAR_MIN_CELLS && rayon::current_num_threads() > 1
 }
 
-/// One red–black sweep (`first` colour, then the other), fused so that the
-/// second colour trails the first by one row (2D) or one plane (3D); this is
-/// exactly equivalent to two full half-sweeps but reads the data once. With
+/// Half-sweep `h` of a run of red–black sweeps on unit `t`: the `first`
+/// colour when `h` is even, the other when odd (every sweep starts with
+/// `first`); the zero-guess pass when `h = 0` and `from_zero`.
+///
+/// # Safety
+/// As [`colour_pass`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn half_sweep<const D3: bool>(
+    lv: &Level,
+    u: Cells,
+    f: &[f64],
+    t: usize,
+    h: usize,
+    first: usize,
+    omega: f64,
+    from_zero: bool,
+) {
+    let color = if h.is_multiple_of(2) { first } else { 1 - first };
+    // SAFETY: forwarded contract.
+    unsafe { colour_pass::<D3>(lv, u, f, t, color, omega, from_zero && h == 0) }
+}
+
+/// `sweeps` red–black sweeps (each the `first` colour, then the other),
+/// fused into one pass over the level: half-sweep `h` (of `2 sweeps`) of
+/// unit `t` (row in 2D, plane in 3D) needs half-sweep `h − 1` of units
+/// `t − 1 … t + 1` and nothing later, so half-sweep `h` trails half-sweep
+/// `h − 1` by one unit and the data of a unit are read once for all the
+/// sweeps while they are in cache (a window of `2 sweeps` units), instead
+/// of once a sweep. Red–black Gauss–Seidel gives the same result to the bit
+/// in any order that keeps those dependencies (a cell's update reads only
+/// the other colour), so this is exactly `sweeps` separate sweeps. With
 /// `from_zero` the previous content of `u` is ignored (taken as 0).
 ///
-/// Along a periodic outermost axis (`m` rows/planes) the second colour of
-/// unit 0 needs the *updated* first colour of unit `m − 1`, so that unit's
-/// first colour is done before the loop (it reads only the second colour of
-/// units `m − 2` and 0, not yet updated); the ghost units are refreshed
-/// around it and before the last unit's second colour. The order is still
-/// exactly red–black.
+/// Along a periodic outermost axis (`m` rows/planes) the sweeps are done
+/// one at a time: the second colour of unit 0 needs the *updated* first
+/// colour of unit `m − 1`, so that unit's first colour is done before the
+/// loop (it reads only the second colour of units `m − 2` and 0, not yet
+/// updated); the ghost units are refreshed around it and before the last
+/// unit's second colour. The order is still exactly red–black.
 ///
 /// On a large level with more than one thread (and a non-periodic outermost
 /// axis) the units are cut into blocks swept in parallel, see
-/// [`rb_sweep_blocks`]; the result is the same to the bit.
-fn rb_sweep<const D3: bool>(
+/// [`rb_sweeps_blocks`]; the result is the same to the bit.
+fn rb_sweeps<const D3: bool>(
+    lv: &Level,
+    u: &mut [f64],
+    f: &[f64],
+    first: usize,
+    omega: f64,
+    from_zero: bool,
+    sweeps: usize,
+) {
+    let stages = 2 * sweeps;
+    let (m, outer_periodic) = outer_units::<D3>(lv);
+    if outer_periodic {
+        for s in 0..sweeps {
+            rb_sweep_periodic::<D3>(lv, u, f, first, omega, from_zero && s == 0);
+        }
+        return;
+    }
+    if m >= 2 * block_units(stages) && parallel(lv) {
+        rb_sweeps_blocks::<D3>(lv, Cells::new(u), f, first, omega, from_zero, stages);
+        return;
+    }
+    let cells = Cells::new(u);
+    for t in 0..m + stages - 1 {
+        for h in 0..stages.min(t + 1) {
+            if t - h < m {
+                // SAFETY: one task, so no concurrent access; the exclusive
+                // borrow of `u` is not used while `cells` is.
+                unsafe { half_sweep::<D3>(lv, cells, f, t - h, h, first, omega, from_zero) };
+            }
+        }
+    }
+}
+
+/// One red–black sweep along a periodic outermost axis ([`rb_sweeps`]),
+/// the second colour trailing the first by one unit.
+fn rb_sweep_periodic<const D3: bool>(
     lv: &Level,
     u: &mut [f64],
     f: &[f64],
@@ -1001,32 +1068,20 @@ fn rb_sweep<const D3: bool>(
     from_zero: bool,
 ) {
     let second = 1 - first;
-    let (m, outer_periodic) = outer_units::<D3>(lv);
-    if !outer_periodic && m >= 2 * PAR_MIN_UNITS && parallel(lv) {
-        rb_sweep_blocks::<D3>(lv, Cells::new(u), f, first, omega, from_zero);
-        return;
-    }
-    if outer_periodic {
-        fill_outer_ghosts::<D3>(lv, u);
-    }
+    let m = outer_units::<D3>(lv).0;
+    fill_outer_ghosts::<D3>(lv, u);
     let cells = Cells::new(u);
     // SAFETY (every `colour_pass` below): one task, so no concurrent access;
     // the exclusive borrow of `u` is not used while `cells` is.
-    unsafe {
-        if outer_periodic {
-            colour_pass::<D3>(lv, cells, f, m - 1, first, omega, from_zero);
-        }
-    }
-    if outer_periodic {
-        fill_outer_ghosts::<D3>(lv, u);
-    }
+    unsafe { colour_pass::<D3>(lv, cells, f, m - 1, first, omega, from_zero) };
+    fill_outer_ghosts::<D3>(lv, u);
     for t in 0..=m {
-        if t < m && !(outer_periodic && t == m - 1) {
+        if t + 1 < m {
             // SAFETY: as above.
             unsafe { colour_pass::<D3>(lv, cells, f, t, first, omega, from_zero) };
         }
         if t >= 1 {
-            if outer_periodic && t == m {
+            if t == m {
                 fill_outer_ghosts::<D3>(lv, u);
             }
             // SAFETY: as above.
@@ -1035,50 +1090,65 @@ fn rb_sweep<const D3: bool>(
     }
 }
 
-/// [`rb_sweep`] on contiguous blocks of units in parallel (non-periodic
-/// outermost axis). The second colour of unit `t` needs the first colour of
-/// units `t − 1 … t + 1` done, so:
-/// 1. each block runs the fused sweep over its own units, leaving the second
-///    colour of its first and last unit undone (those read the first colour
-///    of the neighbouring blocks);
-/// 2. then every block does the second colour of those two units.
+/// The fewest units a parallel block of [`rb_sweeps_blocks`] holds for
+/// `stages` half-sweeps: at least `PAR_MIN_UNITS`, and more than the two
+/// triangles of its ends, so that the triangles of neighbouring block ends
+/// neither overlap nor read each other's units.
+fn block_units(stages: usize) -> usize {
+    PAR_MIN_UNITS.max(2 * stages)
+}
+
+/// [`rb_sweeps`] on contiguous blocks of units `[lo, hi)` in parallel
+/// (non-periodic outermost axis), in two phases:
+/// 1. each block runs the fused pass over its own units, doing half-sweep
+///    `h` only on units `lo + h … hi − h − 1` (a trapezoid: those need
+///    nothing from the neighbouring blocks beyond their first colour's
+///    start values, which nobody writes in this phase);
+/// 2. then every block end `b` (the start of each block, and `m`) does
+///    the triangle left: half-sweep `h = 1, 2, …` on units `b − h … b + h − 1`
+///    (clipped to the level), in order of `h`.
 ///
-/// Within a phase, a task writes one colour of its own units and reads the
-/// other colour (or, for the zero guess, nothing) of its neighbours' edge
-/// units, so no element is read and written by two tasks at once, and the
-/// result is exactly red–black, as the serial sweep.
-fn rb_sweep_blocks<const D3: bool>(
+/// In phase 1 a block writes the first colour of its end units and reads
+/// the other colour of its neighbours' end units; in phase 2 a triangle
+/// writes within `stages − 1` units of its end and reads one more, and ends
+/// are at least [`block_units`] apart. So no element is read and written by
+/// two tasks at once, every half-sweep finds the values it needs at the
+/// stage it needs, and the result is exactly red–black, as the serial pass.
+/// With one sweep (`stages = 2`) phase 2 is the second colour of each
+/// block's first and last unit.
+#[allow(clippy::too_many_arguments)]
+fn rb_sweeps_blocks<const D3: bool>(
     lv: &Level,
     u: Cells,
     f: &[f64],
     first: usize,
     omega: f64,
     from_zero: bool,
+    stages: usize,
 ) {
     use rayon::prelude::*;
-    let second = 1 - first;
     let m = outer_units::<D3>(lv).0;
-    let blocks = (m / PAR_MIN_UNITS).min(4 * rayon::current_num_threads());
+    let blocks = (m / block_units(stages)).min(4 * rayon::current_num_threads());
     let bounds = |b: usize| (b * m / blocks, (b + 1) * m / blocks);
     (0..blocks).into_par_iter().for_each(|b| {
         let (lo, hi) = bounds(b);
-        for t in lo..hi {
-            // SAFETY: see the function docs (phase 1).
-            unsafe {
-                colour_pass::<D3>(lv, u, f, t, first, omega, from_zero);
-                if t >= lo + 2 {
-                    colour_pass::<D3>(lv, u, f, t - 1, second, omega, false);
+        for t in lo..hi + stages - 1 {
+            for h in 0..stages.min(t + 1) {
+                let v = t - h;
+                if v >= lo + h && v + h < hi {
+                    // SAFETY: see the function docs (phase 1).
+                    unsafe { half_sweep::<D3>(lv, u, f, v, h, first, omega, from_zero) };
                 }
             }
         }
     });
-    (0..blocks).into_par_iter().for_each(|b| {
-        let (lo, hi) = bounds(b);
-        // SAFETY: see the function docs (phase 2); a block has at least
-        // `PAR_MIN_UNITS` ≥ 2 units, so `lo` and `hi − 1` differ.
-        unsafe {
-            colour_pass::<D3>(lv, u, f, lo, second, omega, false);
-            colour_pass::<D3>(lv, u, f, hi - 1, second, omega, false);
+    (0..=blocks).into_par_iter().for_each(|b| {
+        let end = bounds(b).0;
+        for h in 1..stages {
+            for v in end.saturating_sub(h)..(end + h).min(m) {
+                // SAFETY: see the function docs (phase 2).
+                unsafe { half_sweep::<D3>(lv, u, f, v, h, first, omega, from_zero) };
+            }
         }
     });
 }
@@ -1559,12 +1629,11 @@ impl Multigrid {
     ) {
         let lv = &self.levels[l];
         let first = usize::from(reverse);
-        for s in 0..sweeps {
-            let z = from_zero && s == 0;
+        if sweeps > 0 {
             if lv.d3 {
-                rb_sweep::<true>(lv, u, f, first, self.opts.omega, z);
+                rb_sweeps::<true>(lv, u, f, first, self.opts.omega, from_zero, sweeps);
             } else {
-                rb_sweep::<false>(lv, u, f, first, self.opts.omega, z);
+                rb_sweeps::<false>(lv, u, f, first, self.opts.omega, from_zero, sweeps);
             }
         }
         if from_zero && sweeps == 0 {
@@ -1773,5 +1842,92 @@ impl Preconditioner for Multigrid {
         self.load(r, &mut w.f, &mut w.partial);
         self.cycle(0, st, true);
         self.store(&st.work[0].u, z);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stencil::BoundaryKind;
+
+    /// Values in [−1, 1) from a linear congruential sequence.
+    fn values(n: usize, mut s: u64) -> Vec<f64> {
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+            })
+            .collect()
+    }
+
+    /// The finest level of a hierarchy on a field with a 1e3 jump, and a
+    /// padded right-hand side and start (interior values, ghosts 0).
+    fn level(dims: [usize; 3], bc: BoundaryKind) -> (Multigrid, Vec<f64>, Vec<f64>) {
+        let n: usize = dims.iter().product();
+        let k: Vec<f64> = values(n, 3)
+            .iter()
+            .map(|v| if *v > 0.6 { 1e3 } else { 1.0 })
+            .collect();
+        let mut st = CellStencil::from_cell_field(dims, &k, 1.0, bc).expect("stencil");
+        st.diag_extra_mut().iter_mut().for_each(|v| *v = 1e-6);
+        let mg = Multigrid::new(&st, &MgOptions::default()).expect("hierarchy");
+        let lv = &mg.levels[0];
+        let (mut f, mut u) = (vec![0.0; lv.len], vec![0.0; lv.len]);
+        let mut slots = vec![0.0; lv.len];
+        mg.load(&values(n, 5), &mut f, &mut slots);
+        mg.load(&values(n, 9), &mut u, &mut slots);
+        (mg, f, u)
+    }
+
+    /// Three sweeps fused into one pass give, to the bit, what three
+    /// separate sweeps give, serial and in parallel blocks, from a start
+    /// and from zero, in either colour order, in 2D and 3D, with a
+    /// periodic outermost axis too (done sweep by sweep).
+    #[test]
+    fn fused_sweeps_equal_separate_sweeps_to_the_bit() {
+        for (dims, bc) in [
+            ([256, 256, 1], BoundaryKind::Dirichlet),
+            ([301, 211, 1], BoundaryKind::Neumann),
+            ([48, 50, 40], BoundaryKind::Dirichlet),
+            ([96, 400, 1], BoundaryKind::Periodic),
+        ] {
+            let (mg, f, u0) = level(dims, bc);
+            let lv = &mg.levels[0];
+            let sweep = |u: &mut [f64], first, zero, sweeps| {
+                if lv.d3 {
+                    rb_sweeps::<true>(lv, u, &f, first, 1.2, zero, sweeps);
+                } else {
+                    rb_sweeps::<false>(lv, u, &f, first, 1.2, zero, sweeps);
+                }
+            };
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("pool");
+                pool.install(|| {
+                    for (first, zero) in [(0, false), (1, false), (0, true)] {
+                        let mut fused = u0.clone();
+                        sweep(&mut fused, first, zero, 3);
+                        let mut apart = u0.clone();
+                        for s in 0..3 {
+                            sweep(&mut apart, first, zero && s == 0, 1);
+                        }
+                        let differ = bits(&fused)
+                            .iter()
+                            .zip(bits(&apart))
+                            .position(|(a, b)| *a != b);
+                        assert_eq!(
+                            differ, None,
+                            "{dims:?} {bc:?}, {threads} threads, first {first}, zero {zero}: first padded index that differs"
+                        );
+                        assert!(bits(&fused) != bits(&u0), "the sweeps changed nothing");
+                    }
+                });
+            }
+        }
     }
 }
