@@ -998,7 +998,11 @@ unsafe fn half_sweep<const D3: bool>(
     omega: f64,
     from_zero: bool,
 ) {
-    let color = if h.is_multiple_of(2) { first } else { 1 - first };
+    let color = if h.is_multiple_of(2) {
+        first
+    } else {
+        1 - first
+    };
     // SAFETY: forwarded contract.
     unsafe { colour_pass::<D3>(lv, u, f, t, color, omega, from_zero && h == 0) }
 }
@@ -1850,15 +1854,11 @@ mod tests {
     use super::*;
     use crate::stencil::BoundaryKind;
 
-    /// Values in [−1, 1) from a linear congruential sequence.
-    fn values(n: usize, mut s: u64) -> Vec<f64> {
+    /// Values in [−1, 1), evenly spread and in no order (a Weyl sequence
+    /// with the golden ratio, from `seed`).
+    fn values(n: usize, seed: u64) -> Vec<f64> {
         (0..n)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-            })
+            .map(|i| ((i as f64 + seed as f64) * 0.618_033_988_749_895).fract() * 2.0 - 1.0)
             .collect()
     }
 
