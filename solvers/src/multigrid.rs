@@ -1106,8 +1106,9 @@ fn block_units(stages: usize) -> usize {
 /// (non-periodic outermost axis), in two phases:
 /// 1. each block runs the fused pass over its own units, doing half-sweep
 ///    `h` only on units `lo + h … hi − h − 1` (a trapezoid: those need
-///    nothing from the neighbouring blocks beyond their first colour's
-///    start values, which nobody writes in this phase);
+///    nothing from the neighbouring blocks but the start values of the
+///    second colour on their end units, which nobody writes in this
+///    phase);
 /// 2. then every block end `b` (the start of each block, and `m`) does
 ///    the triangle left: half-sweep `h = 1, 2, …` on units `b − h … b + h − 1`
 ///    (clipped to the level), in order of `h`.
